@@ -1,0 +1,71 @@
+"""The result of one verification check: pass/fail/undecided plus its evidence."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+Status = Literal["PASS", "FAIL", "UNDECIDED"]
+
+
+@dataclass(frozen=True)
+class Check:
+    """Outcome of a single verification check.
+
+    Parameters
+    ----------
+    name : str
+        Machine-readable name, e.g. ``"routh_hurwitz"``, ``"lyapunov"``, ``"overshoot"``.
+    passed : bool or None
+        ``True`` pass, ``False`` fail, ``None`` undecided (solver failure, inaccurate status, ...).
+        Undecided never counts as a pass.
+    target : str
+        The requirement in words or as an inequality, e.g. ``"<= 10 %"``.
+    achieved : float or str or None
+        The value obtained (in ``unit``).
+    margin : float or None
+        Signed distance to the requirement, positive when it holds (in ``unit``).
+    unit : str
+        Unit of ``achieved`` and ``margin``.
+    detail : str
+        One line saying what was checked and, on failure, what failed.
+    certificate : Mapping
+        Evidence: e.g. ``{"P": [[...]], "eig_P": [...], "solver_status": "optimal"}``.
+        Values are JSON-serialisable (lists, floats, str).
+    """
+
+    name: str
+    passed: bool | None
+    target: str = ""
+    achieved: float | str | None = None
+    margin: float | None = None
+    unit: str = ""
+    detail: str = ""
+    certificate: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def status(self) -> Status:
+        """``"PASS"``, ``"FAIL"`` or ``"UNDECIDED"``."""
+        if self.passed is None:
+            return "UNDECIDED"
+        return "PASS" if self.passed else "FAIL"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable form."""
+        return {
+            "name": self.name,
+            "passed": self.passed,
+            "status": self.status,
+            "target": self.target,
+            "achieved": self.achieved,
+            "margin": self.margin,
+            "unit": self.unit,
+            "detail": self.detail,
+            "certificate": dict(self.certificate),
+        }
+
+
+def all_passed(checks: tuple[Check, ...] | list[Check]) -> bool:
+    """True when every check passed (an undecided check is not a pass)."""
+    return all(c.passed is True for c in checks)
