@@ -1,0 +1,1 @@
+"""Closed-loop simulation on the nonlinear model (CasADi fixed-step maps)."""

@@ -1,0 +1,1 @@
+"""Controller synthesis: one module per family, dispatched by :mod:`designkit.synthesis.registry`."""
