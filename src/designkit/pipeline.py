@@ -1,0 +1,109 @@
+"""spec -> design -> simulation -> checks: the pipeline behind ``designkit synth``.
+
+Each step is a pure function of the previous steps' frozen values; the report is written
+from the :class:`PipelineResult` alone.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import metadata
+from typing import Any
+
+from designkit.spec.loader import LoadedSpec
+from designkit.synthesis.design import Design
+from designkit.verification.check import Check, all_passed
+
+_DEPENDENCIES = ("casadi", "numpy", "scipy", "control", "cvxpy", "clarabel", "matplotlib", "pydantic", "typst")
+
+
+def versions() -> dict[str, str]:
+    """Versions of designkit and its core dependencies (for reports)."""
+    out = {}
+    for name in ("designkit", *_DEPENDENCIES):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class PipelineResult:
+    """Everything a design run produced.
+
+    Parameters
+    ----------
+    loaded : LoadedSpec
+        The validated spec with its source text and hash.
+    design : Design
+        Gains and nominal closed loop.
+    checks : tuple of Check
+        Every verification check, in report order.
+    simulation : SimulationResult or None
+        The closed-loop simulation (None when not run).
+    versions : Mapping
+        designkit and dependency versions.
+    """
+
+    loaded: LoadedSpec
+    design: Design
+    checks: tuple[Check, ...]
+    simulation: Any = None
+    versions: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def verified(self) -> bool:
+        """True when every check passed (undecided is not a pass)."""
+        return all_passed(self.checks)
+
+    @property
+    def failed(self) -> tuple[Check, ...]:
+        """Checks that failed or are undecided."""
+        return tuple(c for c in self.checks if c.passed is not True)
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON object printed by ``designkit synth --json``."""
+        d = self.design
+        return {
+            "name": self.loaded.spec.name,
+            "spec_sha256": self.loaded.sha256,
+            "kind": d.kind,
+            "gains": {k: float(v) for k, v in d.gains.items()},
+            "poles": [[p.real, p.imag] for p in d.poles],
+            "zeros": [[z.real, z.imag] for z in d.zeros],
+            "verified": self.verified,
+            "checks": [c.to_dict() for c in self.checks],
+            "notes": list(d.notes),
+            "versions": dict(self.versions),
+        }
+
+
+def design(loaded: LoadedSpec) -> Design:
+    """Synthesise the controller of a spec."""
+    from designkit.synthesis.registry import synthesize
+
+    return synthesize(loaded.spec)
+
+
+def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
+    """Synthesise, simulate and verify a spec.
+
+    Parameters
+    ----------
+    loaded : LoadedSpec
+        A validated spec (see :func:`designkit.spec.load_spec`).
+    simulate : bool
+        Run the closed-loop simulation and the time-domain checks that need it.
+    """
+    from designkit.simulation.run import simulate as simulate_loop
+    from designkit.synthesis.registry import family
+    from designkit.verification.suite import run_checks
+
+    spec = loaded.spec
+    fam = family(spec.controller.kind)
+    dsn = fam.synthesize(spec)
+    sim = simulate_loop(spec, dsn) if simulate else None
+    checks = run_checks(spec, dsn, fam, sim)
+    return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions())
