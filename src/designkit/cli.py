@@ -1,0 +1,200 @@
+"""Command-line interface: thin wrapper over :mod:`designkit.pipeline`.
+
+Exit codes: 0 designed and every check passed; 1 designed but a check failed or is
+undecided; 2 bad input (one line on stderr naming the key path; nothing written).
+Heavy libraries are imported inside the command functions so that ``--help`` is instant.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from designkit import __version__
+from designkit.errors import DesignkitError
+
+EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return "" if value is None else str(value)
+
+
+def _checks_table(checks) -> str:
+    rows = [("check", "status", "achieved", "target", "margin")]
+    for c in checks:
+        achieved = f"{_fmt(c.achieved)} {c.unit}".strip()
+        rows.append((c.name, c.status, achieved, c.target, _fmt(c.margin)))
+    widths = [max(len(r[i]) for r in rows) for i in range(5)]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    for c in checks:
+        if c.passed is not True and c.detail:
+            lines.append(f"  {c.status} {c.name}: {c.detail}")
+    return "\n".join(lines)
+
+
+def _summary(result) -> str:
+    d = result.design
+    gains = ", ".join(f"{k} = {v:.6g}" for k, v in d.gains.items())
+    poles = ", ".join(f"{p.real:.4g}{p.imag:+.4g}j" if p.imag else f"{p.real:.4g}" for p in d.poles)
+    verdict = "VERIFIED" if result.verified else "NOT VERIFIED: " + ", ".join(c.name for c in result.failed)
+    return "\n".join([
+        f"{result.loaded.spec.name}: {d.kind} on {type(d.plant).__name__}",
+        f"poles: {poles}",
+        f"gains: {gains}",
+        *[f"note: {n}" for n in d.notes],
+        _checks_table(result.checks),
+        verdict,
+    ])
+
+
+def _exit_for(result) -> int:
+    return EXIT_OK if result.verified else EXIT_CHECK_FAILED
+
+
+def cmd_synth(args: argparse.Namespace) -> int:
+    """Synthesise, verify, simulate and write the HTML + PDF report."""
+    from designkit.pipeline import run
+    from designkit.report import write_report
+    from designkit.spec import load_spec
+
+    loaded = load_spec(args.spec)
+    result = run(loaded)
+    files = None if args.no_report else write_report(result, Path(args.out))
+    if args.json:
+        payload = result.to_json()
+        if files is not None:
+            payload["report"] = {"html": str(files.html), "pdf": str(files.pdf)}
+        print(json.dumps(payload, indent=2))
+    else:
+        print(_summary(result))
+        if files is not None:
+            print(f"report: {files.html}\nreport: {files.pdf}")
+    return _exit_for(result)
+
+
+def cmd_verify(args: argparse.Namespace) -> int:
+    """Synthesise and verify; print the checks; write nothing."""
+    from designkit.pipeline import run
+    from designkit.spec import load_spec
+
+    result = run(load_spec(args.spec))
+    print(json.dumps(result.to_json(), indent=2) if args.json else _summary(result))
+    return _exit_for(result)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    """Synthesise and simulate; print a summary or write the trajectories as CSV."""
+    import numpy as np
+
+    from designkit.pipeline import design
+    from designkit.simulation.run import simulate
+    from designkit.spec import load_spec
+
+    loaded = load_spec(args.spec)
+    dsn = design(loaded)
+    sim = simulate(loaded.spec, dsn)
+    columns = np.column_stack([
+        sim.time, sim.reference[:, 0], sim.state, sim.controller_state,
+        np.reshape(sim.u_command, (len(sim.time), -1)), np.reshape(sim.u_applied, (len(sim.time), -1)),
+        np.reshape(sim.perturbation, (len(sim.time), -1)),
+    ])
+    header = ",".join(["t", "xD", *sim.state_names, *sim.controller_state_names, "u_command", "u_applied", "xi"])
+    if args.csv:
+        np.savetxt(args.csv, columns, delimiter=",", header=header, comments="")
+        print(f"wrote {len(sim.time)} samples to {args.csv}")
+    else:
+        err = sim.tracking_error
+        print(f"{loaded.spec.name}: simulated {sim.time[-1]:.4g} s in {len(sim.time) - 1} steps")
+        print(f"final x1 = {sim.position[-1]:.6g} rad, final |x1 - xD| = {abs(err[-1]):.3g} rad, "
+              f"max |x1 - xD| = {np.max(np.abs(err)):.4g} rad")
+        print(f"peak |u_command| = {np.max(np.abs(sim.u_command)):.4g}, "
+              f"peak |u_applied| = {np.max(np.abs(sim.u_applied)):.4g}")
+    return EXIT_OK
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    """Print the JSON Schema of the spec format."""
+    from designkit.spec.schema import Spec
+
+    print(json.dumps(Spec.model_json_schema(), indent=2))
+    return EXIT_OK
+
+
+def cmd_model(args: argparse.Namespace) -> int:
+    """Print a summary of a zoo robot's symbolic model."""
+    from designkit.models.summary import model_command
+
+    print(model_command(args.robot))
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (exposed for documentation and tests)."""
+    parser = argparse.ArgumentParser(
+        prog="designkit",
+        description="Design and verify robot manipulator controllers from a YAML spec.",
+        epilog="Exit codes: 0 designed and verified; 1 designed but a check failed or is undecided; "
+        "2 bad input.",
+    )
+    parser.add_argument("--version", action="version", version=f"designkit {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("synth", help="synthesise, verify, simulate and write the HTML + PDF report")
+    p.add_argument("spec", help="path of the YAML spec")
+    p.add_argument("--out", default="reports", help="report directory (default: reports/); the report "
+                   "goes to OUT/<spec name>/report.html and report.pdf")
+    p.add_argument("--json", action="store_true", help="print one JSON object (gains, verified, checks)")
+    p.add_argument("--no-report", action="store_true", help="do not write the report")
+    p.set_defaults(func=cmd_synth)
+
+    p = sub.add_parser("verify", help="synthesise and run every check; write nothing")
+    p.add_argument("spec")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_verify)
+
+    p = sub.add_parser("simulate", help="simulate the designed closed loop on the nonlinear model")
+    p.add_argument("spec")
+    p.add_argument("--csv", help="write the trajectories to this CSV file")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("schema", help="print the JSON Schema of the spec format")
+    p.set_defaults(func=cmd_schema)
+
+    p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")
+    p.add_argument("robot", help="zoo robot name, e.g. planar2r or puma560")
+    p.set_defaults(func=cmd_model)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``designkit`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    func: Callable[[argparse.Namespace], int] = args.func
+    try:
+        return func(args)
+    except DesignkitError as exc:
+        print(f"designkit: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except BrokenPipeError:  # output piped into e.g. `head`
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print("designkit: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug, not bad input: say so in one line unless --debug
+        if args.debug:
+            raise
+        print(f"designkit: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the "
+              "traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
