@@ -1,0 +1,131 @@
+"""The command line as a user runs it: exit codes, JSON, bad input, every example spec."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from designkit.cli import main
+from tests.problems import POSSPEED_GAINS, POSSPEED_YAML
+
+ROOT = Path(__file__).resolve().parents[1]
+SPECS = sorted((ROOT / "specs").glob("*.yaml"))
+
+# Expected outcome of every example spec: 0 verified, 1 designed but a check fails (on purpose).
+EXPECTED_EXIT = {
+    "posspeed-link": 0,
+    "posspeed-saturation": 0,
+    "posspeed-dead-zone": 0,
+    "posspeed-relay": 1,
+    "posspeed-quantizer": 0,
+    "posspeed-perturbation": 0,
+    "tracking-pid": 0,
+    "requirements-driven": 0,
+    "infeasible-requirements": 1,
+}
+
+
+def _write(tmp_path: Path, text: str, name: str = "spec.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_every_spec_has_an_expected_outcome():
+    assert {p.stem for p in SPECS} == set(EXPECTED_EXIT)
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=lambda p: p.stem)
+def test_example_specs_through_designkit_synth(spec, tmp_path, capsys):
+    code = main(["synth", str(spec), "--out", str(tmp_path), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == EXPECTED_EXIT[spec.stem], [c for c in payload["checks"] if not c["passed"]]
+    assert payload["verified"] is (code == 0)
+    html = tmp_path / payload["name"] / "report.html"
+    pdf = tmp_path / payload["name"] / "report.pdf"
+    assert html.read_text().count("<svg") >= 3
+    assert pdf.read_bytes().startswith(b"%PDF")
+    if code == 1:
+        failed = [c for c in payload["checks"] if c["passed"] is not True]
+        assert failed and all(c["detail"] for c in failed)
+        assert all(c["name"] in html.read_text() for c in failed)
+
+
+def test_synth_json_contract(tmp_path, capsys):
+    spec = _write(tmp_path, POSSPEED_YAML)
+    code = main(["synth", str(spec), "--out", str(tmp_path / "out"), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert set(payload["gains"]) == {"K1", "K2", "K3", "K4"}
+    for k, v in POSSPEED_GAINS.items():
+        assert payload["gains"][k] == pytest.approx(v, rel=1e-12)
+    assert payload["verified"] is True
+    names = {c["name"] for c in payload["checks"]}
+    assert {"pole_placement", "routh_hurwitz", "lyapunov"} <= names
+    assert all(c["passed"] in (True, False, None) for c in payload["checks"])
+
+
+@pytest.mark.parametrize(
+    ("replace", "by", "message"),
+    [
+        ("-20]", "0.5]", "controller.poles[2]: must have negative real part, got 0.5"),
+        ("Km: 2.0", "Km: -2", "plant.Km:"),
+        ("zero: -3", "zero: 3", "controller.zero:"),
+        ("name: posspeed-link", "name: [", "malformed YAML"),
+    ],
+)
+def test_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, replace, by, message):
+    out = tmp_path / "out"
+    existing = out / "posspeed-link" / "report.html"
+    existing.parent.mkdir(parents=True)
+    existing.write_text("previous report")
+    spec = _write(tmp_path, POSSPEED_YAML.replace(replace, by))
+    code = main(["synth", str(spec), "--out", str(out)])
+    captured = capsys.readouterr()
+    assert code == 2
+    assert message in captured.err
+    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
+    assert captured.out == ""
+    assert existing.read_text() == "previous report"
+    assert sorted(p.name for p in out.rglob("*")) == ["posspeed-link", "report.html"]
+
+
+def test_missing_spec_file_exit_2(tmp_path, capsys):
+    assert main(["verify", str(tmp_path / "absent.yaml")]) == 2
+    assert "not found" in capsys.readouterr().err
+
+
+def test_verify_and_simulate_write_nothing(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    spec = _write(tmp_path, POSSPEED_YAML)
+    assert main(["verify", str(spec)]) == 0
+    assert "VERIFIED" in capsys.readouterr().out
+    assert main(["simulate", str(spec)]) == 0
+    assert "final x1" in capsys.readouterr().out
+    csv = tmp_path / "sim.csv"
+    assert main(["simulate", str(spec), "--csv", str(csv)]) == 0
+    header = csv.read_text().splitlines()[0]
+    assert header.startswith("t,xD,x1,x2")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sim.csv", "spec.yaml"]
+
+
+def test_schema_is_json_schema(capsys):
+    assert main(["schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    assert schema["title"] == "Spec"
+    assert {"plant", "controller"} <= set(schema["required"])
+
+
+def test_help_does_not_import_heavy_libraries():
+    code = (
+        "import sys, runpy; sys.argv=['designkit','--help'];\n"
+        "try:\n    runpy.run_module('designkit.cli', run_name='__main__')\nexcept SystemExit: pass\n"
+        "heavy = [m for m in ('casadi','cvxpy','control','matplotlib','scipy','numpy') if m in sys.modules]\n"
+        "print('HEAVY:' + ','.join(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "HEAVY:"
