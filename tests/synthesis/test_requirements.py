@@ -36,7 +36,7 @@ def test_settling_time_bound_holds_for_the_dominant_pair(overshoot, ts):
     y = control.step_response(sys, T=t).outputs
     outside = np.nonzero(np.abs(y - 1) > 0.02)[0]
     settling = t[outside[-1] + 1] if outside.size else 0.0
-    assert settling <= ts * (1 + 1e-6)
+    assert settling == pytest.approx(ts, rel=2e-3)
     assert dom.poles[2].real == pytest.approx(5 * p1.real)
 
 
@@ -47,8 +47,9 @@ def test_requirements_driven_servo_cancels_third_pole():
     ).spec
     design = synthesize(spec)
     assert design.zeros[0].real == pytest.approx(design.poles[2].real)
-    assert design.extra["zeta"] == pytest.approx(-math.log(0.05) / math.sqrt(math.pi**2 + math.log(0.05) ** 2))
+    mp = 0.9 * 0.05  # design margin 0.1 tightens the 5 % requirement
+    assert design.extra["zeta"] == pytest.approx(-math.log(mp) / math.sqrt(math.pi**2 + math.log(mp) ** 2))
     tf = control.ss2tf(design.closed_loop.to_control()[0, 0])
     info = control.step_info(tf, T=np.linspace(0, 6, 60001), SettlingTimeThreshold=0.02)
-    assert info["Overshoot"] == pytest.approx(5.0, rel=1e-3)
-    assert info["SettlingTime"] <= 1.5
+    assert info["Overshoot"] == pytest.approx(4.5, rel=1e-3)
+    assert info["SettlingTime"] == pytest.approx(0.9 * 1.5, rel=1e-3)

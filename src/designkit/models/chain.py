@@ -43,6 +43,7 @@ __all__ = [
     "link_transform",
     "numeric_value",
     "point_jacobian",
+    "representation",
     "tool_pose",
     "trig",
 ]
@@ -192,10 +193,8 @@ def joint_axes(description: ChainDescription, frames: Sequence[ca.SX]) -> list[t
     list of (casadi.SX, casadi.SX)
         ``(z, o)`` pairs, each a 3x1 vector.
     """
-    if description.convention == "modified":
-        anchors = list(frames)
-    else:
-        anchors = [as_sx_matrix(description.base), *frames[:-1]]
+    modified = description.convention == "modified"
+    anchors = list(frames) if modified else [as_sx_matrix(description.base), *frames[:-1]]
     return [(pose[0:3, 2], pose[0:3, 3]) for pose in anchors]
 
 

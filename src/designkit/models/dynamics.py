@@ -239,10 +239,6 @@ class _Joint:
     p: Vec
 
 
-def _homogeneous(R: Mat, p: Vec) -> tuple[Mat, Vec]:
-    return R, p
-
-
 def _compose(a: tuple[Mat, Vec], b: tuple[Mat, Vec]) -> tuple[Mat, Vec]:
     Ra, pa = a
     Rb, pb = b
@@ -447,6 +443,7 @@ def lagrangian(
         cross = -ca.mtimes([jv.T, _skew(h), jw])
         mass += m * ca.mtimes(jv.T, jv) + cross + cross.T + ca.mtimes([jw.T, inertia, jw])
         potential -= ca.dot(grav, m * p + h)
+    mass = ca.triu(mass) + ca.triu(mass, False).T  # exactly symmetric: one expression per pair
     return Lagrangian(mass, potential, ca.gradient(potential, q))
 
 

@@ -126,6 +126,11 @@ class _PoleZeroController(_Section):
         description="When poles come from requirements: the real pole is placed this many times further "
         "left than the real part of the dominant pair.",
     )
+    design_margin: float = Field(
+        default=0.1, ge=0, lt=1,
+        description="When poles come from requirements: the derived pair meets overshoot and settling time "
+        "tightened by this fraction, so the verified loop keeps a margin.",
+    )
 
     @field_validator("poles")
     @classmethod

@@ -55,13 +55,14 @@ def _poles_from_spec(spec: Spec) -> tuple[tuple[complex, ...], tuple[str, ...], 
         return tuple(ctrl.poles), (), {}
     req = spec.requirements
     assert req is not None and req.overshoot is not None and req.settling_time is not None  # schema guarantees
-    dom = dominant_poles(
-        req.overshoot, req.settling_time, third_pole_factor=ctrl.third_pole_factor, band=req.settling_band
-    )
+    tighten = 1.0 - ctrl.design_margin
+    overshoot, settling = tighten * req.overshoot, tighten * req.settling_time
+    dom = dominant_poles(overshoot, settling, third_pole_factor=ctrl.third_pole_factor, band=req.settling_band)
     note = (
-        f"Poles derived from requirements: overshoot {req.overshoot:g} % -> zeta = {dom.zeta:.4f}; "
-        f"settling time {req.settling_time:g} s ({100 * req.settling_band:g} % band, envelope bound) "
-        f"-> wn = {dom.wn:.4f} rad/s; third pole at {ctrl.third_pole_factor:g} x Re(p1)."
+        f"Poles derived from requirements tightened by the design margin {ctrl.design_margin:g}: overshoot "
+        f"{overshoot:g} % -> zeta = {dom.zeta:.4f}; settling time {settling:g} s "
+        f"({100 * req.settling_band:g} % band, exact 2nd-order) -> wn = {dom.wn:.4f} rad/s; "
+        f"third pole at {ctrl.third_pole_factor:g} x Re(p1)."
     )
     return dom.poles, (note,), {"zeta": dom.zeta, "wn": dom.wn}
 

@@ -31,27 +31,47 @@ def damping_from_overshoot(overshoot_percent: float) -> float:
     """Damping ratio whose second-order step response overshoots by ``overshoot_percent`` (%).
 
     ``Mp = exp(-pi zeta / sqrt(1 - zeta^2))``, so ``zeta = -ln Mp / sqrt(pi^2 + ln^2 Mp)``;
-    0 % gives critical damping (``zeta = 1``).
+    an overshoot below 1e-9 % gives critical damping (``zeta = 1``).
     """
-    if overshoot_percent <= 0.0:
+    if overshoot_percent < 1e-9:
         return 1.0
     log_mp = math.log(min(overshoot_percent, 99.999) / 100.0)
     return -log_mp / math.sqrt(math.pi**2 + log_mp**2)
 
 
-def natural_frequency_from_settling(zeta: float, settling_time: float, band: float = 0.02) -> float:
-    """Natural frequency (rad/s) at which a second-order step response stays within ``band``
-    after ``settling_time`` (s).
-
-    For ``zeta < 1`` the exponential envelope ``exp(-zeta wn t)/sqrt(1 - zeta^2) <= band`` is used,
-    an upper bound of the true settling time (the classic ``4/(zeta wn)`` ignores the
-    ``sqrt(1 - zeta^2)`` factor and can be optimistic).  For ``zeta = 1`` the exact condition
-    ``(1 + wn t) exp(-wn t) = band`` is solved.
-    """
+def _step_error(zeta: float, x: float) -> float:
+    """``y(x) - 1`` of the unit-DC-gain second-order step response at normalised time ``x = wn t``."""
     if zeta >= 1.0:
-        x = brentq(lambda x: (1.0 + x) * math.exp(-x) - band, 1e-9, 100.0)
-        return x / settling_time
-    return -math.log(band * math.sqrt(1.0 - zeta**2)) / (zeta * settling_time)
+        return -(1.0 + x) * math.exp(-x)
+    wd = math.sqrt(1.0 - zeta**2)
+    return -math.exp(-zeta * x) * (math.cos(wd * x) + zeta / wd * math.sin(wd * x))
+
+
+def normalised_settling_time(zeta: float, band: float = 0.02) -> float:
+    """Exact settling time ``wn * Ts`` (dimensionless) of ``wn^2/(s^2 + 2 zeta wn s + wn^2)``.
+
+    The last instant at which ``|y - 1| = band``: bracketed from the exponential envelope
+    ``exp(-zeta x)/sqrt(1 - zeta^2)`` (after which the error stays inside the band), located on a
+    fine grid and refined by Brent's method.  Exact, unlike the classic ``4/zeta``.
+    """
+    zeta = min(max(zeta, 1e-3), 1.0)
+    sq = math.sqrt(max(1.0 - zeta**2, 1e-300))
+    x_end = max(-math.log(band * sq) / zeta, 1.0) if zeta < 1.0 else 50.0 / zeta
+    grid = [x_end * k / 20000 for k in range(20001)]
+    outside = [abs(_step_error(zeta, x)) > band for x in grid]
+    last = max((k for k, o in enumerate(outside) if o), default=None)
+    if last is None or last == len(grid) - 1:
+        return grid[-1] if last is not None else 0.0
+    def f(x: float) -> float:
+        return abs(_step_error(zeta, x)) - band
+
+    return brentq(f, grid[last], grid[last + 1], xtol=1e-14)
+
+
+def natural_frequency_from_settling(zeta: float, settling_time: float, band: float = 0.02) -> float:
+    """Natural frequency (rad/s) at which the second-order step response settles into ``band``
+    exactly at ``settling_time`` (s); see :func:`normalised_settling_time`."""
+    return normalised_settling_time(zeta, band) / settling_time
 
 
 def dominant_poles(

@@ -1,0 +1,63 @@
+"""Built-in robots, one module each; :func:`robot` builds one by name.
+
+======== ===============================================================
+name     robot
+======== ===============================================================
+onelink  single revolute link (pendulum)
+planar2r the notes' SIMNOG planar two-link arm
+scara    4-axis RRPR SCARA (Adept Cobra 600 kinematics)
+puma560  Unimation PUMA 560 (Armstrong, Khatib & Burdick dynamics)
+======== ===============================================================
+
+The ROBEL elastic link is not a rigid chain: its defaults are
+:data:`designkit.models.robots.elastic_link.DEFAULTS`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from designkit.errors import SpecError
+from designkit.models.robot import Robot
+from designkit.models.robots import onelink, planar2r, puma560, scara
+
+__all__ = ["ROBOTS", "robot"]
+
+ROBOTS: dict[str, Callable[..., Robot]] = {
+    "onelink": onelink.build,
+    "planar2r": planar2r.build,
+    "scara": scara.build,
+    "puma560": puma560.build,
+}
+"""Robot name -> builder ``(*, friction=False, motor_inertia=False, symbolic=(), **overrides) -> Robot``."""
+
+
+def robot(name: str, **overrides: Any) -> Robot:
+    """Build a built-in robot by name.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`ROBOTS`.
+    **overrides
+        Named physical parameters of that robot (see its module's ``DEFAULTS``),
+        given as numbers or scalar ``casadi.SX`` symbols, plus the options
+        ``friction``, ``motor_inertia`` and ``symbolic`` (``True`` or a tuple of names).
+
+    Raises
+    ------
+    SpecError
+        For an unknown robot or parameter name.
+
+    Examples
+    --------
+    >>> arm = robot("planar2r", m1=1.0, d2=0.5)
+    >>> arm.n, arm.description.links[1].a
+    (2, 0.5)
+    """
+    try:
+        builder = ROBOTS[name]
+    except KeyError:
+        raise SpecError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
+    return builder(**overrides)

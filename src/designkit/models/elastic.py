@@ -1,0 +1,142 @@
+"""One link driven through an elastic transmission (the notes' ROBEL simulator, appendix B, fig. 5.x).
+
+Physical model (motor angle ``theta_m``, link angle ``theta_l``, spring between
+``R1 theta_m`` and ``R2 theta_l``)::
+
+    J1 theta_m'' + B1 theta_m' = Ku u - R1 KR (R1 theta_m - R2 theta_l)
+    J2 theta_l'' + B2 theta_l' = R2 KR (R1 theta_m - R2 theta_l) - mgl sin(theta_l) + w
+
+``u`` is the drive input, ``w`` a disturbance torque on the link, and the
+optional gravity term takes ``theta_l`` from the downward vertical.  In the
+spring-side coordinates ``x = [R1 theta_m, R1 theta_m', R2 theta_l, R2 theta_l']``
+used by ROBEL, with ``tau1 = J1/B1``, ``tau2 = J2/B2`` and ``Km = R1 Ku / B1``::
+
+    x1' = x2
+    x2' = -x2/tau1 - (KR R1^2/J1)(x1 - x3) + (Km/tau1) u
+    x3' = x4
+    x4' = -x4/tau2 + (KR R2^2/J2)(x1 - x3) - (R2 mgl/J2) sin(x3/R2) + (R2/J2) w
+
+This is the ``(A, B)`` that the notes' fig. 5.3 gains ``l_i = -A_i' C / (B' C)``
+imply (``l1 = (tau1/Km)(KR R1^2/J1 - c4 KR R2^2/J2)``, ..., checked in the tests).
+With ``R1 = 1/N``, ``R2 = 1`` it is the usual gear-reduced elastic joint.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import casadi as ca
+import numpy as np
+
+from designkit.errors import SpecError
+
+__all__ = ["ElasticLinkParameters", "elastic_ode", "elastic_state_space"]
+
+
+@dataclass(frozen=True)
+class ElasticLinkParameters:
+    """Parameters of the elastic link, in the notes' (ROBEL) names.
+
+    Parameters
+    ----------
+    J1 : float
+        Motor (rotor) inertia (kg*m^2).
+    tau1 : float
+        Motor mechanical time constant ``J1/B1`` (s).
+    Km : float
+        Motor static gain in spring-side coordinates, ``R1 Ku / B1`` (rad/s per input unit).
+    KR : float
+        Transmission stiffness (N*m/rad).
+    R1, R2 : float
+        Transmission ratios on the motor and link sides (dimensionless).
+    J2 : float
+        Link inertia about its joint (kg*m^2).
+    tau2 : float
+        Link time constant ``J2/B2`` (s); ``math.inf`` for a frictionless link.
+    mgl : float
+        Gravity torque amplitude ``m g l`` of the link (N*m), 0 to ignore gravity.
+    """
+
+    J1: float
+    tau1: float
+    Km: float
+    KR: float
+    R1: float
+    R2: float
+    J2: float
+    tau2: float
+    mgl: float = 0.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not isinstance(value, int | float) or isinstance(value, bool) or math.isnan(value):
+                raise SpecError(f.name, f"must be a number, got {value!r}")
+            if f.name == "mgl":
+                if value < 0 or math.isinf(value):
+                    raise SpecError(f.name, f"must be finite and non-negative, got {value}")
+            elif f.name == "tau2":
+                if value <= 0:
+                    raise SpecError(f.name, f"must be positive (math.inf for no link friction), got {value}")
+            elif not (value > 0 and math.isfinite(value)):
+                raise SpecError(f.name, f"must be positive and finite, got {value}")
+
+    @property
+    def B1(self) -> float:
+        """Motor viscous friction ``J1/tau1`` (N*m*s/rad)."""
+        return self.J1 / self.tau1
+
+    @property
+    def B2(self) -> float:
+        """Link viscous friction ``J2/tau2`` (N*m*s/rad)."""
+        return self.J2 / self.tau2
+
+    @property
+    def Ku(self) -> float:
+        """Motor torque per input unit ``Km B1 / R1`` (N*m per input unit)."""
+        return self.Km * self.B1 / self.R1
+
+
+def elastic_state_space(params: ElasticLinkParameters) -> tuple[np.ndarray, np.ndarray]:
+    """Linear model ``x' = A x + B u`` in spring-side coordinates (gravity linearised at ``x = 0``).
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``A`` (4x4, 1/s and 1/s^2) and ``B`` (4x1).
+    """
+    k1 = params.KR * params.R1**2 / params.J1
+    k2 = params.KR * params.R2**2 / params.J2
+    grav = params.mgl / params.J2
+    A = np.array([
+        [0.0, 1.0, 0.0, 0.0],
+        [-k1, -1.0 / params.tau1, k1, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+        [k2, 0.0, -k2 - grav, -1.0 / params.tau2],
+    ])
+    B = np.array([[0.0], [params.Km / params.tau1], [0.0], [0.0]])
+    return A, B
+
+
+def elastic_ode(params: ElasticLinkParameters) -> ca.Function:
+    """Nonlinear elastic-link dynamics as a named CasADi function.
+
+    Returns
+    -------
+    casadi.Function
+        ``"elastic_link"``: ``x`` (4, spring-side coordinates, rad and rad/s), ``u`` (input),
+        ``w`` (link disturbance torque, N*m) -> ``xdot`` (4).
+    """
+    x = ca.SX.sym("x", 4)
+    u = ca.SX.sym("u")
+    w = ca.SX.sym("w")
+    stretch = x[0] - x[2]
+    xdot = ca.vertcat(
+        x[1],
+        -x[1] / params.tau1 - params.KR * params.R1**2 / params.J1 * stretch + params.Km / params.tau1 * u,
+        x[3],
+        -x[3] / params.tau2 + params.KR * params.R2**2 / params.J2 * stretch
+        - params.R2 * params.mgl / params.J2 * ca.sin(x[2] / params.R2) + params.R2 / params.J2 * w,
+    )
+    return ca.Function("elastic_link", [x, u, w], [xdot], ["x", "u", "w"], ["xdot"])
