@@ -1,0 +1,68 @@
+"""Render a :class:`~designkit.report.model.ReportModel` as one self-contained HTML file.
+
+Figures are inlined as SVG, CSS is inlined, and there is no script, external font, image or
+link: the file can be mailed or archived alone.  Jinja2 autoescaping is on; only the SVG
+produced by :mod:`designkit.report.figures` is marked safe, after :func:`inline_svg` has made
+it fit for inlining.
+"""
+
+from __future__ import annotations
+
+import re
+
+import jinja2
+from markupsafe import Markup, escape
+
+from designkit.report.model import ReportModel
+
+_TEMPLATE = "report.html.j2"
+
+
+def inline_svg(svg: str, prefix: str, *, title: str = "") -> str:
+    """Make a standalone SVG document fit for inlining in HTML.
+
+    Drops the XML declaration, DOCTYPE, RDF metadata and namespace declarations (the HTML
+    parser puts inline ``<svg>`` in the SVG namespace itself), turns ``xlink:href`` into
+    ``href`` and prefixes every id and reference with ``prefix`` so that several figures in
+    one page cannot collide.
+    """
+    start = svg.find("<svg")
+    if start < 0:
+        raise ValueError("not an SVG document")
+    out = svg[start:]
+    out = re.sub(r"<metadata>.*?</metadata>\s*", "", out, flags=re.S)
+    out = re.sub(r'\s+xmlns(?::\w+)?="[^"]*"', "", out)
+    out = out.replace("xlink:href=", "href=")
+    out = re.sub(r'\bid="([^"]+)"', lambda m: f'id="{prefix}{m.group(1)}"', out)
+    out = re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{prefix}{m.group(1)})", out)
+    out = re.sub(r'href="#([^"]+)"', lambda m: f'href="#{prefix}{m.group(1)}"', out)
+    label = Markup(' role="img" aria-label="{}"').format(title) if title else ""
+    out = out.replace("<svg", f'<svg class="figure-svg"{label}', 1)
+    return out.strip()
+
+
+def breakable(text: object) -> Markup:
+    """Escaped text with ``<wbr>`` break opportunities after ``_`` and ``.`` (long identifiers)."""
+    return Markup(str(escape(text)).replace("_", "_<wbr>").replace(".", ".<wbr>"))
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("designkit.report", "templates"),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+    env.filters["breakable"] = breakable
+    return env
+
+
+def render_html(model: ReportModel) -> str:
+    """The report as one HTML document (UTF-8 text)."""
+    figures = [
+        {"title": f.title, "caption": f.caption, "svg": Markup(inline_svg(f.svg, f"f{k}-", title=f.title))}
+        for k, f in enumerate(model.figures, start=1)
+    ]
+    return _environment().get_template(_TEMPLATE).render(m=model, figures=figures)

@@ -1,0 +1,553 @@
+"""What a report says, as one frozen value built from a :class:`~designkit.pipeline.PipelineResult`.
+
+:func:`build_report_model` is the only place that decides wording, number formats and order;
+the HTML and the PDF renderers only lay the :class:`ReportModel` out, so the two formats
+always say the same thing.  Numbers are formatted here (gains with 6 significant digits,
+check values and certificates with 4).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from designkit.report.figures import Figure, design_figures, loop_margins, robustness_grid
+
+_CONTROLLER_LABELS = {
+    "pid_servo": "PID position servo",
+    "pid_tracking": "PID trajectory tracking",
+}
+_GAIN_UNITS = {
+    "pid_servo": {"K1": "N·m/rad", "K2": "N·m·s/rad", "K3": "N·m/(rad·s)", "K4": "s"},
+    "pid_tracking": {"K1": "N·m/rad", "K2": "N·m·s/rad", "K3": "N·m/(rad·s)"},
+}
+_PLANT_EQUATIONS = {
+    "link": "x1' = x2,   x2' = -x2/τ + (Km/τ)(u + ξ)   (x1 position rad, x2 speed rad/s, u control N·m)",
+}
+_PLANT_PARAMETERS = {
+    "Km": ("Km", "(rad/s)/(N·m)", "link gain"),
+    "tau": ("τ", "s", "time constant"),
+}
+# certificate keys whose [re, im] pairs are complex numbers (poles, zeros, eigenvalues)
+_COMPLEX_KEYS = re.compile(r"eig|pole|zero", re.IGNORECASE)
+_SINGLE_KEYS = re.compile(r"^(eigenvalue|pole|zero)$", re.IGNORECASE)
+_MATRIX_MAX = 8  # rows/columns of a certificate matrix shown before eliding
+_LIST_MAX = 12  # items of a certificate vector shown before eliding
+_RECORDS_MAX = 24  # rows of a certificate table (list of mappings) shown before eliding
+
+
+@dataclass(frozen=True)
+class ParameterRow:
+    """A named value with its unit and meaning."""
+
+    name: str
+    value: str
+    unit: str
+    meaning: str = ""
+
+
+@dataclass(frozen=True)
+class PoleRow:
+    """A requested closed-loop pole next to the achieved one closest to it."""
+
+    requested: str
+    achieved: str
+    error: str
+    damping: str
+    natural_frequency: str
+
+
+@dataclass(frozen=True)
+class CertificateEntry:
+    """One item of a check's certificate.
+
+    Either compact ``text`` (one line), or a ``matrix`` of formatted numbers (``header`` None,
+    shown in brackets), or a small table (``matrix`` rows under the column names ``header``,
+    from a list of mappings such as Routh conditions).
+    """
+
+    key: str
+    text: str = ""
+    matrix: tuple[tuple[str, ...], ...] | None = None
+    header: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class CheckRow:
+    """A check as the report shows it (all values already formatted)."""
+
+    name: str
+    status: str
+    target: str
+    achieved: str
+    margin: str
+    unit: str
+    detail: str
+    certificate: tuple[CertificateEntry, ...]
+
+
+@dataclass(frozen=True)
+class ReportModel:
+    """Everything a report shows; one model drives both the HTML and the PDF.
+
+    Parameters
+    ----------
+    title, name, description : str
+        Report title, spec name (also the output folder) and the spec's description.
+    verdict : str
+        ``"VERIFIED"``, ``"FAILED: <failed checks>"`` (plus ``"; UNDECIDED: ..."`` when some are
+        undecided too) or ``"UNDECIDED: <undecided checks>"``.
+    verdict_kind : str
+        ``"verified"``, ``"failed"`` or ``"undecided"`` (drives the banner colour).
+    verdict_summary : str
+        Counts of passed, failed and undecided checks.
+    verified : bool
+        Same as ``PipelineResult.verified``.
+    spec_text, spec_sha256, spec_path : str
+        The spec echoed verbatim, its SHA-256 and where it was read from.
+    versions : tuple of (name, version)
+        designkit and dependency versions.
+    controller : str
+        Controller family in words and its ``kind``.
+    plant_equation : str
+        Plant model in plain text.
+    plant_parameters : tuple of ParameterRow
+        Nominal plant parameters and the uncertainty box, with units.
+    formulas : tuple of str
+        Design equations (plain text).
+    gains : tuple of ParameterRow
+        Gains with units.
+    poles : tuple of PoleRow
+        Requested against achieved closed-loop poles.
+    zeros : tuple of ParameterRow
+        Requested against achieved zeros of ``x1/xD``.
+    loop : tuple of ParameterRow
+        Margins of the loop broken at the plant input.
+    notes : tuple of str
+        Choices made on the user's behalf.
+    checks : tuple of CheckRow
+        Verification checks in report order.
+    simulation : tuple of ParameterRow
+        Simulation settings (empty when no simulation ran).
+    figures : tuple of Figure
+        Figures in report order.
+    """
+
+    title: str
+    name: str
+    description: str
+    verdict: str
+    verdict_kind: str
+    verdict_summary: str
+    verified: bool
+    spec_text: str
+    spec_sha256: str
+    spec_path: str
+    versions: tuple[tuple[str, str], ...]
+    controller: str
+    plant_equation: str
+    plant_parameters: tuple[ParameterRow, ...]
+    formulas: tuple[str, ...]
+    gains: tuple[ParameterRow, ...]
+    poles: tuple[PoleRow, ...]
+    zeros: tuple[ParameterRow, ...]
+    loop: tuple[ParameterRow, ...]
+    notes: tuple[str, ...]
+    checks: tuple[CheckRow, ...]
+    simulation: tuple[ParameterRow, ...]
+    figures: tuple[Figure, ...]
+
+
+# ----------------------------------------------------------------------------- formatting
+
+
+def fmt_number(value: Any, digits: int = 4) -> str:
+    """A number with ``digits`` significant digits (``"∞"``, ``"nan"``; complex as ``a ± bj``)."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool | np.bool_):
+        return str(bool(value)).lower()
+    if isinstance(value, complex | np.complexfloating):
+        z = complex(value)
+        if abs(z.imag) <= 1e-12 * max(1.0, abs(z)):
+            return fmt_number(z.real, digits)
+        sign = "+" if z.imag >= 0 else "-"
+        return f"{fmt_number(z.real, digits)} {sign} {fmt_number(abs(z.imag), digits)}j"
+    if isinstance(value, int | float | np.integer | np.floating):
+        x = float(value)
+        if math.isnan(x):
+            return "nan"
+        if math.isinf(x):
+            return "∞" if x > 0 else "-∞"
+        if x == 0:
+            return "0"
+        return f"{x:.{digits}g}"
+    return str(value)
+
+
+def fmt_signed(value: Any, digits: int = 4) -> str:
+    """Like :func:`fmt_number` with an explicit sign for finite non-zero reals."""
+    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool):
+        x = float(value)
+        if math.isfinite(x) and x != 0:
+            return f"{x:+.{digits}g}"
+    return fmt_number(value, digits)
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+
+
+def _is_matrix(value: Any) -> bool:
+    if not isinstance(value, Sequence | np.ndarray) or isinstance(value, str) or len(value) == 0:
+        return False
+    rows = list(value)
+    if not all(isinstance(r, Sequence | np.ndarray) and not isinstance(r, str) for r in rows):
+        return False
+    width = len(rows[0])
+    return width > 0 and all(len(r) == width and all(_is_number(x) for x in r) for r in rows)
+
+
+def _is_records(value: Any) -> bool:
+    return (isinstance(value, Sequence) and not isinstance(value, str) and len(value) > 0
+            and all(isinstance(v, Mapping) for v in value))
+
+
+def _as_complex(value: Any, *, single: bool = False) -> Any:
+    """Lists of ``[re, im]`` pairs (any nesting) as complex numbers, or ``None``.
+
+    A bare ``[re, im]`` is read as one complex number only when ``single`` (an ``eigenvalue``
+    key); otherwise a 2-vector of reals stays a vector.
+    """
+    if not isinstance(value, Sequence) or isinstance(value, str):
+        return None
+    try:
+        num = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if num.ndim == 0 or num.shape[-1] != 2 or (num.ndim == 1 and not single):
+        return None
+    z = num[..., 0] + 1j * num[..., 1]
+    return complex(z) if z.ndim == 0 else z.tolist()
+
+
+def _elide(items: list[str], limit: int) -> list[str]:
+    return items if len(items) <= limit else [*items[: limit - 1], "…"]
+
+
+def format_matrix(value: Any, digits: int = 4) -> tuple[tuple[str, ...], ...]:
+    """A numeric matrix as strings with ``digits`` significant digits; rows and columns beyond
+    :data:`_MATRIX_MAX` are elided with ``…``."""
+    rows = [list(r) for r in value]
+    shown_rows = rows if len(rows) <= _MATRIX_MAX else [*rows[: _MATRIX_MAX - 1], None]
+    out = []
+    for r in shown_rows:
+        if r is None:
+            out.append(tuple("⋮" for _ in range(min(len(rows[0]), _MATRIX_MAX))))
+        else:
+            out.append(tuple(_elide([fmt_number(x, digits) for x in r], _MATRIX_MAX)))
+    return tuple(out)
+
+
+def _compact(value: Any, digits: int) -> str:
+    if isinstance(value, str):
+        return value
+    if _is_number(value) or isinstance(value, complex | bool) or value is None:
+        return fmt_number(value, digits)
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k}: {_compact(v, digits)}" for k, v in value.items()) + "}"
+    if isinstance(value, Sequence | np.ndarray):
+        items = [_compact(v, digits) for v in value]
+        return "[" + ", ".join(_elide(items, _LIST_MAX)) + (f"] ({len(items)} items)" if len(items) > _LIST_MAX
+                                                          else "]")
+    return str(value)
+
+
+def render_certificate(certificate: Mapping[str, Any], digits: int = 4) -> tuple[CertificateEntry, ...]:
+    """A certificate as compact entries: matrices as string grids, everything else as one line.
+
+    Nested mappings are flattened to dotted keys; a ``grid`` entry (robustness sweep) is
+    summarised (its full data goes to a figure).
+    """
+    out: list[CertificateEntry] = []
+
+    def visit(prefix: str, value: Any) -> None:
+        leaf = prefix.rsplit(".", 1)[-1]
+        if leaf == "grid" and isinstance(value, Mapping):
+            figure = robustness_grid({"grid": value}) is not None
+            out.append(CertificateEntry(prefix, _grid_summary(value, digits, figure=figure)))
+        elif isinstance(value, Mapping) and value:
+            for k, v in value.items():
+                visit(f"{prefix}.{k}" if prefix else str(k), v)
+        elif _is_records(value):
+            header = tuple(dict.fromkeys(k for rec in value for k in rec))
+            pairs = _COMPLEX_KEYS.search(leaf) is not None  # e.g. pole_matching: [re, im] cells
+
+            def cell(v: Any) -> str:
+                z = _as_complex(v, single=True) if pairs else None
+                return _compact(v if z is None else z, digits)
+
+            shown = value[:_RECORDS_MAX]
+            rows = tuple(tuple(cell(rec.get(h)) for h in header) for rec in shown)
+            if len(value) > len(shown):
+                rows += (tuple("…" for _ in header),)
+            out.append(CertificateEntry(prefix, f"{len(value)} rows", rows, tuple(str(h) for h in header)))
+        elif _COMPLEX_KEYS.search(leaf) and _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None):
+            z = _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None)
+            out.append(CertificateEntry(prefix, _compact(z, digits)))
+        elif _is_matrix(value) and len(value) > 1:
+            out.append(CertificateEntry(prefix, f"{len(value)}×{len(value[0])}", format_matrix(value, digits)))
+        else:
+            out.append(CertificateEntry(prefix, _compact(value, digits)))
+
+    for key, value in certificate.items():
+        visit(str(key), value)
+    return tuple(out)
+
+
+def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
+    parts = []
+    for axis in ("Km", "tau"):
+        if axis in grid:
+            arr = np.asarray(grid[axis], dtype=float).ravel()
+            if arr.size:
+                parts.append(f"{axis} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}] "
+                             f"({arr.size} points)")
+    for key, value in grid.items():
+        if key in ("Km", "tau"):
+            continue
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            parts.append(f"{key}: {_compact(value, digits)}")
+            continue
+        if arr.size > 1:
+            parts.append(f"{key}: min {fmt_number(np.nanmin(arr), digits)}, max {fmt_number(np.nanmax(arr), digits)}")
+        else:
+            parts.append(f"{key}: {_compact(value, digits)}")
+    return "; ".join(parts) + (" (see the robustness figure)" if figure else "")
+
+
+# ----------------------------------------------------------------------------- sections
+
+
+def verdict_of(checks: Sequence[Any]) -> tuple[str, str]:
+    """``(verdict, kind)`` of a list of checks; see :class:`ReportModel`."""
+    failed = [c.name for c in checks if c.passed is False]
+    undecided = [c.name for c in checks if c.passed is None]
+    if failed:
+        text = "FAILED: " + ", ".join(failed)
+        if undecided:
+            text += "; UNDECIDED: " + ", ".join(undecided)
+        return text, "failed"
+    if undecided:
+        return "UNDECIDED: " + ", ".join(undecided), "undecided"
+    return "VERIFIED", "verified"
+
+
+def _verdict_summary(checks: Sequence[Any]) -> str:
+    n = len(checks)
+    if n == 0:
+        return "No checks were run: nothing was verified beyond the synthesis itself."
+    counts = [sum(c.passed is v for c in checks) for v in (True, False, None)]
+    return f"{counts[0]} passed, {counts[1]} failed, {counts[2]} undecided, of {n} check{'s' * (n != 1)}."
+
+
+def _plant_rows(spec) -> tuple[ParameterRow, ...]:
+    plant = spec.plant
+    rows = []
+    for key, value in plant.model_dump(exclude={"kind", "uncertainty"}).items():
+        name, unit, meaning = _PLANT_PARAMETERS.get(key, (key, "", ""))
+        rows.append(ParameterRow(name, fmt_number(value, 6), unit, f"nominal {meaning}".strip()))
+    unc = getattr(plant, "uncertainty", None)
+    if unc is not None:
+        for key in ("Km", "tau"):
+            box = getattr(unc, key, None)
+            if box is not None:
+                name, unit, meaning = _PLANT_PARAMETERS[key]
+                rows.append(ParameterRow(name, f"[{fmt_number(box[0], 6)}, {fmt_number(box[1], 6)}]", unit,
+                                         f"uncertainty interval of the {meaning}"))
+        rows.append(ParameterRow("grid", str(unc.grid), "points/axis", "robustness grid resolution"))
+    return tuple(rows)
+
+
+def _match_poles(requested: Sequence[complex], achieved: np.ndarray) -> list[tuple[complex | None, complex]]:
+    remaining = [complex(p) for p in achieved]
+    pairs: list[tuple[complex | None, complex]] = []
+    for r in requested:
+        if not remaining:
+            break
+        k = min(range(len(remaining)), key=lambda i: abs(remaining[i] - r))
+        pairs.append((complex(r), remaining.pop(k)))
+    pairs.extend((None, p) for p in remaining)
+    return pairs
+
+
+def _damping(p: complex) -> tuple[str, str]:
+    wn = abs(p)
+    if wn == 0:
+        return "—", "0"
+    return fmt_number(-p.real / wn, 4), fmt_number(wn, 4)
+
+
+def _pole_rows(design) -> tuple[PoleRow, ...]:
+    achieved = np.linalg.eigvals(np.asarray(design.closed_loop.A, float))
+    achieved = sorted(achieved, key=lambda z: (z.real, z.imag))
+    requested = sorted(design.poles, key=lambda z: (z.real, z.imag))
+    rows = []
+    for req, ach in _match_poles(requested, np.asarray(achieved)):
+        zeta, wn = _damping(ach)
+        rows.append(PoleRow(
+            requested=fmt_number(req, 6) if req is not None else "—",
+            achieved=fmt_number(ach, 6),
+            error=fmt_number(abs(ach - req), 2) if req is not None else "—",
+            damping=zeta, natural_frequency=wn,
+        ))
+    return tuple(rows)
+
+
+def _zero_rows(design) -> tuple[ParameterRow, ...]:
+    from designkit.report.figures import achieved_zeros
+
+    zeros = achieved_zeros(design)
+    rows = [ParameterRow("requested zero", fmt_number(z, 6), "1/s", "zero of x1/xD") for z in design.zeros]
+    rows += [ParameterRow("achieved zero", fmt_number(z, 6), "1/s", "zero of x1/xD (closed loop)") for z in zeros]
+    return tuple(rows)
+
+
+def _loop_rows(design) -> tuple[ParameterRow, ...]:
+    m = loop_margins(design)
+    if m is None:
+        return ()
+    if math.isfinite(m.w_phase_crossover):
+        gm_note = f"factor by which the loop gain may grow; phase crossover ω = {fmt_number(m.w_phase_crossover)} rad/s"
+        if m.gain_margin < 1:
+            gm_note = (f"below 1: conditionally stable, the loop gain may only be reduced by this factor; "
+                       f"phase crossover ω = {fmt_number(m.w_phase_crossover)} rad/s")
+    else:
+        gm_note = "no phase crossover: the phase never reaches -180° at a finite frequency"
+    gm_db = f" ({20 * math.log10(m.gain_margin):+.3g} dB)" if math.isfinite(m.gain_margin) and m.gain_margin > 0 else ""
+    pm_note = (f"at gain crossover ω = {fmt_number(m.w_gain_crossover)} rad/s" if math.isfinite(m.w_gain_crossover)
+               else "no gain crossover: |L| never crosses 1")
+    return (
+        ParameterRow("phase margin", fmt_number(m.phase_margin, 4), "deg", pm_note),
+        ParameterRow("gain margin", fmt_number(m.gain_margin, 4) + gm_db, "ratio", gm_note),
+        ParameterRow("min |1 + L(jω)|", fmt_number(m.modulus_margin, 4), "—",
+                     "modulus (vector) margin on the plotted frequency grid"),
+    )
+
+
+def _check_row(check) -> CheckRow:
+    achieved = check.achieved
+    return CheckRow(
+        name=check.name,
+        status=check.status,
+        target=check.target or "—",
+        achieved=achieved if isinstance(achieved, str) else fmt_number(achieved, 4),
+        margin=fmt_signed(check.margin, 4),
+        unit=check.unit,
+        detail=check.detail,
+        certificate=render_certificate(check.certificate),
+    )
+
+
+def _same(a: Mapping[str, Any], b: Mapping[str, Any]) -> bool:
+    try:
+        return bool(a == b)
+    except (ValueError, TypeError):  # e.g. arrays in a certificate: compare no further
+        return False
+
+
+def _check_rows(checks: Sequence[Any]) -> tuple[CheckRow, ...]:
+    """Rows of the checks table; a certificate identical to an earlier check's is not repeated."""
+    rows: list[CheckRow] = []
+    for k, check in enumerate(checks):
+        row = _check_row(check)
+        earlier = next((c for c in checks[:k] if check.certificate and _same(c.certificate, check.certificate)),
+                       None)
+        if earlier is not None:
+            row = dataclasses.replace(row, certificate=(CertificateEntry("certificate", f"same as {earlier.name}"),))
+        rows.append(row)
+    return tuple(rows)
+
+
+def _simulation_rows(simulation) -> tuple[ParameterRow, ...]:
+    if simulation is None:
+        return ()
+    rows = [ParameterRow("kind", str(simulation.kind), "")]
+    t = np.asarray(simulation.time, float)
+    if t.size:
+        rows.append(ParameterRow("samples", f"{t.size} over [{fmt_number(t[0])}, {fmt_number(t[-1])}]", "s"))
+    for key, value in dict(simulation.settings).items():
+        rows.append(ParameterRow(str(key), _compact(value, 6), ""))
+    return tuple(rows)
+
+
+def build_report_model(result) -> ReportModel:
+    """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
+
+    Parameters
+    ----------
+    result : designkit.pipeline.PipelineResult
+        Spec, design, checks, simulation and versions of one run.
+
+    Returns
+    -------
+    ReportModel
+        Every section of the report, formatted, with the figures as SVG text.
+    """
+    loaded, design = result.loaded, result.design
+    spec = loaded.spec
+    checks = tuple(result.checks)
+    verdict, kind = verdict_of(checks)  # same rule as PipelineResult.verified: undecided is no pass
+    label = _CONTROLLER_LABELS.get(design.kind, design.kind)
+    units = _GAIN_UNITS.get(design.kind, {})
+    figures = design_figures(
+        design, requirements=spec.requirements, simulation_spec=spec.simulation,
+        simulation=result.simulation, checks=checks,
+    )
+    return ReportModel(
+        title=f"{label} — {spec.name}",
+        name=spec.name,
+        description=" ".join(spec.description.split()),
+        verdict=verdict,
+        verdict_kind=kind,
+        verdict_summary=_verdict_summary(checks),
+        verified=bool(result.verified),
+        spec_text=loaded.text,
+        spec_sha256=loaded.sha256,
+        spec_path=str(loaded.path),
+        versions=tuple((str(k), str(v)) for k, v in dict(result.versions).items()),
+        controller=f"{label} ({design.kind})",
+        plant_equation=_PLANT_EQUATIONS.get(spec.plant.kind, spec.plant.kind),
+        plant_parameters=_plant_rows(spec),
+        formulas=tuple(design.formulas),
+        gains=tuple(ParameterRow(k, fmt_number(v, 6), units.get(k, "")) for k, v in design.gains.items()),
+        poles=_pole_rows(design),
+        zeros=_zero_rows(design),
+        loop=_loop_rows(design),
+        notes=tuple(design.notes),
+        checks=_check_rows(checks),
+        simulation=_simulation_rows(result.simulation),
+        figures=figures,
+    )
+
+
+__all__ = [
+    "CertificateEntry",
+    "CheckRow",
+    "Figure",
+    "ParameterRow",
+    "PoleRow",
+    "ReportModel",
+    "build_report_model",
+    "fmt_number",
+    "render_certificate",
+    "verdict_of",
+]

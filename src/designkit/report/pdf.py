@@ -1,0 +1,139 @@
+"""Render a :class:`~designkit.report.model.ReportModel` as PDF through Typst.
+
+The Typst source is generated from ``templates/report.typ.j2`` with Jinja2 using delimiters
+that cannot occur in Typst (``<< >>``, ``<% %>``, ``<# #>``).  Every ``<< value >>`` is
+escaped for Typst *markup* by default (the Typst counterpart of HTML autoescaping); the
+template opts out only through the ``str`` filter (a Typst string literal) or the ``raw``
+filter (trusted Typst written by this module).  Figures are written as SVG files next to the
+``.typ`` source in a temporary directory and included with ``image(...)``.
+
+Typst embeds its default fonts (Libertinus Serif, New Computer Modern, DejaVu Sans Mono);
+system fonts are ignored so that the PDF is the same on every machine.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import jinja2
+
+from designkit.report.model import ReportModel
+
+_TEMPLATE = "report.typ.j2"
+# Every ASCII punctuation character: Typst markup accepts a backslash before any character, so
+# escaping all of them disables headings, lists, emphasis, math, labels, references, raw,
+# comments (// and /*), shorthands (~, --, ...), smart quotes and automatic links alike.
+_MARKUP_SPECIAL = frozenset("\\#$*_@<>[]`~/=-+\"':.;,!?%&|^(){}")
+_STRING_ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+class TypstCode(str):
+    """Text that is already valid Typst and must not be escaped again."""
+
+    __slots__ = ()
+
+
+def escape_typst(text: object) -> str:
+    """Escape ``text`` so that Typst markup shows it literally.
+
+    Every ASCII punctuation character gets a backslash; line breaks become Typst line breaks
+    (``\\`` followed by a newline) and other control characters are dropped.
+
+    Examples
+    --------
+    >>> escape_typst("K_1 = #5 * $x$")
+    'K\\\\_1 \\\\= \\\\#5 \\\\* \\\\$x\\\\$'
+    """
+    s = str(text).replace("\r\n", "\n").replace("\r", "\n")
+    out = []
+    for ch in s:
+        if ch in _MARKUP_SPECIAL:
+            out.append("\\" + ch)
+        elif ch == "\n":
+            out.append("\\\n")
+        elif ch == "\t":
+            out.append(" ")
+        elif ord(ch) < 32 or ord(ch) == 127:
+            continue
+        else:
+            out.append(ch)
+    return "".join(out)
+
+
+def typst_string(text: object) -> TypstCode:
+    """A Typst string literal (with quotes) whose value is ``text``."""
+    out = []
+    for ch in str(text):
+        if ch in _STRING_ESCAPES:
+            out.append(_STRING_ESCAPES[ch])
+        elif ord(ch) < 32 or ord(ch) == 127:
+            out.append(f"\\u{{{ord(ch):x}}}")
+        else:
+            out.append(ch)
+    return TypstCode('"' + "".join(out) + '"')
+
+
+def _finalize(value: object) -> str:
+    if isinstance(value, TypstCode):
+        return value
+    return escape_typst("" if value is None else value)
+
+
+def _matrix(rows: tuple[tuple[str, ...], ...]) -> TypstCode:
+    body = "; ".join(", ".join(typst_string(x) for x in row) for row in rows)
+    return TypstCode(f'$mat(delim: "[", align: #right, {body})$')
+
+
+def _breakable(text: object) -> TypstCode:
+    """Escaped markup with zero-width break opportunities after ``_`` and ``.`` (long identifiers)."""
+    return TypstCode(escape_typst(text).replace("\\_", "\\_\u200b").replace("\\.", "\\.\u200b"))
+
+
+def _environment() -> jinja2.Environment:
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("designkit.report", "templates"),
+        block_start_string="<%",
+        block_end_string="%>",
+        variable_start_string="<<",
+        variable_end_string=">>",
+        comment_start_string="<#",
+        comment_end_string="#>",
+        autoescape=False,
+        finalize=_finalize,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+    env.filters["str"] = typst_string
+    env.filters["raw"] = TypstCode
+    env.filters["matrix"] = _matrix
+    env.filters["breakable"] = _breakable
+    return env
+
+
+def render_typst(model: ReportModel) -> str:
+    """The Typst source of the report; figures are referenced by ``Figure.filename``."""
+    return _environment().get_template(_TEMPLATE).render(m=model)
+
+
+def compile_pdf(model: ReportModel) -> bytes:
+    """Compile the report to PDF bytes (Typst default fonts only, no system fonts)."""
+    import typst
+
+    source = render_typst(model)
+    with tempfile.TemporaryDirectory(prefix="designkit-report-") as tmp:
+        root = Path(tmp)
+        for fig in model.figures:
+            (root / fig.filename).write_text(fig.svg, encoding="utf-8")
+        main = root / "report.typ"
+        main.write_text(source, encoding="utf-8")
+        try:
+            pdf = typst.compile(str(main), root=str(root), font_paths=[], ignore_system_fonts=True)
+        except typst.TypstError as exc:  # user text is escaped, so this is a designkit bug
+            detail = getattr(exc, "diagnostic", "") or str(exc)
+            raise RuntimeError(f"typst could not compile the report source: {detail}") from exc
+    if not isinstance(pdf, bytes) or not pdf.startswith(b"%PDF"):
+        raise RuntimeError("typst did not return a PDF document")
+    return pdf

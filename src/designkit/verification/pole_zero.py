@@ -1,0 +1,211 @@
+"""Check ``"pole_placement"``: does the synthesised closed loop have the requested poles and zeros?
+
+Computed independently of the synthesis formulas, from the closed loop's state space with
+python-control:
+
+- poles: ``control.poles`` of the closed loop, matched to ``design.poles`` as multisets (optimal
+  assignment); a pole's error is ``|p - p_ref| / R`` with ``R`` the largest requested magnitude.
+  Simple poles must agree to ``POLE_REL``; an ``m``-fold cluster of requested poles (e.g. the
+  double pole of a critically damped pair) to ``POLE_REL**(1/m)``, the accuracy to which any
+  algorithm can compute an ``m``-fold root.  The characteristic polynomial (well conditioned even
+  for multiple roots) must agree to ``POLE_REL`` in scaled coefficients ``c_k / R^k``.
+- servo (inputs ``xD, xi``): zeros of the SISO ``xD -> x1`` subsystem by ``control.zeros``, after
+  discarding infinite zeros that the QZ algorithm returns as huge finite numbers
+  (``|z| > ZERO_INFINITE_REL * ||[A B; C D]||``), matched to ``design.zeros``.  A zero cancelling a
+  pole (zero placed on the third pole) is a genuine root of the numerator and is matched like any
+  other.  DC gain of ``x1/xD`` must be 1.
+- tracker (inputs ``xD, xD', xD''``, xi): the reference transfer with ``xD' = s xD`` and
+  ``xD'' = s^2 xD`` must be identically 1 (perfect tracking, notes F1) -- evaluated at
+  ``s = 0, jR/10, jR, 10jR`` -- so it has no zeros (``design.zeros == ()``); and ``xi -> x1`` must have
+  its single finite zero at 0 (integral action; notes F2 = (Km/tau) s / ((s-p1)(s-p2)(s-p3))).
+
+``margin = 1 - max(error / tolerance)`` over every comparison: positive when all hold.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from designkit.verification.check import Check
+from designkit.verification.tolerances import (
+    DC_GAIN_TOL,
+    POLE_CLUSTER_REL,
+    POLE_REL,
+    ZERO_INFINITE_REL,
+    cluster_tolerance,
+    scaled_error,
+)
+
+
+def _pairs(z: Sequence[complex]) -> list[list[float]]:
+    return [[complex(v).real, complex(v).imag] for v in z]
+
+
+def cluster_sizes(ref: Sequence[complex], scale: float) -> np.ndarray:
+    """For each requested root, the size of its cluster (roots within ``POLE_CLUSTER_REL * scale``, transitively)."""
+    ref = np.asarray(ref, dtype=complex)
+    n = len(ref)
+    label = np.arange(n)
+    close = np.abs(ref[:, None] - ref[None, :]) <= POLE_CLUSTER_REL * scale
+    for _ in range(n):  # label propagation: n rounds suffice
+        label = np.min(np.where(close, label[None, :], n), axis=1)
+    return np.array([np.count_nonzero(label == label[i]) for i in range(n)])
+
+
+def match_roots(computed: Sequence[complex], ref: Sequence[complex], scale: float) -> dict[str, Any]:
+    """Match two multisets of roots; errors are ``|x - ref| / scale``, tolerances cluster-aware.
+
+    Returns a dict with ``ok`` (bool), ``ratio`` (worst error/tolerance), and per-root rows.
+    Multisets of different sizes never match.
+    """
+    computed = np.asarray(computed, dtype=complex)
+    ref = np.asarray(ref, dtype=complex)
+    if len(computed) != len(ref):
+        return {"ok": False, "ratio": np.inf, "rows": [], "reason": f"{len(computed)} computed vs {len(ref)} requested"}
+    if len(ref) == 0:
+        return {"ok": True, "ratio": 0.0, "rows": []}
+    cost = np.abs(computed[:, None] - ref[None, :]) / scale
+    ci, ri = linear_sum_assignment(cost)
+    sizes = cluster_sizes(ref, scale)
+    rows = []
+    for c, r in zip(ci, ri, strict=True):
+        tol = cluster_tolerance(int(sizes[r]))
+        rows.append({
+            "requested": [ref[r].real, ref[r].imag], "computed": [computed[c].real, computed[c].imag],
+            "scaled_error": float(cost[c, r]), "tolerance": tol, "cluster": int(sizes[r]),
+        })
+    ratio = max(r["scaled_error"] / r["tolerance"] for r in rows)
+    return {"ok": bool(ratio <= 1.0), "ratio": float(ratio), "rows": rows}
+
+
+def coefficient_error(computed: Sequence[complex], ref: Sequence[complex], scale: float) -> float:
+    """``max_k |c_k - r_k| / scale^k`` between the monic polynomials with roots ``computed`` and ``ref``."""
+    c, r = np.poly(np.asarray(computed)), np.poly(np.asarray(ref))
+    if len(c) != len(r):
+        return float("inf")
+    k = np.arange(len(c))
+    return float(np.max(np.abs(c - r) / scale**k))
+
+
+def finite_zeros(sys: Any) -> tuple[np.ndarray, int]:
+    """Zeros of a SISO ``control.StateSpace`` by ``control.zeros``, without spurious infinite ones.
+
+    Returns the finite zeros and how many were discarded as infinite.
+    """
+    import control
+
+    z = np.asarray(control.zeros(sys), dtype=complex)
+    L = np.block([[np.asarray(sys.A), np.asarray(sys.B)], [np.asarray(sys.C), np.asarray(sys.D)]])
+    limit = ZERO_INFINITE_REL * max(float(np.linalg.norm(L)), 1.0)
+    keep = np.isfinite(z) & (np.abs(z) <= limit)
+    return z[keep], int(np.count_nonzero(~keep))
+
+
+def _siso(sys: Any, out: str, inp: str) -> Any:
+    import control
+
+    i = list(sys.output_labels).index(out)
+    j = list(sys.input_labels).index(inp)
+    return control.ss(sys.A, sys.B[:, j : j + 1], sys.C[i : i + 1, :], sys.D[i : i + 1, j : j + 1])
+
+
+def reference_transfer(closed_loop: Any, s: complex) -> complex:
+    """``x1(s)/xD(s)`` of a tracker driven by ``(xD, s xD, s^2 xD)`` (dimensionless)."""
+    A, B, C, D = closed_loop.A, closed_loop.B, closed_loop.C, closed_loop.D
+    ins, i = list(closed_loop.inputs), list(closed_loop.outputs).index("x1")
+    w = np.zeros(len(ins), dtype=complex)
+    for name, factor in (("xD", 1.0), ("xDd", s), ("xDdd", s * s)):
+        w[ins.index(name)] = factor
+    x = np.linalg.solve(s * np.eye(len(A)) - A, B @ w)
+    return complex(C[i] @ x + D[i] @ w)
+
+
+def pole_placement(design: Any) -> Check:
+    """Check ``"pole_placement"`` (see module docstring).
+
+    Parameters
+    ----------
+    design : Design
+        With ``closed_loop`` (inputs ``xD, xi`` or ``xD, xDd, xDdd, xi``; outputs ``x1, u``),
+        requested ``poles`` and ``zeros`` (1/s).
+
+    Returns
+    -------
+    Check
+        ``achieved``: worst scaled pole error; ``margin``: ``1 - max(error/tolerance)``.
+    """
+    import control
+
+    cl = design.closed_loop
+    sys = cl.to_control()
+    poles = np.asarray(control.poles(sys), dtype=complex)
+    ref = np.asarray(design.poles, dtype=complex)
+    R = float(np.max(np.abs(ref))) if len(ref) and np.max(np.abs(ref)) > 0 else 1.0
+    pm = match_roots(poles, ref, R)
+    cerr = coefficient_error(poles, ref, R)
+    ratios = {"poles": pm["ratio"], "characteristic polynomial": cerr / POLE_REL}
+    failures = []
+    if not pm["ok"]:
+        failures.append(f"poles {np.round(poles, 9).tolist()} != requested {np.round(ref, 9).tolist()}")
+    if not cerr <= POLE_REL:
+        failures.append(f"characteristic polynomial differs by {cerr:.3g} (scaled)")
+    cert: dict[str, Any] = {
+        "poles": _pairs(poles), "requested_poles": _pairs(ref), "pole_scale": R, "pole_matching": pm["rows"],
+        "coefficient_error": cerr, "tolerance": POLE_REL,
+    }
+    ins = list(cl.inputs)
+    if "xDd" not in ins:  # servo: zeros and DC gain of x1/xD
+        sub = _siso(sys, "x1", "xD")
+        z, n_inf = finite_zeros(sub)
+        zref = np.asarray(design.zeros, dtype=complex)
+        Rz = max([R, *np.abs(zref).tolist()])
+        zm = match_roots(z, zref, Rz)
+        dc = complex(control.dcgain(sub))
+        dc_err = scaled_error(dc, 1.0)
+        ratios["zeros"] = zm["ratio"]
+        ratios["dc gain"] = dc_err / DC_GAIN_TOL
+        if not zm["ok"]:
+            failures.append(f"zeros of x1/xD {np.round(z, 9).tolist()} != requested {np.round(zref, 9).tolist()}")
+        if not dc_err <= DC_GAIN_TOL:
+            failures.append(f"DC gain of x1/xD = {dc.real:.12g}, not 1")
+        cert.update(
+            zeros=_pairs(z), requested_zeros=_pairs(zref), zero_matching=zm["rows"], infinite_zeros_discarded=n_inf,
+            dc_gain=dc.real, dc_gain_error=dc_err,
+        )
+    else:  # tracker: x1/xD == 1 identically, xi -> x1 zero at 0
+        points = [0.0, 0.1j * R, 1j * R, 10j * R]
+        vals = [reference_transfer(cl, s) for s in points]
+        errs = [scaled_error(v, 1.0) for v in vals]
+        ratios["reference transfer"] = max(errs) / DC_GAIN_TOL
+        if max(errs) > DC_GAIN_TOL:
+            failures.append(f"x1/xD is not 1 (scaled error {max(errs):.3g})")
+        if len(design.zeros):
+            failures.append(f"the tracker's reference transfer has no zeros, but the design lists {design.zeros}")
+            ratios["requested zeros"] = np.inf
+        dz, n_inf = finite_zeros(_siso(sys, "x1", "xi"))
+        dm = match_roots(dz, [0.0], R)
+        ratios["xi zeros"] = dm["ratio"]
+        if not dm["ok"]:
+            failures.append(f"zeros of x1/xi {np.round(dz, 9).tolist()} != [0] (integral action)")
+        cert.update(
+            reference_transfer={"s": _pairs(points), "value": _pairs(vals), "scaled_error": errs},
+            disturbance_zeros=_pairs(dz), infinite_zeros_discarded=n_inf, zeros=[],
+            requested_zeros=_pairs(design.zeros),
+        )
+    worst = max(ratios.values())
+    cert["error_over_tolerance"] = {k: (float(v) if np.isfinite(v) else None) for k, v in ratios.items()}
+    worst_pole = max((r["scaled_error"] for r in pm["rows"]), default=None)
+    passed = not failures
+    detail = (
+        f"closed-loop poles and zeros as requested (worst error {worst:.2g} x tolerance)"
+        if passed else "; ".join(failures)
+    )
+    return Check(
+        name="pole_placement", passed=passed, target=f"poles and zeros as requested to {POLE_REL:g} (scaled)",
+        achieved=worst_pole, margin=float(1.0 - worst) if np.isfinite(worst) else None, unit="1 (scaled)",
+        detail=detail, certificate=cert,
+    )
