@@ -13,7 +13,7 @@ from typing import Any
 
 from designkit.spec.loader import LoadedSpec
 from designkit.synthesis.design import Design
-from designkit.verification.check import Check, all_passed
+from designkit.verification.check import Check, all_passed, not_passed
 
 _DEPENDENCIES = ("casadi", "numpy", "scipy", "control", "cvxpy", "clarabel", "matplotlib", "pydantic", "typst")
 
@@ -60,8 +60,8 @@ class PipelineResult:
 
     @property
     def failed(self) -> tuple[Check, ...]:
-        """Checks that failed or are undecided."""
-        return tuple(c for c in self.checks if c.passed is not True)
+        """Required checks that failed or are undecided."""
+        return not_passed(self.checks)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json``."""

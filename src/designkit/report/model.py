@@ -339,8 +339,8 @@ def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
 
 def verdict_of(checks: Sequence[Any]) -> tuple[str, str]:
     """``(verdict, kind)`` of a list of checks; see :class:`ReportModel`."""
-    failed = [c.name for c in checks if c.passed is False]
-    undecided = [c.name for c in checks if c.passed is None]
+    failed = [c.name for c in checks if c.passed is False and getattr(c, "required", True)]
+    undecided = [c.name for c in checks if c.passed is None and getattr(c, "required", True)]
     if failed:
         text = "FAILED: " + ", ".join(failed)
         if undecided:
@@ -356,7 +356,9 @@ def _verdict_summary(checks: Sequence[Any]) -> str:
     if n == 0:
         return "No checks were run: nothing was verified beyond the synthesis itself."
     counts = [sum(c.passed is v for c in checks) for v in (True, False, None)]
-    return f"{counts[0]} passed, {counts[1]} failed, {counts[2]} undecided, of {n} check{'s' * (n != 1)}."
+    info = sum(not getattr(c, "required", True) for c in checks)
+    extra = f" ({info} informational, not part of the verdict)" if info else ""
+    return f"{counts[0]} passed, {counts[1]} failed, {counts[2]} undecided, of {n} check{'s' * (n != 1)}{extra}."
 
 
 def _plant_rows(spec) -> tuple[ParameterRow, ...]:

@@ -33,6 +33,11 @@ class Check:
     certificate : Mapping
         Evidence: e.g. ``{"P": [[...]], "eig_P": [...], "solver_status": "optimal"}``.
         Values are JSON-serialisable (lists, floats, str).
+    required : bool
+        Whether the verdict depends on this check.  An informational check (``False``) is
+        reported with its status but does not make a design unverified, e.g. the common
+        Lyapunov function of a parameter box, which is sufficient but not necessary for
+        robust stability.
     """
 
     name: str
@@ -43,6 +48,7 @@ class Check:
     unit: str = ""
     detail: str = ""
     certificate: Mapping[str, Any] = field(default_factory=dict)
+    required: bool = True
 
     @property
     def status(self) -> Status:
@@ -63,9 +69,15 @@ class Check:
             "unit": self.unit,
             "detail": self.detail,
             "certificate": dict(self.certificate),
+            "required": self.required,
         }
 
 
 def all_passed(checks: tuple[Check, ...] | list[Check]) -> bool:
-    """True when every check passed (an undecided check is not a pass)."""
-    return all(c.passed is True for c in checks)
+    """True when every required check passed (an undecided check is not a pass)."""
+    return all(c.passed is True for c in checks if c.required)
+
+
+def not_passed(checks: tuple[Check, ...] | list[Check]) -> tuple[Check, ...]:
+    """Required checks that failed or are undecided."""
+    return tuple(c for c in checks if c.required and c.passed is not True)
