@@ -6,6 +6,8 @@ tested on values whose content is known exactly.
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import pytest
 
@@ -33,6 +35,14 @@ simulation:
 """
 
 NASTY = 'P_1 #x $y$ *bold* @ref <lab> [a] \\cmd `code` ~ // /* -- = + "q" \'s\' http://x.org {b}'
+
+
+def assert_svg(svg: str) -> ET.Element:
+    """Parse ``svg`` and check that it is an SVG document without a creation date (reproducible)."""
+    root = ET.fromstring(svg.encode("utf-8"))
+    assert root.tag.endswith("svg")
+    assert "<dc:date>" not in svg  # no creation date: reproducible
+    return root
 
 
 def linear_simulation(design, spec, *, limit: float | None = None) -> SimulationResult:

@@ -7,37 +7,9 @@ combinations.  The base parameters ``beta = K P`` are the smallest set with
 "Direct calculation of minimum set of inertial parameters of serial robots",
 IEEE T-RA 6(3), 1990; Mayeda, Yoshida & Osuka, IEEE T-RA 6(3), 1990).
 
-Method: an evaluation set on which ``W`` is determined exactly
----------------------------------------------------------------
-A constant vector ``r`` is a column relation when ``W(x) r = 0`` for *every*
-state ``x``.  Random samples cannot prove that; instead we use the structure of
-the model to pick a finite set of states on which any function of the
-regressor's class that vanishes there vanishes everywhere (a *unisolvent*
-set).  The class follows from the Lagrangian (see the notes' ``D_ij``,
-``D_ijk``, ``D_i``):
-
-* ``W = G(q) + A(q) qdd + B(q)[qd, qd] + Fv(qd) + Fc(sign qd)``: affine in
-  ``qdd``, a quadratic form in ``qd``, plus the per-joint viscous and Coulomb
-  friction columns of the model.
-* Link angular and origin velocities, written in the link's own frame, have
-  degree at most 1 in ``cos q_j, sin q_j`` of every revolute joint (and degree
-  1 in every prismatic ``q_j``), so the kinetic part is a trigonometric
-  polynomial of degree <= 2 in each revolute ``q_j`` (polynomial of degree <= 2
-  in a prismatic one) and the gravity part ``G`` has degree <= 1.  The kinetic
-  energy does not change when the whole chain moves about (along) joint 1, so
-  ``A`` and ``B`` do not depend on ``q_1``.
-
-The evaluation set is therefore (i) ``W(q, 0, 0)`` on the tensor grid of 3
-equispaced angles per revolute joint (2 values per prismatic joint), which is
-unisolvent for ``G``, and (ii) at ``q_1 = 0`` and the tensor grid of 5
-equispaced angles per revolute joint ``2..n`` (3 values per prismatic joint):
-``(qd, qdd) = (0, e_k)``, ``(+-e_a, 0)``, ``(2 e_a, 0)``, ``(e_a + e_b, 0)``,
-which is unisolvent for the ``qd``/``qdd`` part (``1 + 3n + n(n-1)/2 + n``
-coefficients, as many points).  On an equispaced grid the discrete Fourier
-transform is exact for these degrees, so by Parseval the 2-norm of the grid
-values bounds ``sup_q |W(q) r|``: the null space of the stacked evaluation
-matrix ``Y`` *is* the null space of ``W`` as a function, and the residual of a
-relation on ``Y`` bounds its residual at every state.
+The exactness argument -- a finite *unisolvent* set of states on which ``W``
+is determined, so that a relation holding there holds everywhere -- and the
+verification on it live in :mod:`designkit.models.unisolvent`.
 
 Discovery, then verification.  The pivots and relations are first computed
 from 500 pseudo-random states of a seeded generator (QR of the stacked
@@ -59,15 +31,15 @@ pivot, typically 0.5 against 1e-15) and the relation coefficients
 1e-15).  The coefficients are not recognised as closed-form expressions of the
 DH constants; the regrouping strings print them as numbers, and the tests check
 that e.g. the PUMA's ``mcx2R`` regroups ``m3..m6`` with coefficient ``a2``.
-The unisolvence argument depends on the degree bounds above, which the tests
-check on the zoo robots by a discrete Fourier transform along each joint.
+The unisolvence argument depends on the degree bounds stated in
+:mod:`designkit.models.unisolvent`, which the tests check on the zoo robots by
+a discrete Fourier transform along each joint.
 A related exact method is Wensing, Niemeyer & Slotine, "A geometric
 characterization of observability in inertial parameter identification" (arXiv:1711.03896).
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import casadi
@@ -75,10 +47,9 @@ import numpy as np
 import scipy.linalg
 
 from designkit.errors import ModelError
+from designkit.models.unisolvent import evaluation_states, regressor_rows, relation_residuals
 
 __all__ = ["BaseParameters", "Certificate", "base_parameters", "evaluation_states"]
-
-_CHUNK = 8192  # states per mapped evaluation
 
 
 @dataclass(frozen=True)
@@ -167,51 +138,6 @@ class BaseParameters:
         return len(self.names)
 
 
-def _grid(joints: tuple[str, ...], revolute_points: int, prismatic_points: int) -> np.ndarray:
-    axes = []
-    for joint in joints:
-        if joint == "revolute":
-            axes.append(0.3 + 2.0 * np.pi * np.arange(revolute_points) / revolute_points)
-        else:
-            axes.append(np.linspace(-0.5, 0.5, prismatic_points))
-    if not axes:
-        return np.zeros((1, 0))
-    return np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, len(joints))
-
-
-def evaluation_states(joints: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The unisolvent evaluation set for a chain's regressor (see the module docstring).
-
-    Parameters
-    ----------
-    joints : tuple of {"revolute", "prismatic"}
-        Joint types, base to tip.
-
-    Returns
-    -------
-    (numpy.ndarray, numpy.ndarray, numpy.ndarray)
-        ``q``, ``qd``, ``qdd``, each ``N x n`` (rad or m, per second, per second squared).
-    """
-    n = len(joints)
-    eye = np.eye(n)
-    # Gravity part: degree 1 in every joint, all joints.
-    q_gravity = _grid(joints, 3, 2)
-    blocks = [(q_gravity, np.zeros_like(q_gravity), np.zeros_like(q_gravity))]
-    # Velocity/acceleration part: degree 2, independent of q_1.
-    rest = _grid(joints[1:], 5, 3)
-    q_kin = np.hstack([np.zeros((rest.shape[0], 1)), rest]) if n else rest
-    rates: list[tuple[np.ndarray, np.ndarray]] = []
-    for k in range(n):
-        rates.append((np.zeros(n), eye[k]))
-    for a in range(n):
-        rates += [(eye[a], np.zeros(n)), (-eye[a], np.zeros(n)), (2.0 * eye[a], np.zeros(n))]
-    for a, b in itertools.combinations(range(n), 2):
-        rates.append((eye[a] + eye[b], np.zeros(n)))
-    for qd, qdd in rates:
-        blocks.append((q_kin, np.tile(qd, (q_kin.shape[0], 1)), np.tile(qdd, (q_kin.shape[0], 1))))
-    return tuple(np.vstack([blk[i] for blk in blocks]) for i in range(3))  # type: ignore[return-value]
-
-
 def _sx_regressor(robot: object) -> tuple[casadi.SX, casadi.SX, casadi.SX, casadi.SX, casadi.Function]:
     try:
         reg = robot.functions["regressor"]  # type: ignore[attr-defined]
@@ -224,39 +150,12 @@ def _sx_regressor(robot: object) -> tuple[casadi.SX, casadi.SX, casadi.SX, casad
     return q, qd, qdd, reg(q, qd, qdd), reg
 
 
-def _evaluate(mapped: casadi.Function, pattern: casadi.Sparsity, q: np.ndarray, qd: np.ndarray,
-              qdd: np.ndarray) -> np.ndarray:
-    """Dense ``W`` at ``N`` states, shape ``(N, n, p)``, through a zero-copy ``FunctionBuffer``.
-
-    ``mapped`` is the regressor mapped over ``N`` states and ``pattern`` the sparsity of one ``W``.
-    """
-    count = q.shape[0]
-    buffer, run = mapped.buffer()
-    inputs = [np.ascontiguousarray(x.T).ravel(order="F") for x in (q, qd, qdd)]
-    for index, array in enumerate(inputs):
-        buffer.set_arg(index, memoryview(array))
-    nonzeros = np.zeros(mapped.nnz_out(0))
-    buffer.set_res(0, memoryview(nonzeros))
-    run()
-    if buffer.ret() != 0:
-        raise ModelError(f"evaluation of {mapped.name()!r} failed (return code {buffer.ret()})")
-    flat = np.array(pattern.row()) + pattern.size1() * np.array(pattern.get_col())  # column-major index
-    dense = np.zeros((count, pattern.size2() * pattern.size1()))
-    dense[:, flat] = nonzeros.reshape(count, -1)
-    return dense.reshape(count, pattern.size2(), pattern.size1()).transpose(0, 2, 1)
-
 
 def _stacked_r(reg: casadi.Function, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
     """R factor of the stacked evaluations ``Y`` (all rows of W at all states), by chunks."""
     p = reg.size2_out(0)
-    pattern = reg.sparsity_out(0)
-    maps: dict[int, casadi.Function] = {}
     r = np.zeros((0, p))
-    for start in range(0, q.shape[0], _CHUNK):
-        stop = min(start + _CHUNK, q.shape[0])
-        if stop - start not in maps:
-            maps[stop - start] = reg.map(stop - start)
-        rows = _evaluate(maps[stop - start], pattern, q[start:stop], qd[start:stop], qdd[start:stop]).reshape(-1, p)
+    for rows in regressor_rows(reg, q, qd, qdd):
         stacked = np.vstack([r, rows])
         r = scipy.linalg.qr(stacked, mode="r", overwrite_a=True, check_finite=False)[0][:p]
     return r
@@ -327,29 +226,6 @@ def _discover(r: np.ndarray, order: list[int], tol: float, zero_tol: float) -> _
     return _Discovery(zero, kept, dependent, pivots, relation)
 
 
-def _verify(reg: casadi.Function, states: tuple[np.ndarray, ...], found: _Discovery) -> tuple[float, float]:
-    """Relative residuals of the relations and of the zero columns on the unisolvent set."""
-    p = reg.size2_out(0)
-    pattern = reg.sparsity_out(0)
-    maps: dict[int, casadi.Function] = {}
-    column_sq = np.zeros(p)
-    residual_sq = np.zeros(len(found.dependent))
-    coefficients = found.relation[:, found.dependent]
-    for start in range(0, states[0].shape[0], _CHUNK):
-        stop = min(start + _CHUNK, states[0].shape[0])
-        if stop - start not in maps:
-            maps[stop - start] = reg.map(stop - start)
-        Y = _evaluate(maps[stop - start], pattern, *(x[start:stop] for x in states)).reshape(-1, p)
-        column_sq += np.einsum("ij,ij->j", Y, Y)
-        if found.dependent:
-            R = Y[:, found.dependent] - Y[:, found.kept] @ coefficients
-            residual_sq += np.einsum("ij,ij->j", R, R)
-    norms = np.sqrt(column_sq)
-    largest = max(norms.max(initial=0.0), 1e-300)
-    relation = np.sqrt(residual_sq) / np.maximum(norms[found.dependent], 1e-300) if found.dependent else [0.0]
-    return float(np.max(relation)), float(norms[found.zero].max(initial=0.0) / largest)
-
-
 def base_parameters(robot: object, *, tol: float = 1e-8, zero_tol: float = 1e-10,
                     verify_tol: float = 1e-9) -> BaseParameters:
     """Base inertial parameters of a robot, with their regrouping and reduced regressor.
@@ -395,7 +271,8 @@ def base_parameters(robot: object, *, tol: float = 1e-8, zero_tol: float = 1e-10
     sample = _sample_states(len(joints), 500)
     for discovery in (sample, full):
         found = _discover(_stacked_r(reg, *discovery), order, tol, zero_tol)
-        residual, zero_level = _verify(reg, full, found)
+        residual, zero_level = relation_residuals(reg, full, kept=found.kept, dependent=found.dependent,
+                                                  relation=found.relation, zero=found.zero)
         if residual <= verify_tol and zero_level <= zero_tol:
             break
     else:

@@ -5,7 +5,7 @@ Parameter vector layout (``n`` joints, 1-based names):
 1. ``10 n`` inertial parameters, link by link,
    ``[m_i, mcx_i, mcy_i, mcz_i, Ixx_i, Ixy_i, Ixz_i, Iyy_i, Iyz_i, Izz_i]``: mass (kg),
    first moment ``m c`` (kg*m) and inertia tensor about the *link-frame origin* (kg*m^2),
-   all in DH link frame ``i`` (see :func:`designkit.models.dynamics.link_inertial_parameters`);
+   all in DH link frame ``i`` (see :func:`designkit.models.inertial_parameters.link_inertial_parameters`);
 2. with friction: ``[fv_i, fc_i]`` per joint, viscous (N*m*s/rad) and Coulomb (N*m) coefficients;
 3. with motor inertia: ``Ia_i = G_i^2 Jm_i`` per joint, the reflected rotor inertia (kg*m^2).
 
@@ -20,7 +20,9 @@ from typing import Any
 import casadi as ca
 
 from designkit.models.description import ChainDescription
-from designkit.models.dynamics import INERTIAL_NAMES, friction_torque, inertial_parameters, rnea
+from designkit.models.dynamics import friction_torque
+from designkit.models.inertial_parameters import INERTIAL_NAMES, inertial_parameters
+from designkit.models.newton_euler import rnea
 
 __all__ = ["inverse_dynamics", "parameter_names", "parameter_vector", "regressor"]
 

@@ -1,60 +1,42 @@
 """A manipulator model: named CasADi functions plus NumPy-in/NumPy-out methods.
 
 :class:`Robot` is built from a :class:`~designkit.models.description.ChainDescription`
-(:func:`robot_from_dh`).  Its ``functions`` table holds one named
-``casadi.Function`` per quantity, built on first use and cached:
-
-==================== ========================== =======================================
-name                 inputs                     outputs (shape)
-==================== ========================== =======================================
-fkine                q                          T (4x4), tool pose in the base frame
-fkine_all            q                          T_all (4 x 4n), ``[T_01, ..., T_0n]``
-jacobian             q                          J (6 x n), rows ``[v; omega]``, base frame
-jacobian_dot_qd      q, qd                      Jdot_qd (6)
-analytic_jacobian    q                          Ja (6 x n), x (6): ``[p; rpy]``
-analytic_jacobian_R  q                          same for representation R (rpy, zyz)
-inverse_dynamics     q, qd, qdd                 tau (n), Newton--Euler (+ friction, rotors)
-mass_matrix          q                          M (n x n), Euler--Lagrange (+ rotors)
-christoffel          q                          Gamma (n x n^2), ``[i, j*n+k] = G_ijk``
-coriolis_matrix      q, qd                      C (n x n), ``C_ij = sum_k G_ijk qd_k``
-gravity_torque       q                          g (n)
-friction_torque      qd                         tau_f (n), zero when friction is off
-forward_dynamics     q, qd, tau                 qdd (n)
-regressor            q, qd, qdd                 W (n x len(P)), ``tau = W P``
-parameters           (none)                     P (len(P))
-kinetic_energy       q, qd                      T (1)
-potential_energy     q                          V (1)
-==================== ========================== =======================================
+(:func:`robot_from_dh`).  Its ``functions`` table
+(:class:`~designkit.models.functions.FunctionTable`) holds one named
+``casadi.Function`` per quantity -- ``fkine``, ``jacobian``, ``inverse_dynamics``,
+``mass_matrix``, ``coriolis_matrix``, ``gravity_torque``, ``forward_dynamics``,
+``regressor``, ... (the full list with inputs and outputs is in
+:mod:`designkit.models.functions`) -- built on first use and cached.
 
 When the description holds CasADi symbols (``description.symbols``), every
 function takes one more, last, input ``"p"``: the symbols stacked in the order
 of ``description.symbols``; the NumPy methods then need ``p=``.
 
 Every NumPy method accepts one state (shape ``(n,)``) or a batch (shape ``(N, n)``,
-evaluated with ``casadi.Function.map``) and returns results stacked along a
-leading axis of length ``N``.  Units are SI (m, rad, kg, s, N, N*m).
+evaluated with ``casadi.Function.map``, see :mod:`designkit.models.batch`) and returns
+results stacked along a leading axis of length ``N``.  Units are SI (m, rad, kg, s, N, N*m).
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from designkit.errors import ModelError, SpecError
-from designkit.models import chain, dynamics, regressor
+from designkit.models import chain, regressor
+from designkit.models.batch import evaluate, shape_output
 from designkit.models.description import ChainDescription, LinkDescription
+from designkit.models.functions import FUNCTION_SPECS, Expressions, FunctionTable
 
 __all__ = ["Energy", "FunctionTable", "Robot", "robot_from_dh"]
 
 _JOINTS = ("revolute", "prismatic")
 _CONVENTIONS = ("standard", "modified")
-_MAX_MAPS = 64
 
 
 @dataclass(frozen=True)
@@ -68,145 +50,6 @@ class Energy:
     def total(self) -> Any:
         """``kinetic + potential`` (J)."""
         return self.kinetic + self.potential
-
-
-class _Expressions:
-    """Symbols and lazily built ``SX`` expressions shared by the functions of one robot."""
-
-    def __init__(self, description: ChainDescription, friction: bool, motor_inertia: bool) -> None:
-        n = description.n
-        self.description = description
-        self.friction = friction
-        self.motor_inertia = motor_inertia
-        self.q = ca.SX.sym("q", n)
-        self.qd = ca.SX.sym("qd", n)
-        self.qdd = ca.SX.sym("qdd", n)
-        self.tau = ca.SX.sym("tau", n)
-        symbols = [sym for _, sym in description.symbols]
-        self.p = ca.vertcat(*symbols) if symbols else None
-
-    @cached_property
-    def parameters(self) -> list[Any]:
-        return regressor.parameter_vector(self.description, friction=self.friction,
-                                          motor_inertia=self.motor_inertia)
-
-    @cached_property
-    def frames(self) -> list[ca.SX]:
-        return chain.frame_transforms(self.description, self.q)
-
-    @cached_property
-    def tool(self) -> ca.SX:
-        return chain.tool_pose(self.description, self.q, self.frames)
-
-    @cached_property
-    def jacobian(self) -> ca.SX:
-        axes = chain.joint_axes(self.description, self.frames)
-        return chain.point_jacobian(self.description, axes, self.tool[0:3, 3], self.description.n - 1)
-
-    @cached_property
-    def lagrangian(self) -> dynamics.Lagrangian:
-        terms = dynamics.lagrangian(self.description, self.q, self.parameters[: 10 * self.description.n])
-        # merge the subexpressions the link sums built separately, before differentiating M
-        return dataclasses.replace(terms, mass_matrix=ca.cse(terms.mass_matrix))
-
-    @cached_property
-    def rotor_inertia(self) -> ca.SX:
-        n = self.description.n
-        if not self.motor_inertia:
-            return ca.SX.zeros(n, n)
-        start = len(self.parameters) - n
-        return ca.diag(ca.vertcat(*[ca.SX(v) for v in self.parameters[start:]]))
-
-    @cached_property
-    def mass_matrix(self) -> ca.SX:
-        return self.lagrangian.mass_matrix + self.rotor_inertia
-
-    @cached_property
-    def christoffel(self) -> ca.SX:
-        return dynamics.christoffel(self.lagrangian.mass_matrix, self.q)
-
-    def inverse_dynamics(self, qdd: Any) -> ca.SX:
-        return regressor.inverse_dynamics(self.description, self.q, self.qd, qdd, self.parameters,
-                                          friction=self.friction, motor_inertia=self.motor_inertia)
-
-    @cached_property
-    def friction_torque(self) -> ca.SX:
-        links = self.description.links
-        if not self.friction:
-            return ca.SX.zeros(len(links), 1)
-        return dynamics.friction_torque([lk.viscous for lk in links], [lk.coulomb for lk in links], self.qd)
-
-
-# name -> (input names, output names, output kinds, builder(expressions) -> list of output SX);
-# a kind is "scalar" (1x1 -> float), "vector" (k x 1 -> (k,)) or "matrix" (kept 2-D).
-_Spec = tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...], Callable[[_Expressions], list[Any]]]
-
-
-def _analytic(name: str) -> _Spec:
-    def build(e: _Expressions) -> list[Any]:
-        ja, x = chain.analytic_jacobian(e.description, e.q, name)
-        return [ja, x]
-
-    return ("q",), ("Ja", "x"), ("matrix", "vector"), build
-
-
-_M, _V, _S = ("matrix",), ("vector",), ("scalar",)
-
-_SPECS: dict[str, _Spec] = {
-    "fkine": (("q",), ("T",), _M, lambda e: [e.tool]),
-    "fkine_all": (("q",), ("T_all",), _M, lambda e: [ca.horzcat(*e.frames)]),
-    "jacobian": (("q",), ("J",), _M, lambda e: [e.jacobian]),
-    "jacobian_dot_qd": (("q", "qd"), ("Jdot_qd",), _V,
-                        lambda e: [chain.jacobian_dot_qd(e.jacobian, e.q, e.qd)]),
-    "analytic_jacobian": _analytic("rpy"),
-    **{f"analytic_jacobian_{name}": _analytic(name) for name in chain.REPRESENTATIONS},
-    "inverse_dynamics": (("q", "qd", "qdd"), ("tau",), _V, lambda e: [e.inverse_dynamics(e.qdd)]),
-    "mass_matrix": (("q",), ("M",), _M, lambda e: [e.mass_matrix]),
-    "christoffel": (("q",), ("Gamma",), _M, lambda e: [e.christoffel]),
-    "coriolis_matrix": (("q", "qd"), ("C",), _M,
-                        lambda e: [dynamics.coriolis_from_christoffel(e.christoffel, e.qd)]),
-    "gravity_torque": (("q",), ("g",), _V, lambda e: [e.lagrangian.gravity_torque]),
-    "friction_torque": (("qd",), ("tau_f",), _V, lambda e: [e.friction_torque]),
-    "forward_dynamics": (("q", "qd", "tau"), ("qdd",), _V, lambda e: [
-        dynamics.forward_dynamics(e.mass_matrix, e.inverse_dynamics(ca.SX.zeros(e.description.n)), e.tau)]),
-    "regressor": (("q", "qd", "qdd"), ("W",), _M, lambda e: [regressor.regressor(
-        e.description, e.q, e.qd, e.qdd, friction=e.friction, motor_inertia=e.motor_inertia)]),
-    "parameters": ((), ("P",), _V, lambda e: [ca.vertcat(*[ca.SX(v) for v in e.parameters])]),
-    "kinetic_energy": (("q", "qd"), ("T",), _S, lambda e: [0.5 * ca.bilin(e.mass_matrix, e.qd, e.qd)]),
-    "potential_energy": (("q",), ("V",), _S, lambda e: [e.lagrangian.potential]),
-}
-
-
-class FunctionTable(Mapping[str, ca.Function]):
-    """Read-only mapping name -> named ``casadi.Function``, each built on first access and cached."""
-
-    def __init__(self, expressions: _Expressions) -> None:
-        self._expressions = expressions
-        self._cache: dict[str, ca.Function] = {}
-
-    def __getitem__(self, name: str) -> ca.Function:
-        if name not in self._cache:
-            try:
-                in_names, out_names, _, build = _SPECS[name]
-            except KeyError:
-                raise KeyError(f"no function {name!r}; available: {sorted(_SPECS)}") from None
-            e = self._expressions
-            inputs = [getattr(e, arg) for arg in in_names]
-            names = list(in_names)
-            if e.p is not None:
-                inputs.append(e.p)
-                names.append("p")
-            self._cache[name] = ca.Function(name, inputs, build(e), names, list(out_names))
-        return self._cache[name]
-
-    def __contains__(self, name: object) -> bool:
-        return name in _SPECS
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(_SPECS)
-
-    def __len__(self) -> int:
-        return len(_SPECS)
 
 
 def _validate(description: ChainDescription) -> None:
@@ -253,7 +96,7 @@ class Robot:
     Attributes
     ----------
     functions : FunctionTable
-        Named ``casadi.Function`` objects, see the module docstring.
+        Named ``casadi.Function`` objects, see :mod:`designkit.models.functions`.
     parameter_names : tuple of str
         Names of the entries of ``P`` (:func:`designkit.models.regressor.parameter_names`).
     parameters : numpy.ndarray or None
@@ -277,7 +120,7 @@ class Robot:
 
     def __post_init__(self) -> None:
         _validate(self.description)
-        expressions = _Expressions(self.description, self.friction, self.motor_inertia)
+        expressions = Expressions(self.description, self.friction, self.motor_inertia)
         object.__setattr__(self, "functions", FunctionTable(expressions))
         names = regressor.parameter_names(self.n, friction=self.friction, motor_inertia=self.motor_inertia)
         object.__setattr__(self, "parameter_names", names)
@@ -300,60 +143,11 @@ class Robot:
         """Names of the symbolic parameters, the order of the ``p`` input."""
         return tuple(name for name, _ in self.description.symbols)
 
-    # ---------------------------------------------------------------- evaluation machinery
-
-    def _evaluate(self, name: str, args: Sequence[tuple[str, Any]], p: Any) -> tuple[list[np.ndarray], int | None]:
-        function = self.functions[name]
-        arrays: list[np.ndarray] = []
-        batch: int | None = None
-        for index, (label, value) in enumerate(args):
-            size = function.size1_in(index)
-            array = np.asarray(value, dtype=float)
-            if array.ndim == 1 and array.shape[0] == size:
-                arrays.append(array.reshape(size, 1))
-            elif array.ndim == 2 and array.shape[1] == size:
-                if batch is not None and array.shape[0] != batch:
-                    raise SpecError(label, f"batch of {array.shape[0]} rows, other inputs have {batch}")
-                batch = array.shape[0]
-                arrays.append(array.T)
-            else:
-                raise SpecError(label, f"expected shape ({size},) or (N, {size}), got {array.shape}")
-        if self.description.symbols:
-            if p is None:
-                raise SpecError("p", f"symbolic robot: give values for {self.symbol_names}")
-            p_array = np.asarray(p, dtype=float).reshape(-1)
-            if p_array.shape[0] != len(self.description.symbols):
-                raise SpecError("p", f"expected {len(self.description.symbols)} values, got {p_array.shape[0]}")
-            arrays.append(p_array.reshape(-1, 1))
-        elif p is not None:
-            raise SpecError("p", "this robot has no symbolic parameters")
-        if batch is None:
-            outputs = function.call([ca.DM(a) for a in arrays])
-            return [np.array(out) for out in outputs], None
-        key = (name, batch)
-        if key not in self._maps:
-            if len(self._maps) >= _MAX_MAPS:  # a memo, not a store: forget old batch sizes
-                self._maps.clear()
-            self._maps[key] = function.map(batch)
-        outputs = self._maps[key].call([ca.DM(a) for a in arrays])
-        shaped = []
-        for index, out in enumerate(outputs):
-            rows, cols = function.size_out(index)
-            shaped.append(np.array(out).reshape(rows, batch, cols).transpose(1, 0, 2))
-        return shaped, batch
-
-    @staticmethod
-    def _shape(value: np.ndarray, kind: str, batch: int | None) -> Any:
-        """Squeeze ``vector`` results to 1-D and ``scalar`` results to floats (or ``(N,)``)."""
-        if kind == "scalar":
-            return float(value[0, 0]) if batch is None else value[:, 0, 0]
-        if kind == "vector":
-            return value[..., 0]
-        return value
+    # ---------------------------------------------------------------- evaluation
 
     def _call(self, name: str, args: Sequence[tuple[str, Any]], p: Any) -> Any:
-        outputs, batch = self._evaluate(name, args, p)
-        return self._shape(outputs[0], _SPECS[name][2][0], batch)
+        outputs, batch = evaluate(self.functions[name], args, p, symbol_names=self.symbol_names, maps=self._maps)
+        return shape_output(outputs[0], FUNCTION_SPECS[name].kinds[0], batch)
 
     # ---------------------------------------------------------------- kinematics
 

@@ -17,10 +17,10 @@ from __future__ import annotations
 from typing import Any
 
 from designkit.verification.check import Check
+from designkit.verification.hurwitz_conditions import routh_hurwitz_design
 from designkit.verification.lyapunov import lyapunov_lmi
 from designkit.verification.pole_zero import pole_placement
 from designkit.verification.robustness import robustness_checks
-from designkit.verification.routh import routh_hurwitz_design
 from designkit.verification.time_domain import time_domain_checks
 
 

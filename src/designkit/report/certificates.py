@@ -1,0 +1,210 @@
+"""Number formatting and the compact rendering of check certificates.
+
+Numbers are formatted here for the whole report (:func:`fmt_number`, :func:`fmt_signed`,
+:func:`fmt_compact`); :func:`render_certificate` turns a check's certificate (nested mappings,
+matrices, lists of records, ``[re, im]`` pairs, robustness grids) into
+:class:`CertificateEntry` rows that the HTML and PDF renderers lay out as they are.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from designkit.report.heatmap import robustness_grid
+
+# certificate keys whose [re, im] pairs are complex numbers (poles, zeros, eigenvalues)
+_COMPLEX_KEYS = re.compile(r"eig|pole|zero", re.IGNORECASE)
+_SINGLE_KEYS = re.compile(r"^(eigenvalue|pole|zero)$", re.IGNORECASE)
+_MATRIX_MAX = 8  # rows/columns of a certificate matrix shown before eliding
+_LIST_MAX = 12  # items of a certificate vector shown before eliding
+_RECORDS_MAX = 24  # rows of a certificate table (list of mappings) shown before eliding
+
+
+@dataclass(frozen=True)
+class CertificateEntry:
+    """One item of a check's certificate.
+
+    Either compact ``text`` (one line), or a ``matrix`` of formatted numbers (``header`` None,
+    shown in brackets), or a small table (``matrix`` rows under the column names ``header``,
+    from a list of mappings such as Routh conditions).
+    """
+
+    key: str
+    text: str = ""
+    matrix: tuple[tuple[str, ...], ...] | None = None
+    header: tuple[str, ...] | None = None
+
+
+def fmt_number(value: Any, digits: int = 4) -> str:
+    """A number with ``digits`` significant digits (``"∞"``, ``"nan"``; complex as ``a ± bj``)."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool | np.bool_):
+        return str(bool(value)).lower()
+    if isinstance(value, complex | np.complexfloating):
+        z = complex(value)
+        if abs(z.imag) <= 1e-12 * max(1.0, abs(z)):
+            return fmt_number(z.real, digits)
+        sign = "+" if z.imag >= 0 else "-"
+        return f"{fmt_number(z.real, digits)} {sign} {fmt_number(abs(z.imag), digits)}j"
+    if isinstance(value, int | float | np.integer | np.floating):
+        x = float(value)
+        if math.isnan(x):
+            return "nan"
+        if math.isinf(x):
+            return "∞" if x > 0 else "-∞"
+        if x == 0:
+            return "0"
+        return f"{x:.{digits}g}"
+    return str(value)
+
+
+def fmt_signed(value: Any, digits: int = 4) -> str:
+    """Like :func:`fmt_number` with an explicit sign for finite non-zero reals."""
+    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool):
+        x = float(value)
+        if math.isfinite(x) and x != 0:
+            return f"{x:+.{digits}g}"
+    return fmt_number(value, digits)
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, int | float | np.integer | np.floating) and not isinstance(x, bool)
+
+
+def _is_matrix(value: Any) -> bool:
+    if not isinstance(value, Sequence | np.ndarray) or isinstance(value, str) or len(value) == 0:
+        return False
+    rows = list(value)
+    if not all(isinstance(r, Sequence | np.ndarray) and not isinstance(r, str) for r in rows):
+        return False
+    width = len(rows[0])
+    return width > 0 and all(len(r) == width and all(_is_number(x) for x in r) for r in rows)
+
+
+def _is_records(value: Any) -> bool:
+    return (isinstance(value, Sequence) and not isinstance(value, str) and len(value) > 0
+            and all(isinstance(v, Mapping) for v in value))
+
+
+def _as_complex(value: Any, *, single: bool = False) -> Any:
+    """Lists of ``[re, im]`` pairs (any nesting) as complex numbers, or ``None``.
+
+    A bare ``[re, im]`` is read as one complex number only when ``single`` (an ``eigenvalue``
+    key); otherwise a 2-vector of reals stays a vector.
+    """
+    if not isinstance(value, Sequence) or isinstance(value, str):
+        return None
+    try:
+        num = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if num.ndim == 0 or num.shape[-1] != 2 or (num.ndim == 1 and not single):
+        return None
+    z = num[..., 0] + 1j * num[..., 1]
+    return complex(z) if z.ndim == 0 else z.tolist()
+
+
+def _elide(items: list[str], limit: int) -> list[str]:
+    return items if len(items) <= limit else [*items[: limit - 1], "…"]
+
+
+def format_matrix(value: Any, digits: int = 4) -> tuple[tuple[str, ...], ...]:
+    """A numeric matrix as strings with ``digits`` significant digits; rows and columns beyond
+    :data:`_MATRIX_MAX` are elided with ``…``."""
+    rows = [list(r) for r in value]
+    shown_rows = rows if len(rows) <= _MATRIX_MAX else [*rows[: _MATRIX_MAX - 1], None]
+    out = []
+    for r in shown_rows:
+        if r is None:
+            out.append(tuple("⋮" for _ in range(min(len(rows[0]), _MATRIX_MAX))))
+        else:
+            out.append(tuple(_elide([fmt_number(x, digits) for x in r], _MATRIX_MAX)))
+    return tuple(out)
+
+
+def fmt_compact(value: Any, digits: int = 4) -> str:
+    """``value`` on one line: numbers as :func:`fmt_number`, mappings as ``{k: v}``, sequences as
+    ``[...]`` (cut after :data:`_LIST_MAX` items, with their count)."""
+    if isinstance(value, str):
+        return value
+    if _is_number(value) or isinstance(value, complex | bool) or value is None:
+        return fmt_number(value, digits)
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k}: {fmt_compact(v, digits)}" for k, v in value.items()) + "}"
+    if isinstance(value, Sequence | np.ndarray):
+        items = [fmt_compact(v, digits) for v in value]
+        return "[" + ", ".join(_elide(items, _LIST_MAX)) + (f"] ({len(items)} items)" if len(items) > _LIST_MAX
+                                                          else "]")
+    return str(value)
+
+
+def render_certificate(certificate: Mapping[str, Any], digits: int = 4) -> tuple[CertificateEntry, ...]:
+    """A certificate as compact entries: matrices as string grids, everything else as one line.
+
+    Nested mappings are flattened to dotted keys; a ``grid`` entry (robustness sweep) is
+    summarised (its full data goes to a figure).
+    """
+    out: list[CertificateEntry] = []
+
+    def visit(prefix: str, value: Any) -> None:
+        leaf = prefix.rsplit(".", 1)[-1]
+        if leaf == "grid" and isinstance(value, Mapping):
+            figure = robustness_grid({"grid": value}) is not None
+            out.append(CertificateEntry(prefix, _grid_summary(value, digits, figure=figure)))
+        elif isinstance(value, Mapping) and value:
+            for k, v in value.items():
+                visit(f"{prefix}.{k}" if prefix else str(k), v)
+        elif _is_records(value):
+            header = tuple(dict.fromkeys(k for rec in value for k in rec))
+            pairs = _COMPLEX_KEYS.search(leaf) is not None  # e.g. pole_matching: [re, im] cells
+
+            def cell(v: Any) -> str:
+                z = _as_complex(v, single=True) if pairs else None
+                return fmt_compact(v if z is None else z, digits)
+
+            shown = value[:_RECORDS_MAX]
+            rows = tuple(tuple(cell(rec.get(h)) for h in header) for rec in shown)
+            if len(value) > len(shown):
+                rows += (tuple("…" for _ in header),)
+            out.append(CertificateEntry(prefix, f"{len(value)} rows", rows, tuple(str(h) for h in header)))
+        elif _COMPLEX_KEYS.search(leaf) and _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None):
+            z = _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None)
+            out.append(CertificateEntry(prefix, fmt_compact(z, digits)))
+        elif _is_matrix(value) and len(value) > 1:
+            out.append(CertificateEntry(prefix, f"{len(value)}×{len(value[0])}", format_matrix(value, digits)))
+        else:
+            out.append(CertificateEntry(prefix, fmt_compact(value, digits)))
+
+    for key, value in certificate.items():
+        visit(str(key), value)
+    return tuple(out)
+
+
+def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
+    parts = []
+    for axis in ("Km", "tau"):
+        if axis in grid:
+            arr = np.asarray(grid[axis], dtype=float).ravel()
+            if arr.size:
+                parts.append(f"{axis} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}] "
+                             f"({arr.size} points)")
+    for key, value in grid.items():
+        if key in ("Km", "tau"):
+            continue
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            parts.append(f"{key}: {fmt_compact(value, digits)}")
+            continue
+        if arr.size > 1:
+            parts.append(f"{key}: min {fmt_number(np.nanmin(arr), digits)}, max {fmt_number(np.nanmax(arr), digits)}")
+        else:
+            parts.append(f"{key}: {fmt_compact(value, digits)}")
+    return "; ".join(parts) + (" (see the robustness figure)" if figure else "")
