@@ -129,3 +129,14 @@ def test_help_does_not_import_heavy_libraries():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "HEAVY:"
+
+
+def test_unwritable_output_is_bad_input(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    spec = _write(tmp_path, POSSPEED_YAML)
+    code = main(["synth", str(spec), "--out", str(blocker)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("designkit: error: --out: cannot write the report")
+    assert blocker.read_text() == "not a directory"

@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from designkit import __version__
-from designkit.errors import DesignkitError
+from designkit.errors import DesignkitError, SpecError
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
@@ -65,7 +65,12 @@ def cmd_synth(args: argparse.Namespace) -> int:
 
     loaded = load_spec(args.spec)
     result = run(loaded)
-    files = None if args.no_report else write_report(result, Path(args.out))
+    files = None
+    if not args.no_report:
+        try:
+            files = write_report(result, Path(args.out))
+        except OSError as exc:
+            raise SpecError("--out", f"cannot write the report: {exc.strerror or exc}") from None
     if args.json:
         payload = result.to_json()
         if files is not None:

@@ -268,6 +268,7 @@ def _draw_simulation(sim, requirements):
         _control_limit(ax_u, requirements.max_control, peak)
     ax.set_ylabel("position (rad)")
     ax.legend(loc="best", framealpha=0.9)
+    _element_levels(ax_u, (sim.settings or {}).get("nonlinearity"))
     # applied first, so that a chattering applied control (relay, quantiser) does not hide the command
     plot_decimated(ax_u, t, column(sim.u_applied), color=ORANGE, lw=1.0, alpha=0.75, label="u applied")
     plot_decimated(ax_u, t, column(sim.u_command), color=PURPLE, lw=1.2, label="u command")
@@ -279,6 +280,21 @@ def _draw_simulation(sim, requirements):
     ax_u.set_xlim(t[0], t[-1])
     ax_u.legend(loc="best", framealpha=0.9)
     return fig
+
+
+# nonlinear element kind -> (key of its level in the settings, legend label)
+_ELEMENT_LEVELS = {"saturation": ("limit", "saturation ±limit"), "relay": ("amplitude", "relay ±amplitude")}
+
+
+def _element_levels(ax, element) -> None:
+    """Dotted lines at the output levels of a saturating element (saturation, relay)."""
+    if not isinstance(element, dict) or element.get("kind") not in _ELEMENT_LEVELS:
+        return
+    key, label = _ELEMENT_LEVELS[element["kind"]]
+    level = element.get(key)
+    if isinstance(level, int | float) and math.isfinite(level):
+        ax.axhline(level, color=ORANGE, ls=":", lw=1.0, label=label)
+        ax.axhline(-level, color=ORANGE, ls=":", lw=1.0)
 
 
 def design_figures(
