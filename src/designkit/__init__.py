@@ -29,9 +29,9 @@ _EXPORTS: dict[str, str] = {
     "parse_spec": "designkit.spec.loader",
     "LoadedSpec": "designkit.spec.loader",
     "Spec": "designkit.spec.schema",
-    "synthesize": "designkit.synthesis.registry",
+    "synthesize": "designkit.families",
     "Design": "designkit.synthesis.design",
-    "LinearSystem": "designkit.synthesis.linear_system",
+    "LinearSystem": "designkit.models.linear_system",
     "run": "designkit.pipeline",
     "PipelineResult": "designkit.pipeline",
     "Check": "designkit.verification.check",
@@ -50,7 +50,6 @@ _EXPORTS: dict[str, str] = {
     "DesignkitError": "designkit.errors",
     "SpecError": "designkit.errors",
     "ModelError": "designkit.errors",
-    "InfeasibleError": "designkit.errors",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -38,13 +38,27 @@ def _checks_table(checks) -> str:
     return "\n".join(lines)
 
 
+def _number(v: object) -> str:
+    import numpy as np
+
+    arr = np.asarray(v, dtype=float)
+    return f"{float(arr):.6g}" if arr.ndim == 0 else "[" + ", ".join(f"{x:.6g}" for x in arr.ravel()) + "]"
+
+
+def _poles(poles) -> str:
+    return ", ".join(f"{p.real:.4g}{p.imag:+.4g}j" if p.imag else f"{p.real:.4g}" for p in poles)
+
+
 def _summary(result) -> str:
     d = result.design
-    gains = ", ".join(f"{k} = {v:.6g}" for k, v in d.gains.items())
-    poles = ", ".join(f"{p.real:.4g}{p.imag:+.4g}j" if p.imag else f"{p.real:.4g}" for p in d.poles)
+    gains = ", ".join(f"{k} = {_number(v)}" for k, v in d.gains.items())
+    if d.loops:
+        poles = "; ".join(f"{name}: {_poles(loop.poles)}" for name, loop in zip(d.loop_names, d.loops, strict=True))
+    else:
+        poles = _poles(d.poles)
     verdict = "VERIFIED" if result.verified else "NOT VERIFIED: " + ", ".join(c.name for c in result.failed)
     return "\n".join([
-        f"{result.loaded.spec.name}: {d.kind} on {type(d.plant).__name__}",
+        f"{result.loaded.spec.name}: {d.kind} on a {d.plant.kind} plant",
         f"poles: {poles}",
         f"gains: {gains}",
         *[f"note: {n}" for n in d.notes],
@@ -105,19 +119,22 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     dsn = design(loaded)
     sim = simulate(loaded.spec, dsn)
     columns = np.column_stack([
-        sim.time, sim.reference[:, 0], sim.state, sim.controller_state,
-        np.reshape(sim.u_command, (len(sim.time), -1)), np.reshape(sim.u_applied, (len(sim.time), -1)),
-        np.reshape(sim.perturbation, (len(sim.time), -1)),
+        sim.time, sim.desired, sim.state, sim.controller_state, sim.u_command, sim.u_applied, sim.perturbation,
     ])
-    header = ",".join(["t", "xD", *sim.state_names, *sim.controller_state_names, "u_command", "u_applied", "xi"])
+    n = sim.n_joints
+    header = ",".join(["t", *(["xD"] if n == 1 else [f"xD{j + 1}" for j in range(n)]), *sim.state_names,
+                       *sim.controller_state_names, *[f"{u}_command" for u in sim.input_names],
+                       *[f"{u}_applied" for u in sim.input_names], *sim.disturbance_names])
     if args.csv:
         np.savetxt(args.csv, columns, delimiter=",", header=header, comments="")
         print(f"wrote {len(sim.time)} samples to {args.csv}")
     else:
-        err = sim.tracking_error
         print(f"{loaded.spec.name}: simulated {sim.time[-1]:.4g} s in {len(sim.time) - 1} steps")
-        print(f"final x1 = {sim.position[-1]:.6g} rad, final |x1 - xD| = {abs(err[-1]):.3g} rad, "
-              f"max |x1 - xD| = {np.max(np.abs(err)):.4g} rad")
+        for j in range(sim.n_joints):
+            name = sim.state_names[sim.positions[j]]
+            err = sim.tracking_errors[:, j]
+            print(f"final {name} = {sim.joint_positions[-1, j]:.6g} rad, final |{name} - xD| = {abs(err[-1]):.3g} rad, "
+                  f"max |{name} - xD| = {np.max(np.abs(err)):.4g} rad")
         print(f"peak |u_command| = {np.max(np.abs(sim.u_command)):.4g}, "
               f"peak |u_applied| = {np.max(np.abs(sim.u_applied)):.4g}")
     return EXIT_OK

@@ -1,10 +1,17 @@
-"""Exception hierarchy of designkit; the CLI maps each class to an exit code."""
+"""Exception hierarchy of designkit; the CLI maps each class to an exit code.
+
+Every mistake a user can make is a :class:`DesignkitError`: a spec that does not validate
+(:class:`SpecError`, which names the YAML key path) or a model that cannot be built
+(:class:`ModelError`, which names the model argument; the spec layer re-raises it as a
+:class:`SpecError` with the full key path, e.g. ``plant.dh[1].mass``).  Anything else that
+escapes is a bug.
+"""
 
 from __future__ import annotations
 
 
 class DesignkitError(Exception):
-    """Base class of every error designkit raises on purpose."""
+    """Base class of every error designkit raises on purpose (exit code 2: bad input)."""
 
     exit_code: int = 2
 
@@ -20,21 +27,34 @@ class SpecError(DesignkitError):
         What is wrong, in one line.
     """
 
-    exit_code = 2
-
     def __init__(self, path: str, message: str) -> None:
         self.path = path
         self.message = message
         super().__init__(f"{path}: {message}" if path else message)
 
 
-class InfeasibleError(DesignkitError):
-    """A design problem that has no solution (e.g. requirements no pole set can meet)."""
-
-    exit_code = 1
-
-
 class ModelError(DesignkitError):
-    """A robot model that cannot be built (unsupported URDF, inconsistent parameters)."""
+    """A model that cannot be built: an invalid robot description, plant parameter or argument.
 
-    exit_code = 2
+    Parameters
+    ----------
+    field : str
+        The model argument or description field at fault, relative to the model
+        (``"Km"``, ``"links[1].mass"``, ``"q_low"``); a spec's key path is prefixed to it by
+        the spec layer.  When ``message`` is omitted, ``field`` is the message and the error
+        concerns the model as a whole.
+    message : str, optional
+        What is wrong, in one line.
+    """
+
+    def __init__(self, field: str, message: str | None = None) -> None:
+        if message is None:
+            field, message = "", field
+        self.field = field
+        self.message = message
+        super().__init__(f"{field}: {message}" if field else message)
+
+    @property
+    def path(self) -> str:
+        """Same as :attr:`field` (the key path relative to the model)."""
+        return self.field

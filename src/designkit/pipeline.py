@@ -1,4 +1,4 @@
-"""spec -> design -> simulation -> checks: the pipeline behind ``designkit synth``.
+"""spec -> plant -> design -> simulation -> checks: the pipeline behind ``designkit synth``.
 
 Each step is a pure function of the previous steps' frozen values; the report is written
 from the :class:`PipelineResult` alone.
@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib import metadata
+from pathlib import Path
 from typing import Any
 
 from designkit.spec.loader import LoadedSpec
@@ -70,9 +71,14 @@ class PipelineResult:
             "name": self.loaded.spec.name,
             "spec_sha256": self.loaded.sha256,
             "kind": d.kind,
-            "gains": {k: float(v) for k, v in d.gains.items()},
+            "plant": d.plant.kind,
+            "gains": d.gains.to_json(),
+            "gain_units": {k: d.gains.unit(k) for k in d.gains},
             "poles": [[p.real, p.imag] for p in d.poles],
             "zeros": [[z.real, z.imag] for z in d.zeros],
+            "loops": {name: {"poles": [[p.real, p.imag] for p in loop.poles],
+                             "zeros": [[z.real, z.imag] for z in loop.zeros]}
+                      for name, loop in zip(d.loop_names, d.loops, strict=True)},
             "verified": self.verified,
             "checks": [c.to_dict() for c in self.checks],
             "notes": list(d.notes),
@@ -80,11 +86,23 @@ class PipelineResult:
         }
 
 
+def base_dir(loaded: LoadedSpec) -> Path | None:
+    """Folder of the spec file (relative model paths are resolved against it), or None for text."""
+    return None if loaded.path.startswith("<") else Path(loaded.path).resolve().parent
+
+
+def plant(loaded: LoadedSpec) -> Any:
+    """The nominal plant of a spec."""
+    from designkit.models.from_spec import plant_from_spec
+
+    return plant_from_spec(loaded.spec.plant, base_dir(loaded))
+
+
 def design(loaded: LoadedSpec) -> Design:
     """Synthesise the controller of a spec."""
-    from designkit.synthesis.registry import synthesize
+    from designkit.families import family
 
-    return synthesize(loaded.spec)
+    return family(loaded.spec.controller.kind).synthesize(loaded.spec, plant(loaded))
 
 
 def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
@@ -98,12 +116,10 @@ def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
         Run the closed-loop simulation and the time-domain checks that need it.
     """
     from designkit.simulation.run import simulate as simulate_loop
-    from designkit.synthesis.registry import family
     from designkit.verification.suite import run_checks
 
     spec = loaded.spec
-    fam = family(spec.controller.kind)
-    dsn = fam.synthesize(spec)
+    dsn = design(loaded)
     sim = simulate_loop(spec, dsn) if simulate else None
-    checks = run_checks(spec, dsn, fam, sim)
+    checks = run_checks(spec, dsn, sim)
     return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions())

@@ -6,7 +6,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.batch import MAX_MAPS, evaluate, shape_output
 from designkit.models.robots import robot
 from tests.models.support import random_states
@@ -38,15 +38,15 @@ def test_batches_have_a_leading_axis_and_match_single_calls():
 
 def test_input_errors_name_the_argument():
     arm = robot("planar2r")
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         arm.inverse_dynamics(np.zeros(3), np.zeros(2), np.zeros(2))
     assert info.value.path == "q"
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         arm.inverse_dynamics(np.zeros((3, 2)), np.zeros((4, 2)), np.zeros(2))
     assert info.value.path == "qd"
-    with pytest.raises(SpecError, match="p"):
+    with pytest.raises(ModelError, match="p"):
         robot("planar2r", symbolic=True).mass_matrix(np.zeros(2))
-    with pytest.raises(SpecError, match="p"):
+    with pytest.raises(ModelError, match="p"):
         arm.mass_matrix(np.zeros(2), p=[1.0])
 
 

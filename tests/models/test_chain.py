@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models import chain
 from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
@@ -61,9 +61,9 @@ def test_numeric_right_angles_give_exact_zeros():
 
 
 def test_unknown_convention_and_representation_raise():
-    with pytest.raises(SpecError, match="convention"):
+    with pytest.raises(ModelError, match="convention"):
         chain.dh_transform(0, 0, 0, 0, "craig")
-    with pytest.raises(SpecError, match="representation"):
+    with pytest.raises(ModelError, match="representation"):
         chain.representation("quaternion")
 
 

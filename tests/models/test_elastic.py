@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.elastic import ElasticLinkParameters, elastic_ode, elastic_state_space
 from designkit.models.robots.elastic_link import DEFAULTS, elastic_link
 from tests.models.support import TOL_EXACT, scaled_error
@@ -100,7 +100,7 @@ def test_undamped_oscillation_frequency():
 @pytest.mark.parametrize(("field", "value"), [("J1", 0.0), ("tau2", -1.0), ("mgl", -2.0), ("KR", math.nan),
                                               ("R1", "1")])
 def test_parameters_are_validated(field, value):
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         dataclasses.replace(DEFAULTS, **{field: value})
     assert info.value.path == field
 
@@ -108,5 +108,5 @@ def test_parameters_are_validated(field, value):
 def test_elastic_link_defaults_and_overrides():
     assert elastic_link() == DEFAULTS
     assert elastic_link(KR=50.0).KR == 50.0
-    with pytest.raises(SpecError, match="elastic_link.K"):
+    with pytest.raises(ModelError, match="elastic_link.K"):
         elastic_link(K=1.0)

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.link import LinkParameters, LinkPlant, link_ode, link_range, simplified_link
 from designkit.models.robots import robot
 from tests.models.support import TOL_EXACT, scaled_error
@@ -18,7 +18,7 @@ from tests.models.support import TOL_EXACT, scaled_error
                                               ("tau", "0.5"), ("Km", True)])
 def test_link_plant_validation_names_the_field(field, value):
     values = {"Km": 2.0, "tau": 0.5, field: value}
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         LinkPlant(**values)
     assert info.value.path == field
 
@@ -61,9 +61,9 @@ def test_simplified_link_uses_the_configuration_dependent_inertia():
     assert link.damping == f
     assert link.inertia == arm.mass_matrix(q)[0, 0]
     assert link.tau == pytest.approx(arm.mass_matrix(q)[0, 0] / f, rel=1e-15)
-    with pytest.raises(SpecError, match="i"):
+    with pytest.raises(ModelError, match="i"):
         simplified_link(arm, 2, q)
-    with pytest.raises(SpecError, match="viscous"):
+    with pytest.raises(ModelError, match="viscous"):
         simplified_link(robot("planar2r", f1=0.0), 0, q)
 
 
@@ -102,7 +102,7 @@ def test_link_range_bounds_every_sampled_configuration():
 
 def test_link_range_validates_its_box():
     arm = robot("planar2r")
-    with pytest.raises(SpecError):
+    with pytest.raises(ModelError):
         link_range(arm, 0, [1.0, 0.0], [0.0, 1.0])
-    with pytest.raises(SpecError):
+    with pytest.raises(ModelError):
         link_range(arm, 0, [0.0], [1.0])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.robot import Robot, robot_from_dh
 from designkit.models.robots import ROBOTS, puma560, robot
 from tests.models.support import TOL_EXACT, TOL_REFERENCE, ZOO, pinocchio_model, random_states, scaled_error
@@ -37,7 +37,7 @@ def test_overrides_replace_named_parameters():
     ("puma560", {"symbolic": ("d9",)}, "puma560.d9"),
 ])
 def test_bad_names_and_values_raise_spec_errors(name, kwargs, path):
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         robot(name, **kwargs)
     assert info.value.path == path
 
@@ -159,7 +159,7 @@ def test_zoo_dynamics_match_pinocchio(name):
 
 
 def test_unknown_representation_names_the_argument():
-    with pytest.raises(SpecError, match="representation"):
+    with pytest.raises(ModelError, match="representation"):
         robot("planar2r").analytic_jacobian(np.zeros(2), "axis-angle")
 
 
@@ -169,12 +169,12 @@ def test_robot_from_dh_accepts_fields_and_validates():
     assert arm.gravity_torque([0.0])[0] == pytest.approx(9.81)
     same = robot_from_dh(arm.description, friction=True)
     assert same.friction and same.parameter_names[-2:] == ("fv1", "fc1")
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         robot_from_dh(name="bad", links=[{"joint": "spherical"}])
     assert info.value.path == "links[0].joint"
-    with pytest.raises(SpecError) as info:
+    with pytest.raises(ModelError) as info:
         robot_from_dh(name="bad", links=[{"mass": -1.0}])
     assert info.value.path == "links[0].mass"
-    with pytest.raises(SpecError):
+    with pytest.raises(ModelError):
         robot_from_dh(name="empty", links=[])
     assert arm.replace(motor_inertia=True).motor_inertia

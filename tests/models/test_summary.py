@@ -7,7 +7,7 @@ import shutil
 import casadi
 import pytest
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.robots import robot
 from designkit.models.summary import evaluation_cost, model_command, model_summary, operation_counts
 
@@ -69,7 +69,7 @@ def test_model_command():
     text = model_command("scara", timing=False)
     assert text.splitlines()[0].startswith("scara: 4 joints")
     assert "prismatic" in text
-    with pytest.raises(SpecError, match="unknown robot"):
+    with pytest.raises(ModelError, match="unknown robot"):
         model_command("r2d2")
 
 

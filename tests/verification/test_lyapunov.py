@@ -10,8 +10,10 @@ from hypothesis import strategies as st
 from designkit.models.link import LinkPlant
 from designkit.synthesis import pid
 from designkit.verification import lyapunov
+from designkit.verification.lmi import solve_kyp
 from designkit.verification.lyapunov import (
     LmiSolution,
+    LyapunovCertificate,
     common_lyapunov,
     cross_check,
     lyapunov_equation,
@@ -141,3 +143,42 @@ def test_lyapunov_equation_solves_the_equation():
     np.testing.assert_allclose(A.T @ P + P @ A, -np.eye(4), atol=1e-10)
     Pb = lyapunov_equation(A)  # balanced route: another valid certificate
     assert recheck([A], Pb, eps=LMI_EPS).ok
+
+
+LYAPUNOV_KEYS = {
+    "eps", "normalisation", "solver", "solver_status", "t", "D", "A_scale", "P", "eig_P", "eig_AtP_PA", "Pb",
+    "eig_Pb", "eig_AhtPb_PbAh", "recheck_margin", "eig_A",
+}
+
+
+def test_certificate_keys_are_kept_by_the_shared_core():
+    """The report reads these keys: the move to the shared LMI core must not change them."""
+    ok = lyapunov_lmi(np.diag([-1.0, -2.0]))
+    assert set(ok.certificate) == LYAPUNOV_KEYS
+    bad = lyapunov_lmi(np.diag([-1.0, 2.0]))
+    assert set(bad.certificate) == {"eps", "normalisation", "eig_A", "evidence"}
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(2, 5))
+def test_recheck_and_lyapunov_certificate_are_one_test(seed, n):
+    """lyapunov.recheck and LyapunovCertificate.recheck give the same verdict and margin, for good
+    and for bad candidates (an arbitrary symmetric matrix is rarely a Lyapunov matrix)."""
+    rng = np.random.default_rng(seed)
+    A = _random_stable(seed, n, 0.5)
+    M = rng.normal(size=(n, n))
+    for P in (lyapunov_equation(A), M @ M.T + 0.1 * np.eye(n), M + M.T):
+        detailed = recheck([A], P)
+        summary = LyapunovCertificate((A,), P).recheck()
+        assert summary.ok is detailed.ok
+        assert summary.margin == detailed.margin or (np.isinf(summary.margin) and np.isinf(detailed.margin))
+
+
+def test_kyp_certificate_is_also_a_lyapunov_certificate():
+    """The KYP solve runs through the same LMI core: its P passes the Lyapunov re-check of A."""
+    A = pid.design_servo(PLANT, [-4, -5, -20], -3.0).closed_loop.A
+    B = np.eye(3)[:, [2]]
+    P0 = lyapunov_equation(A)
+    sol = solve_kyp(A, B, B.T @ P0)
+    assert sol.status == "optimal"
+    assert recheck([A], sol.P).ok

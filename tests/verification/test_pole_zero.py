@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from designkit.models.link import LinkPlant
 from designkit.synthesis import pid
-from designkit.synthesis.linear_system import LinearSystem
+from designkit.models.linear_system import LinearSystem
 from designkit.synthesis.requirements import dominant_poles
 from designkit.verification.pole_zero import coefficient_error, finite_zeros, match_roots, pole_placement
 from designkit.verification.tolerances import POLE_REL

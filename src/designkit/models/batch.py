@@ -15,7 +15,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 
 __all__ = ["MAX_MAPS", "evaluate", "shape_output"]
 
@@ -38,7 +38,7 @@ def evaluate(
     function : casadi.Function
         Column-vector inputs in the order of ``args``, then ``"p"`` when ``symbol_names`` is not empty.
     args : sequence of (str, array_like)
-        ``(label, value)`` per input; the label names the argument in a :class:`SpecError`.
+        ``(label, value)`` per input; the label names the argument in a :class:`ModelError`.
     p : array_like or None
         Values of the symbolic parameters, in the order of ``symbol_names``.
     symbol_names : sequence of str
@@ -53,7 +53,7 @@ def evaluate(
 
     Raises
     ------
-    SpecError
+    ModelError
         For a wrongly shaped argument, batches of different sizes, or missing/unexpected ``p``.
     """
     arrays: list[np.ndarray] = []
@@ -65,20 +65,20 @@ def evaluate(
             arrays.append(array.reshape(size, 1))
         elif array.ndim == 2 and array.shape[1] == size:
             if batch is not None and array.shape[0] != batch:
-                raise SpecError(label, f"batch of {array.shape[0]} rows, other inputs have {batch}")
+                raise ModelError(label, f"batch of {array.shape[0]} rows, other inputs have {batch}")
             batch = array.shape[0]
             arrays.append(array.T)
         else:
-            raise SpecError(label, f"expected shape ({size},) or (N, {size}), got {array.shape}")
+            raise ModelError(label, f"expected shape ({size},) or (N, {size}), got {array.shape}")
     if symbol_names:
         if p is None:
-            raise SpecError("p", f"symbolic robot: give values for {symbol_names}")
+            raise ModelError("p", f"symbolic robot: give values for {symbol_names}")
         p_array = np.asarray(p, dtype=float).reshape(-1)
         if p_array.shape[0] != len(symbol_names):
-            raise SpecError("p", f"expected {len(symbol_names)} values, got {p_array.shape[0]}")
+            raise ModelError("p", f"expected {len(symbol_names)} values, got {p_array.shape[0]}")
         arrays.append(p_array.reshape(-1, 1))
     elif p is not None:
-        raise SpecError("p", "this robot has no symbolic parameters")
+        raise ModelError("p", "this robot has no symbolic parameters")
     if batch is None:
         outputs = function.call([ca.DM(a) for a in arrays])
         return [np.array(out) for out in outputs], None

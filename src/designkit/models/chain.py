@@ -25,7 +25,7 @@ from typing import Any
 
 import casadi as ca
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.description import ChainDescription, LinkDescription
 
 _SNAP = 1e-14
@@ -135,7 +135,7 @@ def dh_transform(a: Any, alpha: Any, d: Any, theta: Any, convention: str = "stan
             [0.0, 0.0, 0.0, 1.0],
         ]
     else:
-        raise SpecError("convention", f"must be 'standard' or 'modified', got {convention!r}")
+        raise ModelError("convention", f"must be 'standard' or 'modified', got {convention!r}")
     return as_sx_matrix(rows)
 
 
@@ -148,7 +148,7 @@ def link_transform(link: LinkDescription, q: Any, convention: str = "standard") 
         return dh_transform(link.a, link.alpha, link.d, q + link.offset, convention)
     if link.joint == "prismatic":
         return dh_transform(link.a, link.alpha, q + link.offset, link.theta, convention)
-    raise SpecError("joint", f"must be 'revolute' or 'prismatic', got {link.joint!r}")
+    raise ModelError("joint", f"must be 'revolute' or 'prismatic', got {link.joint!r}")
 
 
 def frame_transforms(description: ChainDescription, q: ca.SX) -> list[ca.SX]:
@@ -345,11 +345,11 @@ REPRESENTATIONS: dict[str, Representation] = {
 
 
 def representation(name: str) -> Representation:
-    """Look up an orientation representation, raising :class:`SpecError` for an unknown name."""
+    """Look up an orientation representation, raising :class:`ModelError` for an unknown name."""
     try:
         return REPRESENTATIONS[name]
     except KeyError:
-        raise SpecError("representation", f"must be one of {sorted(REPRESENTATIONS)}, got {name!r}") from None
+        raise ModelError("representation", f"must be one of {sorted(REPRESENTATIONS)}, got {name!r}") from None
 
 
 def analytic_jacobian(description: ChainDescription, q: ca.SX, name: str = "rpy") -> tuple[ca.SX, ca.SX]:

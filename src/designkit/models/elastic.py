@@ -23,15 +23,20 @@ With ``R1 = 1/N``, ``R2 = 1`` it is the usual gear-reduced elastic joint.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
+from designkit.models.plant import Parameter, PlantBase, Signal, ode_function
 
-__all__ = ["ElasticLinkParameters", "elastic_ode", "elastic_state_space"]
+__all__ = ["ElasticJointPlant", "ElasticLinkParameters", "elastic_ode", "elastic_state_space"]
 
 
 @dataclass(frozen=True)
@@ -72,15 +77,15 @@ class ElasticLinkParameters:
         for f in fields(self):
             value = getattr(self, f.name)
             if not isinstance(value, int | float) or isinstance(value, bool) or math.isnan(value):
-                raise SpecError(f.name, f"must be a number, got {value!r}")
+                raise ModelError(f.name, f"must be a number, got {value!r}")
             if f.name == "mgl":
                 if value < 0 or math.isinf(value):
-                    raise SpecError(f.name, f"must be finite and non-negative, got {value}")
+                    raise ModelError(f.name, f"must be finite and non-negative, got {value}")
             elif f.name == "tau2":
                 if value <= 0:
-                    raise SpecError(f.name, f"must be positive (math.inf for no link friction), got {value}")
+                    raise ModelError(f.name, f"must be positive (math.inf for no link friction), got {value}")
             elif not (value > 0 and math.isfinite(value)):
-                raise SpecError(f.name, f"must be positive and finite, got {value}")
+                raise ModelError(f.name, f"must be positive and finite, got {value}")
 
     @property
     def B1(self) -> float:
@@ -119,24 +124,104 @@ def elastic_state_space(params: ElasticLinkParameters) -> tuple[np.ndarray, np.n
     return A, B
 
 
+_PARAMETER_INFO: dict[str, tuple[str, str]] = {
+    "J1": ("kg*m^2", "motor (rotor) inertia"),
+    "tau1": ("s", "motor time constant J1/B1"),
+    "Km": ("(rad/s)/input", "motor static gain R1 Ku/B1"),
+    "KR": ("N*m/rad", "transmission stiffness"),
+    "R1": ("1", "motor-side transmission ratio"),
+    "R2": ("1", "link-side transmission ratio"),
+    "J2": ("kg*m^2", "link inertia"),
+    "tau2": ("s", "link time constant J2/B2"),
+    "mgl": ("N*m", "gravity torque amplitude"),
+}
+
+
+@functools.cache
+def _elastic_ode() -> ca.Function:
+    """The elastic-joint ODE, symbolic in ``p = (J1, tau1, Km, KR, R1, R2, J2, tau2, mgl)``."""
+    x, u, w = ca.SX.sym("x", 4), ca.SX.sym("u"), ca.SX.sym("d")
+    p = ca.SX.sym("p", len(_PARAMETER_INFO))
+    J1, tau1, Km, KR, R1, R2, J2, tau2, mgl = ca.vertsplit(p)
+    stretch = x[0] - x[2]
+    xdot = ca.vertcat(
+        x[1],
+        -x[1] / tau1 - KR * R1**2 / J1 * stretch + Km / tau1 * u,
+        x[3],
+        -x[3] / tau2 + KR * R2**2 / J2 * stretch - R2 * mgl / J2 * ca.sin(x[2] / R2) + R2 / J2 * w,
+    )
+    return ode_function("elastic_joint_ode", x, u, w, p, xdot)
+
+
 def elastic_ode(params: ElasticLinkParameters) -> ca.Function:
-    """Nonlinear elastic-link dynamics as a named CasADi function.
+    """Nonlinear elastic-link dynamics at ``params`` as a named CasADi function.
 
     Returns
     -------
     casadi.Function
         ``"elastic_link"``: ``x`` (4, spring-side coordinates, rad and rad/s), ``u`` (input),
-        ``w`` (link disturbance torque, N*m) -> ``xdot`` (4).
+        ``w`` (link disturbance torque, N*m) -> ``xdot`` (4); :meth:`ElasticJointPlant.ode` with
+        the parameters fixed.
     """
-    x = ca.SX.sym("x", 4)
-    u = ca.SX.sym("u")
-    w = ca.SX.sym("w")
-    stretch = x[0] - x[2]
-    xdot = ca.vertcat(
-        x[1],
-        -x[1] / params.tau1 - params.KR * params.R1**2 / params.J1 * stretch + params.Km / params.tau1 * u,
-        x[3],
-        -x[3] / params.tau2 + params.KR * params.R2**2 / params.J2 * stretch
-        - params.R2 * params.mgl / params.J2 * ca.sin(x[2] / params.R2) + params.R2 / params.J2 * w,
-    )
+    plant = ElasticJointPlant(params)
+    x, u, w = ca.SX.sym("x", 4), ca.SX.sym("u"), ca.SX.sym("w")
+    xdot = plant.ode()(x, u, w, ca.DM(plant.parameter_vector))
     return ca.Function("elastic_link", [x, u, w], [xdot], ["x", "u", "w"], ["xdot"])
+
+
+@dataclass(frozen=True)
+class ElasticJointPlant(PlantBase):
+    """The ROBEL elastic joint as a :class:`~designkit.models.plant.Plant` (4 states, spring-side coordinates).
+
+    States ``x1 = R1 theta_m`` (rad), ``x2`` its rate, ``x3 = R2 theta_l`` (rad, the controlled
+    link position), ``x4`` its rate; input ``u``; disturbance ``w`` (N*m on the link).
+
+    Parameters
+    ----------
+    params : ElasticLinkParameters
+        Physical parameters (see :class:`ElasticLinkParameters`).
+
+    Examples
+    --------
+    >>> from designkit.models.robots.elastic_link import DEFAULTS
+    >>> plant = ElasticJointPlant(DEFAULTS)
+    >>> plant.positions, plant.velocities, len(plant.parameters)
+    ((2,), (3,), 9)
+    """
+
+    params: ElasticLinkParameters
+
+    kind: ClassVar[str] = "elastic_joint"
+    states: ClassVar[tuple[Signal, ...]] = (
+        Signal("x1", "rad", "motor angle R1 theta_m"), Signal("x2", "rad/s", "motor speed"),
+        Signal("x3", "rad", "link angle R2 theta_l"), Signal("x4", "rad/s", "link speed"),
+    )
+    inputs: ClassVar[tuple[Signal, ...]] = (Signal("u", "input", "drive input (motor torque Ku u, N*m)"),)
+    disturbances: ClassVar[tuple[Signal, ...]] = (Signal("w", "N*m", "disturbance torque on the link"),)
+    positions: ClassVar[tuple[int, ...]] = (2,)
+    velocities: ClassVar[tuple[int, ...]] = (3,)
+
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        """The nine physical parameters with units (``mgl`` may be 0)."""
+        return tuple(Parameter(name, float(getattr(self.params, name)), unit, meaning, positive=name != "mgl")
+                     for name, (unit, meaning) in _PARAMETER_INFO.items())
+
+    def ode(self) -> ca.Function:
+        """``elastic_joint_ode: (x[4], u, d = w, p[9]) -> xdot[4]``."""
+        return _elastic_ode()
+
+    def rest_state(self, q: Any) -> np.ndarray:
+        """At rest with the link at ``q`` (spring-side rad) and the spring unstretched (``x1 = x3 = q``)."""
+        q = float(np.asarray(q, dtype=float).reshape(-1)[0])
+        return np.array([q, 0.0, q, 0.0])
+
+    def equations(self) -> tuple[str, ...]:
+        """The model in plain text."""
+        return (
+            "x1' = x2,   x2' = -x2/τ1 - (KR R1²/J1)(x1 - x3) + (Km/τ1) u",
+            "x3' = x4,   x4' = -x4/τ2 + (KR R2²/J2)(x1 - x3) - (R2 mgl/J2) sin(x3/R2) + (R2/J2) w",
+        )
+
+    def _replace(self, values: Mapping[str, float]) -> ElasticJointPlant:
+        return ElasticJointPlant(dataclasses.replace(self.params, **values))

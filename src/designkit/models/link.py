@@ -22,16 +22,19 @@ Joint indices here are 0-based (``i = 0`` is the notes' link 1).
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.chain import numeric_value
+from designkit.models.plant import Parameter, PlantBase, Signal, ode_function
 
 if TYPE_CHECKING:
     from designkit.models.robot import Robot
@@ -39,9 +42,23 @@ if TYPE_CHECKING:
 __all__ = ["LinkParameters", "LinkPlant", "LinkRange", "link_ode", "link_range", "simplified_link"]
 
 
+_LINK_STATES = (Signal("x1", "rad", "link position"), Signal("x2", "rad/s", "link speed"))
+_LINK_INPUTS = (Signal("u", "N*m", "control torque"),)
+_LINK_DISTURBANCES = (Signal("xi", "N*m", "input-equivalent perturbation"),)
+
+
+@functools.cache
+def _link_ode() -> ca.Function:
+    """The one link ODE of the code base, symbolic in ``p = (Km, tau)``."""
+    x, u, d, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("d"), ca.SX.sym("p", 2)
+    Km, tau = p[0], p[1]
+    xdot = ca.vertcat(x[1], -x[1] / tau + Km / tau * (u + d))
+    return ode_function("link_ode", x, u, d, p, xdot)
+
+
 @dataclass(frozen=True)
-class LinkPlant:
-    """Simplified link ``x'' = -(1/tau) x' + (Km/tau) (u + xi)``.
+class LinkPlant(PlantBase):
+    """Simplified link ``x1' = x2``, ``x2' = -(1/tau) x2 + (Km/tau) (u + xi)`` (a :class:`Plant`).
 
     Parameters
     ----------
@@ -52,20 +69,57 @@ class LinkPlant:
 
     Raises
     ------
-    SpecError
+    ModelError
         When a field is not a positive finite number (the error names the field).
+
+    Examples
+    --------
+    >>> plant = LinkPlant(Km=2.0, tau=0.5)
+    >>> plant.rhs([0.0, 1.0], [1.0]).tolist()   # x2' = -1/0.5 + (2/0.5) * 1
+    [1.0, 2.0]
+    >>> plant.with_params(tau=0.25).tau
+    0.25
     """
 
     Km: float
     tau: float
 
+    kind: ClassVar[str] = "link"
+    states: ClassVar[tuple[Signal, ...]] = _LINK_STATES
+    inputs: ClassVar[tuple[Signal, ...]] = _LINK_INPUTS
+    disturbances: ClassVar[tuple[Signal, ...]] = _LINK_DISTURBANCES
+    positions: ClassVar[tuple[int, ...]] = (0,)
+    velocities: ClassVar[tuple[int, ...]] = (1,)
+    hull_parameters: ClassVar[tuple[str, ...]] = ("Km", "tau")
+    """Under a controller of fixed linear gains the closed-loop ``A`` is affine in ``(1/tau, Km/tau)``, and that
+    map sends any box of ``(Km, tau)`` onto the convex hull of its corners' images (bounded by ``a = 1/tau_hi``,
+    ``a = 1/tau_lo``, ``b = Km_lo a``, ``b = Km_hi a``): what holds at the corners for every matrix of their hull
+    holds for the whole box."""
+
     def __post_init__(self) -> None:
         for name in ("Km", "tau"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-                raise SpecError(name, f"must be a number, got {value!r}")
+                raise ModelError(name, f"must be a number, got {value!r}")
             if not (math.isfinite(value) and value > 0):
-                raise SpecError(name, f"must be positive and finite, got {value}")
+                raise ModelError(name, f"must be positive and finite, got {value}")
+
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        """``Km`` ((rad/s)/(N*m)) and ``tau`` (s)."""
+        return (Parameter("Km", float(self.Km), "(rad/s)/(N*m)", "link gain"),
+                Parameter("tau", float(self.tau), "s", "link time constant"))
+
+    def ode(self) -> ca.Function:
+        """``link_ode: (x[2], u, d = xi, p = (Km, tau)) -> xdot[2]``."""
+        return _link_ode()
+
+    def equations(self) -> tuple[str, ...]:
+        """The model in plain text."""
+        return ("x1' = x2", "x2' = -x2/τ + (Km/τ)(u + ξ)")
+
+    def _replace(self, values: Mapping[str, float]) -> LinkPlant:
+        return LinkPlant(Km=values.get("Km", self.Km), tau=values.get("tau", self.tau))
 
 
 @dataclass(frozen=True)
@@ -116,7 +170,7 @@ class LinkRange:
 
 def _joint_index(robot: Robot, i: int) -> int:
     if not isinstance(i, int | np.integer) or not 0 <= i < robot.n:
-        raise SpecError("i", f"must be a joint index in 0..{robot.n - 1}, got {i!r}")
+        raise ModelError("i", f"must be a joint index in 0..{robot.n - 1}, got {i!r}")
     return int(i)
 
 
@@ -125,12 +179,12 @@ def _damping(robot: Robot, i: int, extra: float, p: Any) -> float:
     value = numeric_value(viscous)
     if value is None:
         if p is None:
-            raise SpecError("p", f"symbolic robot: give values for {robot.symbol_names}")
+            raise ModelError("p", f"symbolic robot: give values for {robot.symbol_names}")
         syms = ca.vertcat(*[s for _, s in robot.description.symbols])
         value = float(ca.Function("viscous", [syms], [viscous])(np.asarray(p, dtype=float)))
     total = value + float(extra)
     if not total > 0:
-        raise SpecError(f"links[{i}].viscous",
+        raise ModelError(f"links[{i}].viscous",
                         f"the simplified link needs positive damping (viscous + damping), got {total}")
     return total
 
@@ -223,11 +277,11 @@ def link_range(
     low = np.asarray(q_low, dtype=float).reshape(-1)
     high = np.asarray(q_high, dtype=float).reshape(-1)
     if low.size != robot.n or high.size != robot.n:
-        raise SpecError("q_low", f"q_low and q_high need {robot.n} entries")
+        raise ModelError("q_low", f"q_low and q_high need {robot.n} entries")
     if np.any(low > high):
-        raise SpecError("q_high", "must be >= q_low component-wise")
+        raise ModelError("q_high", "must be >= q_low component-wise")
     if samples < 2:
-        raise SpecError("samples", f"must be at least 2, got {samples}")
+        raise ModelError("samples", f"must be at least 2, got {samples}")
     f = _damping(robot, i, damping, p)
     points = _grid(i, low, high, samples, max_points)
     values = robot.mass_matrix(points, p=p)[:, i, i]
@@ -257,16 +311,14 @@ def link_range(
 
 
 def link_ode(plant: LinkPlant) -> ca.Function:
-    """The simplified link as a named CasADi function.
+    """The simplified link at ``plant``'s parameters as a named CasADi function.
 
     Returns
     -------
     casadi.Function
         ``"link"``: ``x`` (2: position rad, rate rad/s), ``u`` (N*m), ``xi`` (N*m)
-        -> ``xdot`` (2).
+        -> ``xdot`` (2); the plant's :meth:`LinkPlant.ode` with ``p`` fixed.
     """
-    x = ca.SX.sym("x", 2)
-    u = ca.SX.sym("u")
-    xi = ca.SX.sym("xi")
-    xdot = ca.vertcat(x[1], -x[1] / plant.tau + plant.Km / plant.tau * (u + xi))
+    x, u, xi = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("xi")
+    xdot = plant.ode()(x, u, xi, ca.DM(plant.parameter_vector))
     return ca.Function("link", [x, u, xi], [xdot], ["x", "u", "xi"], ["xdot"])

@@ -27,7 +27,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from designkit.errors import ModelError, SpecError
+from designkit.errors import ModelError
 from designkit.models import chain, regressor
 from designkit.models.batch import evaluate, shape_output
 from designkit.models.description import ChainDescription, LinkDescription
@@ -53,29 +53,29 @@ class Energy:
 
 
 def _validate(description: ChainDescription) -> None:
-    """Check the structure of a description; raise :class:`SpecError` naming the field."""
+    """Check the structure of a description; raise :class:`ModelError` naming the field."""
     if not description.links:
-        raise SpecError("links", "a chain needs at least one link")
+        raise ModelError("links", "a chain needs at least one link")
     if description.convention not in _CONVENTIONS:
-        raise SpecError("convention", f"must be one of {_CONVENTIONS}, got {description.convention!r}")
+        raise ModelError("convention", f"must be one of {_CONVENTIONS}, got {description.convention!r}")
     if len(description.gravity) != 3:
-        raise SpecError("gravity", f"must have 3 components, got {len(description.gravity)}")
+        raise ModelError("gravity", f"must have 3 components, got {len(description.gravity)}")
     for key in ("base", "tool"):
         matrix = getattr(description, key)
         if len(matrix) != 4 or any(len(row) != 4 for row in matrix):
-            raise SpecError(key, "must be a 4x4 homogeneous transform")
+            raise ModelError(key, "must be a 4x4 homogeneous transform")
     for i, link in enumerate(description.links):
         if link.joint not in _JOINTS:
-            raise SpecError(f"links[{i}].joint", f"must be one of {_JOINTS}, got {link.joint!r}")
+            raise ModelError(f"links[{i}].joint", f"must be one of {_JOINTS}, got {link.joint!r}")
         if len(link.com) != 3 or len(link.inertia) != 6:
-            raise SpecError(f"links[{i}]", "com needs 3 and inertia 6 components")
+            raise ModelError(f"links[{i}]", "com needs 3 and inertia 6 components")
         for key in ("mass", "motor_inertia", "viscous", "coulomb"):
             value = chain.numeric_value(getattr(link, key))
             if value is not None and value < 0:
-                raise SpecError(f"links[{i}].{key}", f"must be non-negative, got {value}")
+                raise ModelError(f"links[{i}].{key}", f"must be non-negative, got {value}")
     for name, sym in description.symbols:
         if not (isinstance(sym, ca.SX) and sym.is_symbolic()):
-            raise SpecError(f"symbols.{name}", "must be a scalar casadi.SX symbol")
+            raise ModelError(f"symbols.{name}", "must be a scalar casadi.SX symbol")
 
 
 @dataclass(frozen=True, eq=False)
@@ -225,7 +225,7 @@ class Robot:
         fields = {"description": self.description, "friction": self.friction, "motor_inertia": self.motor_inertia}
         unknown = set(changes) - set(fields)
         if unknown:
-            raise SpecError(sorted(unknown)[0], f"unknown option; choose from {sorted(fields)}")
+            raise ModelError(sorted(unknown)[0], f"unknown option; choose from {sorted(fields)}")
         return Robot(**{**fields, **changes})
 
 
@@ -236,8 +236,8 @@ def _link(value: Any, index: int) -> LinkDescription:
         try:
             return LinkDescription(**value)
         except TypeError as exc:
-            raise SpecError(f"links[{index}]", str(exc)) from None
-    raise SpecError(f"links[{index}]", f"must be a LinkDescription or a mapping, got {type(value).__name__}")
+            raise ModelError(f"links[{index}]", str(exc)) from None
+    raise ModelError(f"links[{index}]", f"must be a LinkDescription or a mapping, got {type(value).__name__}")
 
 
 def robot_from_dh(
@@ -264,7 +264,7 @@ def robot_from_dh(
 
     Raises
     ------
-    SpecError
+    ModelError
         For an invalid description (the message names the field).
 
     Examples
@@ -278,17 +278,17 @@ def robot_from_dh(
     if description is None:
         links = fields.pop("links", None)
         if links is None:
-            raise SpecError("links", "give a description or its links")
+            raise ModelError("links", "give a description or its links")
         fields.setdefault("name", "robot")
         try:
             description = ChainDescription(links=tuple(_link(v, i) for i, v in enumerate(links)), **fields)
         except TypeError as exc:
-            raise SpecError("description", str(exc)) from None
+            raise ModelError("description", str(exc)) from None
     elif fields:
         try:
             description = dataclasses.replace(description, **fields)
         except TypeError as exc:
-            raise SpecError("description", str(exc)) from None
+            raise ModelError("description", str(exc)) from None
     if not isinstance(description, ChainDescription):
         raise ModelError(f"expected a ChainDescription, got {type(description).__name__}")
     return Robot(description, friction=friction, motor_inertia=motor_inertia)

@@ -253,7 +253,7 @@ def model_command(name: str, *, timing: bool = True) -> str:
 
     Raises
     ------
-    SpecError
+    ModelError
         For an unknown robot name.
     """
     from designkit.models.robots import robot

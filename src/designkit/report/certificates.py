@@ -189,22 +189,21 @@ def render_certificate(certificate: Mapping[str, Any], digits: int = 4) -> tuple
 
 def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
     parts = []
-    for axis in ("Km", "tau"):
-        if axis in grid:
-            arr = np.asarray(grid[axis], dtype=float).ravel()
-            if arr.size:
-                parts.append(f"{axis} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}] "
-                             f"({arr.size} points)")
-    for key, value in grid.items():
-        if key in ("Km", "tau"):
-            continue
+    for axis in grid.get("axes", []) if isinstance(grid.get("axes"), list | tuple) else []:
         try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            parts.append(f"{key}: {fmt_compact(value, digits)}")
+            arr = np.asarray(axis["values"], dtype=float).ravel()
+        except (TypeError, ValueError, KeyError):
             continue
+        if arr.size:
+            unit = f" {axis.get('unit', '')}".rstrip()
+            parts.append(f"{axis.get('name', '?')} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}]"
+                         f"{unit} ({arr.size} points)")
+    try:
+        arr = np.asarray(grid.get("values"), dtype=float)
         if arr.size > 1:
-            parts.append(f"{key}: min {fmt_number(np.nanmin(arr), digits)}, max {fmt_number(np.nanmax(arr), digits)}")
-        else:
-            parts.append(f"{key}: {fmt_compact(value, digits)}")
+            parts.append(f"margin: min {fmt_number(np.nanmin(arr), digits)}, max {fmt_number(np.nanmax(arr), digits)}")
+    except (TypeError, ValueError):
+        pass
+    if "label" in grid:
+        parts.append(str(grid["label"]))
     return "; ".join(parts) + (" (see the robustness figure)" if figure else "")

@@ -1,24 +1,35 @@
 """Report figures as deterministic SVG text (matplotlib, imported lazily).
 
-Every ``*_svg`` function returns the SVG of one figure, or ``None`` when the data it needs is
-absent; :func:`design_figures` collects them in report order.  Rendering (rc settings, palette,
-byte-for-byte reproducible SVG, decimation of long signals) lives in :mod:`designkit.report.svg`,
-the loop transfer and its margins in :mod:`designkit.report.loop` and the robustness heat map in
-:mod:`designkit.report.heatmap`.
+Figures come from two tables, so a new family or check adds its figure without touching the
+others:
+
+* :data:`DESIGN_FIGURES` -- drawn from the design and the simulation (pole-zero map, ideal
+  linear response, nonlinear simulation per joint);
+* :data:`CHECK_FIGURES` -- keyed by check name, drawn from that check's certificate and data
+  (the loop margins' Bode plots, the robustness lattice, the intercoupling).
+
+Analysis is never done here: margins, frequency responses, stability over the lattice and the
+decoupled predictions are computed by the checks (:mod:`designkit.verification`); figures only
+draw them, and every caption is written from what is drawn.  Rendering (rc settings, palette,
+byte-for-byte reproducible SVG, decimation) lives in :mod:`designkit.report.svg`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from designkit.report.heatmap import robustness_svg
-from designkit.report.loop import achieved_zeros, frequency_grid, input_index, loop_frequency_response, loop_margins
-from designkit.report.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, column, new_figure, plot_decimated, render
+from designkit.report.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render
+from designkit.verification.loop import achieved_zeros
+
+__all__ = ["CHECK_FIGURES", "DESIGN_FIGURES", "Figure", "design_figures"]
+
+_JOINT_COLORS = (BLUE, GREEN, PURPLE, ORANGE, RED, GREY)
 
 
 @dataclass(frozen=True)
@@ -30,7 +41,7 @@ class Figure:
     title : str
         Short title shown above the figure.
     caption : str
-        What the figure shows and how to read it.
+        What the figure shows and how to read it (written from what is drawn).
     svg : str
         A standalone SVG document.
     filename : str
@@ -43,56 +54,35 @@ class Figure:
     filename: str
 
 
-# ----------------------------------------------------------------------------- helpers
+def _joint_label(design: Any, j: int) -> str:
+    return "" if len(design.plant.positions) == 1 else f" (joint {j + 1})"
 
 
-def _time_grid(design, requirements, simulation_spec, horizon: float = 0.0) -> np.ndarray:
-    duration = getattr(simulation_spec, "duration", None)
-    if duration is None:
-        slowest = min((abs(p.real) for p in np.linalg.eigvals(design.closed_loop.A) if abs(p.real) > 1e-9),
-                      default=1.0)
-        duration = 8.0 / slowest
-        if requirements is not None and requirements.settling_time is not None:
-            duration = max(duration, 2.0 * requirements.settling_time)
-        duration += horizon
-    return np.linspace(0.0, float(duration), 1500)
+def _pos_name(design: Any, j: int) -> str:
+    return design.plant.states[design.plant.positions[j]].name
 
 
-def linear_response(design, t: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(x1, u)`` of the nominal linear closed loop driven by ``reference`` (no perturbation)."""
-    import control
-
-    cl = design.closed_loop
-    names = {"xD": 0, "xDd": 1, "xDdd": 2}
-    U = np.zeros((len(cl.inputs), t.size))
-    for k, name in enumerate(cl.inputs):
-        if name in names:
-            U[k] = reference[:, names[name]]
-    resp = control.forced_response(control.ss(cl.A, cl.B, cl.C, cl.D), T=t, U=U, X0=np.zeros(cl.A.shape[0]))
-    y = np.atleast_2d(resp.outputs)
-    return y[cl.outputs.index("x1")], y[cl.outputs.index("u")]
+# ----------------------------------------------------------------------------- pole-zero map
 
 
-# ----------------------------------------------------------------------------- figures
+def _requested_poles(design: Any) -> np.ndarray:
+    return np.array([*design.poles, *[p for loop in design.loops for p in loop.poles]], dtype=complex)
 
 
-def pole_zero_svg(design) -> str:
-    """Pole-zero map: achieved closed-loop poles and zeros against the requested ones."""
-    return render(_draw_pole_zero, design)
-
-
-def _draw_pole_zero(design):
+def _draw_pole_zero(design: Any) -> Any:
     fig, (ax,) = new_figure(6.4, 3.0)
     achieved = np.linalg.eigvals(design.closed_loop.A)
     zeros = achieved_zeros(design)
-    req_p = np.array(design.poles, dtype=complex)
+    req_p = _requested_poles(design)
     req_z = np.array(design.zeros, dtype=complex)
     ax.axvline(0.0, color=GREY, lw=0.8)
     ax.axhline(0.0, color=GREY, lw=0.8)
+    per_loop = bool(design.loops)
     if req_p.size:
         ax.plot(req_p.real, req_p.imag, "o", ms=13, mfc="none", mec=ORANGE, mew=1.6, ls="none",
-                label="requested poles")
-    ax.plot(achieved.real, achieved.imag, "x", ms=9, color=BLUE, mew=2.0, ls="none", label="achieved poles")
+                label="requested poles (per joint loop)" if per_loop else "requested poles")
+    ax.plot(achieved.real, achieved.imag, "x", ms=9, color=BLUE, mew=2.0, ls="none",
+            label="coupled closed-loop poles" if per_loop else "achieved poles")
     if req_z.size:
         ax.plot(req_z.real, req_z.imag, "s", ms=13, mfc="none", mec=ORANGE, mew=1.6, ls="none",
                 label="requested zero")
@@ -111,51 +101,92 @@ def _draw_pole_zero(design):
     return fig
 
 
-def step_response_svg(design, requirements=None, simulation_spec=None, simulation=None) -> str:
-    """Ideal linear response of ``x1`` (and ``u``) with the requirement envelope.
-
-    Servo designs get a step of ``simulation_spec.step`` rad; tracking designs follow the
-    reference of ``simulation`` when given (else the spec's trajectory).
-    """
-    return render(_draw_step, design, requirements, simulation_spec, simulation)
-
-
-def _draw_step(design, requirements, simulation_spec, simulation):
-    tracking = input_index(design.closed_loop, "xDd") is not None
-    if tracking and simulation is not None and getattr(simulation, "kind", "") == "trajectory":
-        t = np.asarray(simulation.time, float)
-        ref = np.asarray(simulation.reference, float)
+def pole_zero_figure(result: Any) -> Figure | None:
+    """Achieved (or coupled) closed-loop poles against the requested ones."""
+    design = result.design
+    if design.closed_loop is None:
+        return None
+    n_ach = len(design.closed_loop.A)
+    n_req = len(_requested_poles(design))
+    if design.loops:
+        caption = (f"The {n_ach} poles of the coupled arm's closed loop, linearized at the design configuration (×), "
+                   f"against the {n_req} poles each joint loop places on its own simplified link model (○); the "
+                   "distance between them is the intercoupling the per-link design ignores.")
     else:
-        from designkit.simulation.reference import reference_for
-        from designkit.spec.schema import Simulation
+        caption = (f"The {n_ach} achieved closed-loop poles (eigenvalues of the linearized closed loop, ×) against the "
+                   f"{n_req} requested poles (○); each × should sit in the centre of a ○.")
+    if design.zeros:
+        caption += " Zeros of the reference-to-position transfer xD→x1 (small ○) against the requested zero (□)."
+    return Figure("Pole-zero map", caption, render(_draw_pole_zero, design), "fig-pole-zero.svg")
 
-        sim_spec = simulation_spec if simulation_spec is not None else Simulation()
-        reference = reference_for("trajectory" if tracking else "step", sim_spec)
-        t = _time_grid(design, requirements, simulation_spec, reference.horizon)
-        ref = np.asarray(reference.evaluate(t), float)
-    amplitude = float(ref[-1, 0])
-    x1, u = linear_response(design, t, ref)
+
+# ----------------------------------------------------------------------------- linear response
+
+
+def _time_grid(design: Any, spec: Any, horizon: float) -> np.ndarray:
+    duration = spec.simulation.duration
+    if duration is None:
+        slowest = min((abs(p.real) for p in np.linalg.eigvals(design.closed_loop.A) if abs(p.real) > 1e-9),
+                      default=1.0)
+        duration = 8.0 / slowest
+        req = spec.requirements
+        if req is not None and req.settling_time is not None:
+            duration = max(duration, 2.0 * req.settling_time)
+        duration += horizon
+    return np.linspace(0.0, float(duration), 1500)
+
+
+def _draw_linear(design: Any, t: np.ndarray, ref: np.ndarray, positions: np.ndarray, u: np.ndarray,
+                 limit: float | None) -> Any:
     fig, (ax, ax_u) = new_figure(6.8, 4.6, rows=2)
     fig.get_layout_engine().set(h_pad=0.06)
-    ax.plot(t, ref[:, 0], color=GREY, ls="--", lw=1.0, label="xD (reference)")
-    ax.plot(t, x1, color=BLUE, label="x1 (linear, nominal)")
-    if requirements is not None and _at_rest(t, ref[:, 0]):
-        _draw_envelope(ax, t, amplitude, requirements)
+    n = positions.shape[1]
+    for j in range(n):
+        color = _JOINT_COLORS[j % len(_JOINT_COLORS)]
+        ax.plot(t, ref[:, j, 0], color=color, ls="--", lw=1.0, label=f"xD{_joint_label(design, j)} (reference)")
+        ax.plot(t, positions[:, j], color=color, label=f"{_pos_name(design, j)} (linear, nominal)")
     ax.set_ylabel("position (rad)")
     ax.legend(loc="best", framealpha=0.9)
-    ax_u.plot(t, u, color=PURPLE, label="u (linear)")
-    if requirements is not None and requirements.max_control is not None:
-        _control_limit(ax_u, requirements.max_control, float(np.max(np.abs(u))))
+    for k in range(u.shape[1]):
+        ax_u.plot(t, u[:, k], color=_JOINT_COLORS[k % len(_JOINT_COLORS)], label=design.plant.inputs[k].name)
+    if limit is not None:
+        _control_limit(ax_u, limit, float(np.max(np.abs(u))))
     ax_u.set_xlabel("time (s)")
-    ax_u.set_ylabel("control u (N·m)")
+    ax_u.set_ylabel("control (N·m)")
     ax_u.legend(loc="best", framealpha=0.9)
     ax_u.set_xlim(t[0], t[-1])
     return fig
 
 
-def _control_limit(ax, limit: float, peak: float) -> None:
-    """Draw ``|u| <= limit``; when the limit is far beyond the signal (more than 3x its peak) it is
-    named in the legend only, so that the signal keeps a readable scale."""
+def linear_figure(result: Any) -> Figure | None:
+    """The nominal linear closed loop driven by the spec's reference (no nonlinearity, delay, noise)."""
+    from designkit.families import family
+    from designkit.simulation.linear import linear_response
+    from designkit.simulation.reference import reference_for
+
+    design, spec = result.design, result.loaded.spec
+    if design.closed_loop is None:
+        return None
+    kind = family(design.kind).reference
+    reference = reference_for(kind, spec.simulation, len(design.plant.positions))
+    t = _time_grid(design, spec, reference.horizon)
+    ref = reference.evaluate(t)
+    positions, u = linear_response(design, t, ref)
+    req = spec.requirements
+    limit = req.max_control if req is not None else None
+    shown = limit is not None and limit <= 3.0 * float(np.max(np.abs(u)))
+    word = "trajectory" if kind == "trajectory" else "step"
+    caption = (f"The nominal closed loop linearized at its operating point, driven by the {word} reference (dashed), "
+               "without saturation, delay, noise or perturbation: the response the design predicts. Bottom: the "
+               "control it needs")
+    caption += (f", with the limit |u| ≤ {limit:g} N·m." if shown else
+                f" (the limit |u| ≤ {limit:g} N·m is off scale)." if limit is not None else ".")
+    svg = render(_draw_linear, design, t, ref, positions, u, limit)
+    return Figure(f"Ideal linear {word} response", caption, svg, "fig-linear-response.svg")
+
+
+def _control_limit(ax: Any, limit: float, peak: float) -> None:
+    """Draw ``|u| <= limit``; a limit far beyond the signal (more than 3x its peak) is named in the legend only."""
     label = f"|u| ≤ {limit:g} N·m"
     if limit <= 3.0 * peak:
         ax.axhline(limit, color=RED, ls="--", lw=1.0, label=label)
@@ -164,196 +195,250 @@ def _control_limit(ax, limit: float, peak: float) -> None:
         ax.plot([], [], color=RED, ls="--", lw=1.0, label=f"{label} (off scale)")
 
 
+# ----------------------------------------------------------------------------- nonlinear simulation
+
+
 def _at_rest(t: np.ndarray, xd: np.ndarray) -> bool:
-    """True when the reference is constant and non-zero over the last 20 % of the time window
-    (a step, or a rest-to-rest motion that has ended): only then is there a final value to which
-    overshoot, settling and steady-state bounds refer."""
+    """True when the reference is constant and non-zero over the last 20 % of the window."""
     tail = np.asarray(xd, float)[t >= t[0] + 0.8 * (t[-1] - t[0])]
     final = float(tail[-1]) if tail.size else 0.0
     return final != 0.0 and float(np.ptp(tail)) <= 1e-9 * max(1.0, abs(final))
 
 
-def _draw_envelope(ax, t, amplitude: float, req) -> None:
-    a, mag = amplitude, abs(amplitude)
+def _draw_envelope(ax: Any, t: np.ndarray, start: float, target: float, req: Any) -> list[str]:
+    a = target - start
+    mag = abs(a)
     t_end = float(t[-1])
+    drawn = []
     if req.overshoot is not None:
-        ax.axhline(a + math.copysign(mag * req.overshoot / 100.0, a), color=RED, ls="--", lw=1.0,
+        ax.axhline(target + math.copysign(mag * req.overshoot / 100.0, a), color=RED, ls="--", lw=1.0,
                    label=f"overshoot limit ({req.overshoot:g} %)")
+        drawn.append("the overshoot limit")
     if req.settling_time is not None and req.settling_time < t_end:
         band = req.settling_band * mag
-        ax.fill_between([req.settling_time, t_end], a - band, a + band, color=GREEN, alpha=0.18, lw=0,
+        ax.fill_between([req.settling_time, t_end], target - band, target + band, color=GREEN, alpha=0.18, lw=0,
                         label=f"settling band ±{100 * req.settling_band:g} % after {req.settling_time:g} s")
-        ax.axvline(req.settling_time, color=GREEN, ls=":", lw=1.0)
-    if req.rise_time is not None and req.rise_time < t_end:
-        ax.plot([req.rise_time], [0.9 * a], marker="^" if a > 0 else "v", ms=8, color=RED, ls="none",
-                label=f"rise-time limit: 90 % by {req.rise_time:g} s")
-        ax.axvline(req.rise_time, color=RED, ls=":", lw=0.9)
+        drawn.append("the settling band")
     if req.steady_state_error is not None:
         e = req.steady_state_error
-        t0 = t[0] + 0.8 * (t_end - t[0])
-        ax.hlines([a - e, a + e], t0, t_end, colors=ORANGE, lw=1.2,
-                  label=f"steady-state band ±{e:g} rad")
+        from designkit.verification.tolerances import STEADY_STATE_WINDOW
+
+        t0 = t[0] + (1.0 - STEADY_STATE_WINDOW) * (t_end - t[0])
+        ax.hlines([target - e, target + e], t0, t_end, colors=ORANGE, lw=1.2,
+                  label=f"steady-state band ±{e:g} rad (last {100 * STEADY_STATE_WINDOW:g} %)")
+        drawn.append("the steady-state band")
+    return drawn
 
 
-def bode_svg(design) -> str | None:
-    """Bode plot of the loop broken at the plant input, margins annotated (``None`` if undefined)."""
-    return render(_draw_bode, design)
-
-
-def _draw_bode(design):
-    w = frequency_grid(design)
-    resp = loop_frequency_response(design, w)
-    margins = loop_margins(design)
-    if resp is None or margins is None:
-        return None
-    mag_db = 20.0 * np.log10(np.abs(resp))
-    phase = np.degrees(np.unwrap(np.angle(resp)))
-    # unwrap keeps continuity; shift by whole turns so the low-frequency phase lies in (-360, 0]
-    phase -= 360.0 * math.ceil(phase[0] / 360.0)
-    fig, (ax_m, ax_p) = new_figure(6.8, 4.6, rows=2)
-    ax_m.semilogx(w, mag_db, color=BLUE)
-    ax_m.axhline(0.0, color=GREY, lw=0.8)
-    ax_m.set_ylabel("|L(jω)| (dB)")
-    ax_p.semilogx(w, phase, color=BLUE)
-    ax_p.axhline(-180.0, color=GREY, lw=0.8)
-    ax_p.set_ylabel("∠L(jω) (deg)")
-    ax_p.set_xlabel("ω (rad/s)")
-    ax_p.set_xlim(w[0], w[-1])
-    text = []
-    if math.isfinite(margins.w_gain_crossover):
-        wgc = margins.w_gain_crossover
-        for a in (ax_m, ax_p):
-            a.axvline(wgc, color=GREEN, ls=":", lw=1.0)
-        ax_p.annotate("", xy=(wgc, -180.0 + margins.phase_margin), xytext=(wgc, -180.0),
-                      arrowprops={"arrowstyle": "<->", "color": GREEN, "lw": 1.4})
-        text.append(f"PM = {margins.phase_margin:.1f}° at ω = {wgc:.3g} rad/s")
-    else:
-        text.append("PM: no gain crossover")
-    if math.isfinite(margins.w_phase_crossover) and math.isfinite(margins.gain_margin):
-        wpc = margins.w_phase_crossover
-        for a in (ax_m, ax_p):
-            a.axvline(wpc, color=RED, ls=":", lw=1.0)
-        gm_db = 20.0 * math.log10(margins.gain_margin)
-        ax_m.annotate("", xy=(wpc, 0.0), xytext=(wpc, -gm_db),
-                      arrowprops={"arrowstyle": "<->", "color": RED, "lw": 1.4})
-        text.append(f"GM = {margins.gain_margin:.3g} ({gm_db:+.1f} dB) at ω = {wpc:.3g} rad/s")
-    else:
-        text.append("GM = ∞ (phase never crosses -180° at finite ω)")
-    text.append(f"min |1 + L| = {margins.modulus_margin:.3g}")
-    ax_m.text(0.99, 0.96, "\n".join(text), transform=ax_m.transAxes, ha="right", va="top", fontsize=8,
-              bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": GREY, "alpha": 0.9}, zorder=5)
-    lo, hi = float(np.min(phase)), float(np.max(phase))
-    ax_p.set_ylim(min(lo, -180.0) - 15.0, max(hi, -180.0) + 15.0)
-    return fig
-
-
-def simulation_svg(simulation, requirements=None) -> str | None:
-    """Nonlinear simulation: ``x1`` and ``xD`` (with the requirement envelope when the reference
-    comes to rest); ``u_command``, ``u_applied``, the perturbation and the control limit."""
-    if simulation is None:
-        return None
-    return render(_draw_simulation, simulation, requirements)
-
-
-def _draw_simulation(sim, requirements):
-    t = np.asarray(sim.time, float)
-    xd = column(sim.reference)
-    fig, (ax, ax_u) = new_figure(6.8, 4.6, rows=2)
-    plot_decimated(ax, t, xd, color=GREY, ls="--", lw=1.0, label="xD (reference)")
-    plot_decimated(ax, t, column(sim.state), color=BLUE, label="x1")
-    if requirements is not None and t.size > 1 and _at_rest(t, xd):
-        _draw_envelope(ax, t, float(xd[-1]), requirements)
-    if requirements is not None and requirements.max_control is not None:
-        peak = max(float(np.max(np.abs(column(sim.u_command)))), float(np.max(np.abs(column(sim.u_applied)))))
-        _control_limit(ax_u, requirements.max_control, peak)
-    ax.set_ylabel("position (rad)")
-    ax.legend(loc="best", framealpha=0.9)
-    _element_levels(ax_u, (sim.settings or {}).get("nonlinearity"))
-    # applied first, so that a chattering applied control (relay, quantiser) does not hide the command
-    plot_decimated(ax_u, t, column(sim.u_applied), color=ORANGE, lw=1.0, alpha=0.75, label="u applied")
-    plot_decimated(ax_u, t, column(sim.u_command), color=PURPLE, lw=1.2, label="u command")
-    pert = column(sim.perturbation) if np.size(sim.perturbation) else np.zeros(0)
-    if pert.size == t.size and np.any(pert != 0.0):
-        plot_decimated(ax_u, t, pert, color=RED, ls="--", lw=1.0, label="perturbation ξ")
-    ax_u.set_ylabel("control (N·m)")
-    ax_u.set_xlabel("time (s)")
-    ax_u.set_xlim(t[0], t[-1])
-    ax_u.legend(loc="best", framealpha=0.9)
-    return fig
-
-
-# nonlinear element kind -> (key of its level in the settings, legend label)
 _ELEMENT_LEVELS = {"saturation": ("limit", "saturation ±limit"), "relay": ("amplitude", "relay ±amplitude")}
 
 
-def _element_levels(ax, element) -> None:
-    """Dotted lines at the output levels of a saturating element (saturation, relay)."""
-    if not isinstance(element, dict) or element.get("kind") not in _ELEMENT_LEVELS:
-        return
+def _element_levels(ax: Any, element: Any) -> bool:
+    if not hasattr(element, "get") or element.get("kind") not in _ELEMENT_LEVELS:
+        return False
     key, label = _ELEMENT_LEVELS[element["kind"]]
     level = element.get(key)
-    if isinstance(level, int | float) and math.isfinite(level):
-        ax.axhline(level, color=ORANGE, ls=":", lw=1.0, label=label)
-        ax.axhline(-level, color=ORANGE, ls=":", lw=1.0)
+    levels = [level] if isinstance(level, int | float) else list(level or [])
+    for k, lv in enumerate(levels):
+        if isinstance(lv, int | float) and math.isfinite(lv):
+            ax.axhline(lv, color=ORANGE, ls=":", lw=1.0, label=label if k == 0 else None)
+            ax.axhline(-lv, color=ORANGE, ls=":", lw=1.0)
+    return bool(levels)
 
 
-def design_figures(
-    design, *, requirements=None, simulation_spec=None, simulation=None,
-    checks: Sequence[Any] = (),
-) -> tuple[Figure, ...]:
+def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
+    t = np.asarray(sim.time, float)
+    n = sim.n_joints
+    rows = 3 if (sim.kind == "trajectory" or n > 1) else 2
+    fig, axes = new_figure(6.8, 6.2 if rows == 3 else 4.6, rows=rows)
+    ax, ax_u = axes[0], axes[-1]
+    drawn = []
+    for j in range(n):
+        color = _JOINT_COLORS[j % len(_JOINT_COLORS)]
+        plot_decimated(ax, t, sim.desired[:, j], color=color, ls="--", lw=1.0,
+                       label=f"xD{_joint_label(design, j)} (reference)")
+        plot_decimated(ax, t, sim.joint_positions[:, j], color=color, label=sim.state_names[sim.positions[j]])
+    if req is not None and t.size > 1 and n == 1 and _at_rest(t, sim.desired[:, 0]):
+        drawn += _draw_envelope(ax, t, float(sim.joint_positions[0, 0]), float(sim.desired[-1, 0]), req)
+    ax.set_ylabel("position (rad)")
+    ax.legend(loc="best", framealpha=0.9, ncols=2 if n > 1 else 1)
+    if rows == 3:
+        ax_e = axes[1]
+        for j in range(n):
+            plot_decimated(ax_e, t, sim.tracking_errors[:, j], color=_JOINT_COLORS[j % len(_JOINT_COLORS)],
+                           label=f"{sim.state_names[sim.positions[j]]} − xD")
+        ax_e.axhline(0.0, color=GREY, lw=0.8)
+        ax_e.set_ylabel("error (rad)")
+        ax_e.legend(loc="best", framealpha=0.9)
+        drawn.append("the tracking error of every joint")
+    if req is not None and req.max_control is not None:
+        peak = max(float(np.max(np.abs(sim.u_command))), float(np.max(np.abs(sim.u_applied))))
+        _control_limit(ax_u, req.max_control, peak)
+        drawn.append("the control limit")
+    if _element_levels(ax_u, sim.settings.get("nonlinearity")):
+        drawn.append("the element's output levels")
+    for k in range(sim.u_applied.shape[1]):
+        color = _JOINT_COLORS[k % len(_JOINT_COLORS)]
+        name = sim.input_names[k]
+        plot_decimated(ax_u, t, sim.u_applied[:, k], color=ORANGE if n == 1 else color, lw=1.0, alpha=0.75,
+                       label=f"{name} applied")
+        plot_decimated(ax_u, t, sim.u_command[:, k], color=PURPLE if n == 1 else color, lw=1.2, ls="-",
+                       label=f"{name} command")
+    pert = np.asarray(sim.perturbation, float)
+    if pert.size and np.any(pert != 0.0):
+        for k in range(pert.shape[1]):
+            if np.any(pert[:, k] != 0):
+                plot_decimated(ax_u, t, pert[:, k], color=RED, ls="-.", lw=1.0,
+                               label=f"perturbation {sim.disturbance_names[k]}")
+        drawn.append("the perturbation")
+    ax_u.set_ylabel("control (N·m)")
+    ax_u.set_xlabel("time (s)")
+    ax_u.set_xlim(t[0], t[-1])
+    ax_u.legend(loc="best", framealpha=0.9, ncols=2 if n > 1 else 1)
+    return fig, drawn
+
+
+def simulation_figure(result: Any) -> Figure | None:
+    """The nonlinear closed-loop simulation: positions against references, errors, controls."""
+    sim = result.simulation
+    if sim is None:
+        return None
+    spec = result.loaded.spec
+    drawn: list[str] = []
+
+    def draw(design: Any, sim: Any, req: Any) -> Any:
+        fig, what = _draw_simulation(design, sim, req)
+        drawn.extend(what)
+        return fig
+
+    svg = render(draw, result.design, sim, spec.requirements)
+    plant = result.design.plant
+    caption = (f"Simulation of the full nonlinear {plant.kind} plant with the spec's nonlinearity, delay, sampling, "
+               "noise and perturbation; the time-domain checks are measured on it. Top: joint positions and their "
+               "references (dashed). Bottom: the control each input receives as commanded by the controller and as "
+               "applied to the plant")
+    caption += ("; also drawn: " + ", ".join(drawn) + ".") if drawn else "."
+    return Figure("Nonlinear closed-loop simulation", caption, svg, "fig-simulation.svg")
+
+
+# ----------------------------------------------------------------------------- check figures
+
+
+def _draw_bode(data: Any) -> Any:
+    w = np.asarray(data["frequency"], float)
+    fig, (ax_m, ax_p) = new_figure(6.8, 4.6, rows=2)
+    text = []
+    for k, ch in enumerate(data["channels"]):
+        resp, m = np.asarray(ch["response"]), ch["margins"]
+        color = _JOINT_COLORS[k % len(_JOINT_COLORS)]
+        phase = np.degrees(np.unwrap(np.angle(resp)))
+        phase -= 360.0 * math.ceil(phase[0] / 360.0)
+        ax_m.semilogx(w, 20.0 * np.log10(np.abs(resp)), color=color, label=f"L at {ch['input']}")
+        ax_p.semilogx(w, phase, color=color)
+        if math.isfinite(m.w_gain_crossover):
+            for a in (ax_m, ax_p):
+                a.axvline(m.w_gain_crossover, color=color, ls=":", lw=1.0)
+            text.append(f"{ch['input']}: PM = {m.phase_margin:.1f}° at ω = {m.w_gain_crossover:.3g} rad/s")
+        if math.isfinite(m.w_phase_crossover) and math.isfinite(m.gain_margin):
+            text.append(f"{ch['input']}: GM = {m.gain_margin:.3g} at ω = {m.w_phase_crossover:.3g} rad/s")
+    ax_m.axhline(0.0, color=GREY, lw=0.8)
+    ax_p.axhline(-180.0, color=GREY, lw=0.8)
+    ax_m.set_ylabel("|L(jω)| (dB)")
+    ax_p.set_ylabel("∠L(jω) (deg)")
+    ax_p.set_xlabel("ω (rad/s)")
+    ax_p.set_xlim(w[0], w[-1])
+    if len(data["channels"]) > 1:
+        ax_m.legend(loc="lower left", framealpha=0.9)
+    if text:
+        ax_m.text(0.99, 0.96, "\n".join(text), transform=ax_m.transAxes, ha="right", va="top", fontsize=8,
+                  bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": GREY, "alpha": 0.9}, zorder=5)
+    return fig
+
+
+def bode_figure(result: Any, check: Any) -> Figure | None:
+    """Bode plots of the loop broken at each plant input (data of the ``loop_margins`` check)."""
+    if not check.data.get("channels"):
+        return None
+    from designkit.families import family
+
+    transfer = family(result.design.kind).display.loop_transfer
+    chans = [c["input"] for c in check.data["channels"]]
+    caption = ("The loop broken where the control enters the plant" + (" (each input in turn, the other loops closed)"
+                                                                      if len(chans) > 1 else "")
+               + ": L(s) = C (sI − A − B C)⁻¹ B from the linearized closed loop. ")
+    if transfer:
+        caption += f"In closed form: {transfer}. "
+    caption += "Dotted lines: gain crossovers; the box gives the phase and gain margins measured there."
+    return Figure("Loop Bode plot at the plant input", caption, render(_draw_bode, check.data), "fig-loop-bode.svg")
+
+
+def robustness_figure(result: Any, check: Any) -> Figure | None:
+    """The robust_grid check's margin over its parameter lattice (axes from the certificate)."""
+    svg = robustness_svg(check.name, check.certificate)
+    if svg is None:
+        return None
+    axes = check.certificate["grid"]["axes"]
+    names = " and ".join(a["name"] for a in axes)
+    caption = (f"Stability margin −max Re(pole) (1/s) of the closed loop over the lattice of {names}; "
+               + ("green is stable, red unstable, and the black line is where the margin is zero."
+                  if len(axes) == 2 else "above zero is stable."))
+    return Figure(f"Robustness over {names}", caption, svg, f"fig-robustness-{_slug(check.name)}.svg")
+
+
+def _draw_coupling(data: Any, names: Sequence[str]) -> Any:
+    t = np.asarray(data["time"], float)
+    coupled, decoupled = np.asarray(data["coupled"]), np.asarray(data["decoupled"])
+    fig, (ax, ax_e) = new_figure(6.8, 4.6, rows=2)
+    for j in range(coupled.shape[1]):
+        color = _JOINT_COLORS[j % len(_JOINT_COLORS)]
+        plot_decimated(ax, t, decoupled[:, j], color=color, ls="--", lw=1.0, label=f"{names[j]} own loop alone")
+        plot_decimated(ax, t, coupled[:, j], color=color, label=f"{names[j]} coupled arm")
+        plot_decimated(ax_e, t, coupled[:, j] - decoupled[:, j], color=color, label=f"{names[j]}")
+    ax.set_ylabel("position (rad)")
+    ax.legend(loc="best", framealpha=0.9, ncols=2)
+    ax_e.axhline(0.0, color=GREY, lw=0.8)
+    ax_e.set_ylabel("intercoupling error (rad)")
+    ax_e.set_xlabel("time (s)")
+    ax_e.set_xlim(t[0], t[-1])
+    ax_e.legend(loc="best", framealpha=0.9)
+    return fig
+
+
+def coupling_figure(result: Any, check: Any) -> Figure | None:
+    """Each joint on the coupled arm against its own loop on its simplified model (coupling check data)."""
+    if not check.data:
+        return None
+    plant = result.design.plant
+    names = [plant.states[i].name for i in plant.positions]
+    rows = check.certificate.get("intercoupling_error", [])
+    worst = max(rows, key=lambda r: r["max_abs_rad"]) if rows else None
+    caption = ("Top: each joint on the full nonlinear coupled arm (solid) and as its own loop predicts on its "
+               "simplified link model, alone (dashed). Bottom: their difference, the intercoupling error the "
+               "per-joint PIDs leave")
+    if worst is not None:
+        caption += f" (largest {worst['max_abs_rad']:.3g} rad, joint {worst['joint']}, t = {worst['at_s']:.3g} s)."
+    return Figure("Intercoupling between the joint loops", caption, render(_draw_coupling, check.data, names),
+                  "fig-coupling.svg")
+
+
+DESIGN_FIGURES: tuple[Callable[[Any], Figure | None], ...] = (pole_zero_figure, linear_figure, simulation_figure)
+"""Figures drawn from the design and the simulation, in report order."""
+
+CHECK_FIGURES: dict[str, Callable[[Any, Any], Figure | None]] = {
+    "loop_margins": bode_figure,
+    "robust_grid": robustness_figure,
+    "coupling": coupling_figure,
+}
+"""Check name -> figure drawn from that check's certificate and data."""
+
+
+def design_figures(result: Any) -> tuple[Figure, ...]:
     """Every figure of a report, in report order (figures without data are left out)."""
-    tracking = input_index(design.closed_loop, "xDd") is not None
-    kind_word = "trajectory" if tracking else "step"
-    pz_caption = ("Achieved closed-loop poles (eigenvalues of the nominal closed-loop A, ×) against the requested "
-                  "poles (○); each × should sit in the centre of a ○.")
-    if design.zeros:
-        pz_caption += (" Zeros of the reference-to-position transfer xD→x1 (small ○) against the requested "
-                       "zero (□).")
-    loop_formula = {
-        "pid_servo": " For the PID servo L(s) = Km (K2 s² + K1 s + K3) / (s² (τ s + 1)).",
-        "pid_tracking": " For the PID tracker L(s) = ((Km K2 − 1) s² + Km K1 s + Km K3) / (s² (τ s + 1)) "
-                        "(the x2/Km term cancels the plant damping).",
-    }.get(design.kind, "")
-    out = [
-        Figure("Pole-zero map", pz_caption, pole_zero_svg(design), "fig-pole-zero.svg"),
-        Figure(
-            f"Ideal linear {kind_word} response",
-            f"Nominal linear closed loop (no saturation, delay, noise or perturbation) driven by the {kind_word} "
-            "reference, with the requirement envelope where the spec has requirements: the response must "
-            "stay under the overshoot limit, pass the rise-time marker in time and stay in the settling "
-            "band; the lower plot is the control it needs against the control limit.",
-            step_response_svg(design, requirements, simulation_spec, simulation), "fig-linear-response.svg",
-        ),
-    ]
-    bode = bode_svg(design)
-    if bode is not None:
-        out.append(Figure(
-            "Loop Bode plot at the plant input",
-            "L(s) = −K (sI − A + bK)⁻¹ b: the loop broken where the control (and the perturbation ξ) enters "
-            f"the plant.{loop_formula} Green: gain crossover and phase margin; red: phase crossover and gain "
-            "margin (a gain margin below 1 means the loop becomes unstable if the gain is reduced by that "
-            "factor).",
-            bode, "fig-loop-bode.svg",
-        ))
-    sim = simulation_svg(simulation, requirements)
-    if sim is not None:
-        out.append(Figure(
-            "Nonlinear closed-loop simulation",
-            "Simulation on the link model with the spec's nonlinearity, delay, sampling, noise and "
-            "perturbation; the time-domain checks are measured on it. Top: position x1 and reference xD "
-            "with the requirement envelope. Bottom: control computed by the controller (u command), "
-            "control reaching the plant (u applied), the perturbation ξ and the control limit.",
-            sim, "fig-simulation.svg",
-        ))
-    for check in checks:
-        svg = robustness_svg(check.name, check.certificate)
-        if svg is not None:
-            out.append(Figure(
-                f"Robustness over the parameter box ({check.name})",
-                "The check's margin over the grid of plant parameters (Km, τ); green is robust, red is not, "
-                "and the black line is where the margin is zero.",
-                svg, f"fig-robustness-{_slug(check.name)}.svg",
-            ))
+    out = [f for draw in DESIGN_FIGURES if (f := draw(result)) is not None]
+    for check in result.checks:
+        draw = CHECK_FIGURES.get(check.name)
+        if draw is not None and (f := draw(result, check)) is not None:
+            out.append(f)
     return tuple(out)
 
 

@@ -1,66 +1,100 @@
-"""Robustness heat map: a check's margin over the ``(Km, tau)`` box of plant parameters.
+"""Robustness figure: a check's margin over the lattice of its uncertain plant parameters.
 
-A check opts in by putting a ``"grid"`` mapping in its certificate (see :func:`robustness_grid`);
-:func:`robustness_svg` draws it, green where robust and red where not, with the zero contour.
+A check opts in by putting a ``"grid"`` mapping in its certificate (see :func:`robustness_grid`):
+its ``axes`` (name, unit, values of each varying parameter -- one or two) and the margin at every
+lattice point.  Two axes give a heat map, green where robust and red where not, with the zero
+contour; one axis a line.  The axes are the certificate's: nothing here knows which plant
+parameters exist.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from designkit.report.svg import new_figure, render
+from designkit.report.svg import BLUE, GREY, new_figure, render
 
-_GRID_VALUE_KEYS = ("values", "margin", "margins", "value", "z")
+__all__ = ["GridData", "robustness_grid", "robustness_svg"]
 
 
-def robustness_grid(certificate: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, str] | None:
-    """``(Km, tau, values[tau, Km], label)`` from a certificate's ``"grid"`` entry, else ``None``.
+@dataclass(frozen=True)
+class GridData:
+    """A margin over a lattice of one or two parameters.
 
-    Accepted form: ``certificate["grid"] = {"Km": [...], "tau": [...], "values": [[...]],
-    "label": "..."}`` where ``values`` has shape ``(len(tau), len(Km))`` or ``(len(Km), len(tau))``
-    (the key may also be ``margin``/``margins``/``value``/``z``).
+    Parameters
+    ----------
+    axes : tuple of (name, unit, values)
+        The varying parameters (values as arrays).
+    values : ndarray
+        Shape ``(len(y), len(x))`` for two axes, ``(len(x),)`` for one.
+    label : str
+        What the values are.
+    """
+
+    axes: tuple[tuple[str, str, np.ndarray], ...]
+    values: np.ndarray
+    label: str
+
+
+def robustness_grid(certificate: Mapping[str, Any]) -> GridData | None:
+    """The ``"grid"`` entry of a certificate, checked, else ``None``.
+
+    Accepted form: ``certificate["grid"] = {"axes": [{"name", "unit", "values"}, ...], "values": ...,
+    "label": "..."}`` with one or two axes; for two, ``values`` has shape ``(len(axis 2), len(axis 1))``.
     """
     grid = certificate.get("grid") if isinstance(certificate, Mapping) else None
-    if not isinstance(grid, Mapping) or "Km" not in grid or "tau" not in grid:
-        return None
-    key = next((k for k in _GRID_VALUE_KEYS if k in grid), None)
-    if key is None:
+    if not isinstance(grid, Mapping) or "axes" not in grid or "values" not in grid:
         return None
     try:
-        km = np.asarray(grid["Km"], float).ravel()
-        tau = np.asarray(grid["tau"], float).ravel()
-        values = np.asarray(grid[key], float)
-    except (TypeError, ValueError):
+        axes = tuple((str(a["name"]), str(a.get("unit", "")), np.asarray(a["values"], float).ravel())
+                     for a in grid["axes"])
+        values = np.asarray(grid["values"], float)
+    except (TypeError, ValueError, KeyError):
         return None
-    if values.shape == (km.size, tau.size) and km.size != tau.size:
-        values = values.T
-    if values.shape != (tau.size, km.size) or km.size < 2 or tau.size < 2:
+    if len(axes) == 2:
+        shape = (axes[1][2].size, axes[0][2].size)
+    elif len(axes) == 1:
+        shape = (axes[0][2].size,)
+    else:
         return None
-    return km, tau, values, str(grid.get("label", key))
+    if values.shape != shape or min(a[2].size for a in axes) < 2:
+        return None
+    return GridData(axes=axes, values=values, label=str(grid.get("label", "margin")))
 
 
 def robustness_svg(name: str, certificate: Mapping[str, Any]) -> str | None:
-    """Heat map of a robustness margin over the ``(Km, tau)`` box (``None`` without grid data)."""
+    """The figure of a check's lattice (``None`` without grid data)."""
     data = robustness_grid(certificate)
     if data is None:
         return None
-    return render(_draw_robustness, name, data)
+    return render(_draw, name, data)
 
 
-def _draw_robustness(name: str, data):
-    km, tau, values, label = data
+def _axis_label(axis: tuple[str, str, np.ndarray]) -> str:
+    return f"{axis[0]} ({axis[1].replace('*', '·')})" if axis[1] else axis[0]
+
+
+def _draw(name: str, data: GridData) -> Any:
     fig, (ax,) = new_figure(6.4, 4.0)
-    finite = values[np.isfinite(values)]
-    vmax = float(np.max(np.abs(finite))) if finite.size else 1.0
-    vmax = vmax if vmax > 0 else 1.0
-    mesh = ax.pcolormesh(km, tau, values, shading="nearest", cmap="RdYlGn", vmin=-vmax, vmax=vmax)
-    if finite.size and np.min(finite) < 0 < np.max(finite):
-        ax.contour(km, tau, values, levels=[0.0], colors="black", linewidths=1.2)
-    fig.colorbar(mesh, ax=ax, label=label)
-    ax.set_xlabel("Km ((rad/s)/(N·m))")
-    ax.set_ylabel("τ (s)")
-    ax.set_title(f"{name}: {label}")
+    finite = data.values[np.isfinite(data.values)]
+    if len(data.axes) == 1:
+        x = data.axes[0][2]
+        ax.plot(x, data.values, color=BLUE)
+        ax.axhline(0.0, color=GREY, lw=0.8)
+        ax.set_xlabel(_axis_label(data.axes[0]))
+        ax.set_ylabel(data.label)
+    else:
+        vmax = float(np.max(np.abs(finite))) if finite.size else 1.0
+        vmax = vmax if vmax > 0 else 1.0
+        x, y = data.axes[0][2], data.axes[1][2]
+        mesh = ax.pcolormesh(x, y, data.values, shading="nearest", cmap="RdYlGn", vmin=-vmax, vmax=vmax)
+        if finite.size and np.min(finite) < 0 < np.max(finite):
+            ax.contour(x, y, data.values, levels=[0.0], colors="black", linewidths=1.2)
+        fig.colorbar(mesh, ax=ax, label=data.label)
+        ax.set_xlabel(_axis_label(data.axes[0]))
+        ax.set_ylabel(_axis_label(data.axes[1]))
+    ax.set_title(f"{name}: {data.label}")
     return fig

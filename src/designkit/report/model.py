@@ -16,25 +16,17 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families import family
 from designkit.report.certificates import CertificateEntry, fmt_compact, fmt_number, fmt_signed, render_certificate
 from designkit.report.figures import Figure, design_figures
-from designkit.report.loop import achieved_zeros, loop_margins
+from designkit.verification.loop import achieved_zeros
 
-_CONTROLLER_LABELS = {
-    "pid_servo": "PID position servo",
-    "pid_tracking": "PID trajectory tracking",
-}
-_GAIN_UNITS = {
-    "pid_servo": {"K1": "N·m/rad", "K2": "N·m·s/rad", "K3": "N·m/(rad·s)", "K4": "s"},
-    "pid_tracking": {"K1": "N·m/rad", "K2": "N·m·s/rad", "K3": "N·m/(rad·s)"},
-}
-_PLANT_EQUATIONS = {
-    "link": "x1' = x2,   x2' = -x2/τ + (Km/τ)(u + ξ)   (x1 position rad, x2 speed rad/s, u control N·m)",
-}
-_PLANT_PARAMETERS = {
-    "Km": ("Km", "(rad/s)/(N·m)", "link gain"),
-    "tau": ("τ", "s", "time constant"),
-}
+_SYMBOLS = {"tau": "τ", "tau1": "τ1", "tau2": "τ2"}
+
+
+def unit(text: str) -> str:
+    """A unit as the report writes it (``N*m`` -> ``N·m``)."""
+    return text.replace("*", "·")
 
 
 @dataclass(frozen=True)
@@ -49,8 +41,9 @@ class ParameterRow:
 
 @dataclass(frozen=True)
 class PoleRow:
-    """A requested closed-loop pole next to the achieved one closest to it."""
+    """A requested closed-loop pole next to the achieved one closest to it (``loop``: the joint loop, if any)."""
 
+    loop: str
     requested: str
     achieved: str
     error: str
@@ -171,21 +164,18 @@ def _verdict_summary(checks: Sequence[Any]) -> str:
     return f"{counts[0]} passed, {counts[1]} failed, {counts[2]} undecided, of {n} check{'s' * (n != 1)}{extra}."
 
 
-def _plant_rows(spec) -> tuple[ParameterRow, ...]:
-    plant = spec.plant
-    rows = []
-    for key, value in plant.model_dump(exclude={"kind", "uncertainty"}).items():
-        name, unit, meaning = _PLANT_PARAMETERS.get(key, (key, "", ""))
-        rows.append(ParameterRow(name, fmt_number(value, 6), unit, f"nominal {meaning}".strip()))
-    unc = getattr(plant, "uncertainty", None)
+def _plant_rows(plant: Any, spec: Any) -> tuple[ParameterRow, ...]:
+    rows = [ParameterRow(_SYMBOLS.get(p.name, p.name), fmt_number(p.value, 6), unit(p.unit), f"nominal {p.meaning}".strip())
+            for p in plant.parameters]
+    unc = getattr(spec.plant, "uncertainty", None)
     if unc is not None:
-        for key in ("Km", "tau"):
-            box = getattr(unc, key, None)
-            if box is not None:
-                name, unit, meaning = _PLANT_PARAMETERS[key]
-                rows.append(ParameterRow(name, f"[{fmt_number(box[0], 6)}, {fmt_number(box[1], 6)}]", unit,
-                                         f"uncertainty interval of the {meaning}"))
-        rows.append(ParameterRow("grid", str(unc.grid), "points/axis", "robustness grid resolution"))
+        for name, (lo, hi) in unc.intervals.items():
+            par = plant.parameter(name)
+            rows.append(ParameterRow(_SYMBOLS.get(name, name), f"[{fmt_number(lo, 6)}, {fmt_number(hi, 6)}]",
+                                     unit(par.unit), f"uncertainty interval of the {par.meaning}"))
+        rows.append(ParameterRow("grid", str(unc.grid), "points/axis", "robustness lattice resolution"))
+        if unc.samples:
+            rows.append(ParameterRow("samples", str(unc.samples), "plants", f"seeded random samples (seed {unc.seed})"))
     return tuple(rows)
 
 
@@ -208,7 +198,7 @@ def _damping(p: complex) -> tuple[str, str]:
     return fmt_number(-p.real / wn, 4), fmt_number(wn, 4)
 
 
-def _pole_rows(design) -> tuple[PoleRow, ...]:
+def _loop_pole_rows(design: Any, loop: str) -> list[PoleRow]:
     achieved = np.linalg.eigvals(np.asarray(design.closed_loop.A, float))
     achieved = sorted(achieved, key=lambda z: (z.real, z.imag))
     requested = sorted(design.poles, key=lambda z: (z.real, z.imag))
@@ -216,41 +206,70 @@ def _pole_rows(design) -> tuple[PoleRow, ...]:
     for req, ach in _match_poles(requested, np.asarray(achieved)):
         zeta, wn = _damping(ach)
         rows.append(PoleRow(
+            loop=loop,
             requested=fmt_number(req, 6) if req is not None else "—",
             achieved=fmt_number(ach, 6),
             error=fmt_number(abs(ach - req), 2) if req is not None else "—",
             damping=zeta, natural_frequency=wn,
         ))
-    return tuple(rows)
+    return rows
 
 
-def _zero_rows(design) -> tuple[ParameterRow, ...]:
+def _pole_rows(design: Any) -> tuple[PoleRow, ...]:
+    if design.loops:
+        rows = []
+        for name, loop in zip(design.loop_names, design.loops, strict=True):
+            rows += _loop_pole_rows(loop, f"{name} (simplified link)")
+        coupled = sorted(np.linalg.eigvals(np.asarray(design.closed_loop.A, float)), key=lambda z: (z.real, z.imag))
+        for p in coupled:
+            zeta, wn = _damping(p)
+            rows.append(PoleRow("coupled arm", "—", fmt_number(p, 6), "—", zeta, wn))
+        return tuple(rows)
+    if design.closed_loop is None:
+        return ()
+    return tuple(_loop_pole_rows(design, ""))
+
+
+def _zero_rows(design: Any) -> tuple[ParameterRow, ...]:
     zeros = achieved_zeros(design)
     rows = [ParameterRow("requested zero", fmt_number(z, 6), "1/s", "zero of x1/xD") for z in design.zeros]
     rows += [ParameterRow("achieved zero", fmt_number(z, 6), "1/s", "zero of x1/xD (closed loop)") for z in zeros]
     return tuple(rows)
 
 
-def _loop_rows(design) -> tuple[ParameterRow, ...]:
-    m = loop_margins(design)
-    if m is None:
+def _loop_rows(checks: Sequence[Any]) -> tuple[ParameterRow, ...]:
+    """Margins as the ``loop_margins`` check measured them (nothing is recomputed here)."""
+    check = next((c for c in checks if c.name == "loop_margins"), None)
+    if check is None:
         return ()
-    if math.isfinite(m.w_phase_crossover):
-        gm_note = f"factor by which the loop gain may grow; phase crossover ω = {fmt_number(m.w_phase_crossover)} rad/s"
-        if m.gain_margin < 1:
+    rows = []
+    for r in check.certificate.get("loops", []):
+        where = f" at {r['input']}" if len(check.certificate.get("loops", [])) > 1 else ""
+        wgc, wpc, gm = r["gain_crossover_rad_s"], r["phase_crossover_rad_s"], r["gain_margin"]
+        pm_note = f"at gain crossover ω = {fmt_number(wgc)} rad/s" if wgc is not None else "no gain crossover"
+        if wpc is not None and gm is not None:
             gm_note = (f"below 1: conditionally stable, the loop gain may only be reduced by this factor; "
-                       f"phase crossover ω = {fmt_number(m.w_phase_crossover)} rad/s")
-    else:
-        gm_note = "no phase crossover: the phase never reaches -180° at a finite frequency"
-    gm_db = f" ({20 * math.log10(m.gain_margin):+.3g} dB)" if math.isfinite(m.gain_margin) and m.gain_margin > 0 else ""
-    pm_note = (f"at gain crossover ω = {fmt_number(m.w_gain_crossover)} rad/s" if math.isfinite(m.w_gain_crossover)
-               else "no gain crossover: |L| never crosses 1")
-    return (
-        ParameterRow("phase margin", fmt_number(m.phase_margin, 4), "deg", pm_note),
-        ParameterRow("gain margin", fmt_number(m.gain_margin, 4) + gm_db, "ratio", gm_note),
-        ParameterRow("min |1 + L(jω)|", fmt_number(m.modulus_margin, 4), "—",
-                     "modulus (vector) margin on the plotted frequency grid"),
-    )
+                       if gm < 1 else "factor by which the loop gain may grow; ") + f"phase crossover ω = {fmt_number(wpc)} rad/s"
+            gm_text = fmt_number(gm, 4) + (f" ({20 * math.log10(gm):+.3g} dB)" if gm > 0 else "")
+        else:
+            gm_note, gm_text = "no phase crossover: the phase never reaches -180° at a finite frequency", "∞"
+        pm = r["phase_margin_deg"]
+        rows += [
+            ParameterRow(f"phase margin{where}", fmt_number(pm, 4) if pm is not None else "∞", "deg", pm_note),
+            ParameterRow(f"gain margin{where}", gm_text, "ratio", gm_note),
+            ParameterRow(f"min |1 + L(jω)|{where}", fmt_number(r["modulus_margin"], 4), "—",
+                         "modulus (vector) margin on the frequency grid"),
+        ]
+    return tuple(rows)
+
+
+def _gain_value(value: Any) -> str:
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        return fmt_number(float(arr), 6)
+    if arr.ndim == 1:
+        return "; ".join(f"joint {j + 1}: {fmt_number(v, 6)}" for j, v in enumerate(arr))
+    return "; ".join("[" + ", ".join(fmt_number(v, 6) for v in row) + "]" for row in arr)
 
 
 def _check_row(check) -> CheckRow:
@@ -299,7 +318,7 @@ def _simulation_rows(simulation) -> tuple[ParameterRow, ...]:
     return tuple(rows)
 
 
-def build_report_model(result) -> ReportModel:
+def build_report_model(result: Any) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
 
     Parameters
@@ -316,12 +335,9 @@ def build_report_model(result) -> ReportModel:
     spec = loaded.spec
     checks = tuple(result.checks)
     verdict, kind = verdict_of(checks)  # same rule as PipelineResult.verified: undecided is no pass
-    label = _CONTROLLER_LABELS.get(design.kind, design.kind)
-    units = _GAIN_UNITS.get(design.kind, {})
-    figures = design_figures(
-        design, requirements=spec.requirements, simulation_spec=spec.simulation,
-        simulation=result.simulation, checks=checks,
-    )
+    display = family(design.kind).display
+    label = display.label
+    plant = design.plant
     return ReportModel(
         title=f"{label} — {spec.name}",
         name=spec.name,
@@ -335,17 +351,19 @@ def build_report_model(result) -> ReportModel:
         spec_path=str(loaded.path),
         versions=tuple((str(k), str(v)) for k, v in dict(result.versions).items()),
         controller=f"{label} ({design.kind})",
-        plant_equation=_PLANT_EQUATIONS.get(spec.plant.kind, spec.plant.kind),
-        plant_parameters=_plant_rows(spec),
-        formulas=tuple(design.formulas),
-        gains=tuple(ParameterRow(k, fmt_number(v, 6), units.get(k, "")) for k, v in design.gains.items()),
+        plant_equation="\n".join(plant.equations()) + "   (" + ", ".join(
+            f"{s.name} {unit(s.unit)}" for s in (*plant.states, *plant.inputs)) + ")",
+        plant_parameters=_plant_rows(plant, spec),
+        formulas=(*display.law, *design.formulas),
+        gains=tuple(ParameterRow(k, _gain_value(v), unit(design.gains.unit(k)), design.gains.meaning(k))
+                    for k, v in design.gains.items()),
         poles=_pole_rows(design),
         zeros=_zero_rows(design),
-        loop=_loop_rows(design),
+        loop=_loop_rows(checks),
         notes=tuple(design.notes),
         checks=_check_rows(checks),
         simulation=_simulation_rows(result.simulation),
-        figures=figures,
+        figures=design_figures(result),
     )
 
 
@@ -357,5 +375,6 @@ __all__ = [
     "PoleRow",
     "ReportModel",
     "build_report_model",
+    "unit",
     "verdict_of",
 ]

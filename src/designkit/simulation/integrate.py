@@ -1,8 +1,12 @@
-"""Plant ODE, the classical fixed-step RK4 scheme and the CasADi ``mapaccum`` runner.
+"""Integration schemes and the CasADi ``mapaccum`` runner.
 
-The link (notes section 1.2): ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)`` with ``x1`` the
-position (rad), ``x2`` the speed (rad/s), ``u`` the applied control and ``xi`` the
-input-equivalent perturbation (N*m), ``Km`` in (rad/s)/(N*m) and ``tau`` in s.
+* :func:`rk4`: one classical Runge-Kutta 4 step of ``s' = rhs(s, a)`` on CasADi expressions, with
+  the time-varying arguments at the step's start, middle and end;
+* :func:`variable_step`: one step of CasADi's variable-step BDF integrator (CVODES) on the same
+  right-hand side, the time-varying arguments interpolated quadratically through the same three
+  values (third-order accurate in the reference, whatever steps CVODES takes inside), for stiff
+  plants such as the elastic joint;
+* :func:`plant_step`: one RK4 step of a plant's ODE with its inputs held (tests, benchmarks).
 
 :func:`run_steps` evaluates a one-step Function ``(z, w) -> (z_next, record)`` over ``N`` steps
 without a Python loop per step: one ``Function.mapaccum`` over ``chunk`` steps, evaluated chunk
@@ -17,15 +21,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from designkit.models.link import LinkPlant
-
-
-def link_ode(plant: LinkPlant) -> ca.Function:
-    """``link_ode: (x[2], u, xi) -> x_dot[2]`` for the link ``plant`` (SI units)."""
-    x, u, xi = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("xi")
-    a, b = 1.0 / float(plant.tau), float(plant.Km) / float(plant.tau)
-    x_dot = ca.vertcat(x[1], -a * x[1] + b * (u + xi))
-    return ca.Function("link_ode", [x, u, xi], [x_dot], ["x", "u", "xi"], ["x_dot"])
 
 
 def rk4(rhs: Callable[[Any, Any], Any], s: Any, dt: float, stages: Sequence[Any]) -> Any:
@@ -56,12 +51,45 @@ def rk4(rhs: Callable[[Any, Any], Any], s: Any, dt: float, stages: Sequence[Any]
     return s + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
-def plant_step(plant: LinkPlant, dt: float) -> ca.Function:
-    """``link_rk4: (x[2], u, xi) -> x_next[2]``: one RK4 step of the link with ``u``, ``xi`` held."""
-    ode = link_ode(plant)
-    x, u, xi = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("xi")
-    x_next = rk4(lambda s, a: ode(s, u, xi), x, dt, (None, None, None))
-    return ca.Function("link_rk4", [x, u, xi], [x_next], ["x", "u", "xi"], ["x_next"])
+def plant_step(plant: Any, dt: float) -> ca.Function:
+    """``plant_rk4: (x, u, d) -> x_next``: one RK4 step of ``plant``'s ODE (nominal parameters), inputs held."""
+    ode = plant.ode_at()
+    x, u, d = (ca.SX.sym(k, ode.size1_in(i)) for i, k in enumerate(("x", "u", "d")))
+    x_next = rk4(lambda s, a: ode(s, u, d), x, dt, (None, None, None))
+    return ca.Function("plant_rk4", [x, u, d], [x_next], ["x", "u", "d"], ["x_next"])
+
+
+def variable_step(rhs: ca.Function, s: ca.SX, dt: float, stages: Sequence[ca.SX], held: ca.SX,
+                  *, rtol: float, atol: float) -> ca.SX:
+    """One CVODES step of ``s' = rhs(s, a(t), held)`` over ``[0, dt]``, as an expression of ``s`` and ``held``.
+
+    Parameters
+    ----------
+    rhs : casadi.Function
+        ``(s, a, h) -> s_dot``: ``a`` the time-varying argument (the reference), ``h`` everything
+        held over the step.
+    s : casadi.SX
+        State at the step's start.
+    dt : float
+        Step (s).
+    stages : sequence of 3 SX
+        ``a`` at ``0, dt/2, dt``; inside the step ``a`` is the quadratic through them.
+    held : casadi.SX
+        The held values.
+    rtol, atol : float
+        CVODES tolerances.
+    """
+    a0, am, a1 = stages
+    na, nh = rhs.size1_in(1), rhs.size1_in(2)
+    tau, xs = ca.SX.sym("tau"), ca.SX.sym("s", rhs.size1_in(0))
+    A0, Am, A1, H = ca.SX.sym("a0", na), ca.SX.sym("am", na), ca.SX.sym("a1", na), ca.SX.sym("h", nh)
+    h = 0.5 * dt
+    a_t = ((tau - h) * (tau - 2 * h) / (2 * h * h)) * A0 - (tau * (tau - 2 * h) / (h * h)) * Am \
+        + (tau * (tau - h) / (2 * h * h)) * A1
+    dae = {"x": xs, "p": ca.vertcat(A0, Am, A1, H), "t": tau, "ode": rhs(xs, a_t, H)}
+    opts = {"reltol": rtol, "abstol": atol, "max_num_steps": 100_000}
+    integrator = ca.integrator("cvodes_step", "cvodes", dae, 0.0, dt, opts)
+    return integrator(x0=s, p=ca.vertcat(a0, am, a1, held))["xf"]
 
 
 def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: int = 200) -> np.ndarray:

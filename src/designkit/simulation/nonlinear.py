@@ -1,9 +1,11 @@
 """The nonlinear element between controller and plant (POSSPEED, notes fig. B.1.2).
 
-Every element is a pure map ``(u, m) -> (v, m_next)`` from the commanded control ``u`` (N*m)
-and a memory vector ``m`` to the applied control ``v`` and the next memory, given twice: as a
-named CasADi :class:`casadi.Function` (used by the simulator) and as a NumPy reference (used by
-the tests).  Memoryless elements have an empty memory (``n_memory = 0``).
+Every element is a pure map ``(u, m) -> (v, m_next)`` from the commanded controls ``u`` (one per
+plant input, N*m) and a memory vector ``m`` to the applied controls ``v`` and the next memory,
+acting input by input with its own level per input (a scalar applies to every input).  It is
+given twice: as a named CasADi :class:`casadi.Function` (used by the simulator) and as a NumPy
+reference (used by the tests).  Memoryless elements have an empty memory (``n_memory = 0``); the
+relay remembers one output per input.
 
 Definitions (``u`` the input, ``v`` the output):
 
@@ -40,8 +42,10 @@ class Element:
     ----------
     kind : str
         ``"none"``, ``"saturation"``, ``"dead_zone"``, ``"quantizer"`` or ``"relay"``.
+    n : int
+        Number of inputs it acts on.
     function : casadi.Function
-        ``(u, m) -> (v, m_next)`` with ``u``, ``v`` scalars (N*m) and ``m`` of size ``n_memory``.
+        ``(u, m) -> (v, m_next)`` with ``u``, ``v`` of size ``n`` (N*m) and ``m`` of size ``n_memory``.
     reference : callable
         NumPy implementation with the same signature, for arrays of ``u`` (elementwise; memory
         elements take and return arrays of memories of the same shape).
@@ -56,6 +60,7 @@ class Element:
     """
 
     kind: str
+    n: int
     function: ca.Function
     reference: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
     n_memory: int
@@ -68,85 +73,114 @@ def _function(kind: str, v: ca.SX, u: ca.SX, m: ca.SX, m_next: ca.SX) -> ca.Func
     return ca.Function(f"nl_{kind}", [u, m], [v, m_next], ["u", "m"], ["v", "m_next"])
 
 
-def _memoryless(kind: str, expr: Callable[[ca.SX], ca.SX], ref, continuous: bool, settings) -> Element:
-    u, m = ca.SX.sym("u"), ca.SX.sym("m", 0)
+def _levels(value: Any, n: int | None) -> tuple[np.ndarray, int]:
+    arr = np.atleast_1d(np.asarray(value, dtype=float))
+    n = arr.size if n is None else n
+    return np.broadcast_to(arr, (n,)).astype(float), n
+
+
+def _plain(arr: np.ndarray) -> float | list[float]:
+    return float(arr[0]) if np.all(arr == arr[0]) else arr.tolist()
+
+
+def _memoryless(kind: str, n: int, expr: Callable[[ca.SX, int], ca.SX], ref, continuous: bool, settings) -> Element:
+    u, m = ca.SX.sym("u", n), ca.SX.sym("m", 0)
+    v = ca.vertcat(*[expr(u[j], j) for j in range(n)])
     return Element(
-        kind=kind, function=_function(kind, expr(u), u, m, m), reference=ref, n_memory=0,
+        kind=kind, n=n, function=_function(kind, v, u, m, m), reference=ref, n_memory=0,
         initial_memory=(), continuous=continuous, settings=settings,
     )
 
 
-def identity() -> Element:
+def identity(n: int = 1) -> Element:
     """No nonlinear element: ``v = u``."""
-    return _memoryless("none", lambda u: u, lambda u, m: (np.asarray(u, float), m), True, {"kind": "none"})
+    return _memoryless("none", n, lambda u, j: u, lambda u, m: (np.asarray(u, float), m), True, {"kind": "none"})
 
 
-def saturation(limit: float) -> Element:
-    """``v = clip(u, -limit, limit)``; ``limit`` in N*m."""
+def saturation(limit: Any, n: int | None = None) -> Element:
+    """``v = clip(u, -limit, limit)``; ``limit`` in N*m (one per input or one for all)."""
+    lim, n = _levels(limit, n)
     return _memoryless(
-        "saturation", lambda u: ca.fmin(ca.fmax(u, -limit), limit),
-        lambda u, m: (np.minimum(np.maximum(np.asarray(u, float), -limit), limit), m),
-        True, {"kind": "saturation", "limit": float(limit)},
+        "saturation", n, lambda u, j: ca.fmin(ca.fmax(u, -lim[j]), lim[j]),
+        lambda u, m: (np.minimum(np.maximum(np.asarray(u, float), -lim), lim), m),
+        True, {"kind": "saturation", "limit": _plain(lim)},
     )
 
 
-def dead_zone(width: float) -> Element:
+def dead_zone(width: Any, n: int | None = None) -> Element:
     """``v = 0`` for ``|u| <= width``, ``u - sign(u) width`` beyond; ``width`` in N*m."""
+    w, n = _levels(width, n)
 
     def ref(u, m):
         u = np.asarray(u, float)
-        return np.where(u > width, u - width, np.where(u < -width, u + width, 0.0)), m
+        return np.where(u > w, u - w, np.where(u < -w, u + w, 0.0)), m
 
     return _memoryless(
-        "dead_zone", lambda u: ca.if_else(u > width, u - width, ca.if_else(u < -width, u + width, 0.0)),
-        ref, True, {"kind": "dead_zone", "width": float(width)},
+        "dead_zone", n, lambda u, j: ca.if_else(u > w[j], u - w[j], ca.if_else(u < -w[j], u + w[j], 0.0)),
+        ref, True, {"kind": "dead_zone", "width": _plain(w)},
     )
 
 
-def quantizer(step: float) -> Element:
+def quantizer(step: Any, n: int | None = None) -> Element:
     """``v = step * floor(u/step + 1/2)``: nearest level, ties upward; ``step`` in N*m."""
+    q, n = _levels(step, n)
     return _memoryless(
-        "quantizer", lambda u: step * ca.floor(u / step + 0.5),
-        lambda u, m: (step * np.floor(np.asarray(u, float) / step + 0.5), m),
-        False, {"kind": "quantizer", "step": float(step), "rounding": "floor(u/step + 1/2)"},
+        "quantizer", n, lambda u, j: q[j] * ca.floor(u / q[j] + 0.5),
+        lambda u, m: (q * np.floor(np.asarray(u, float) / q + 0.5), m),
+        False, {"kind": "quantizer", "step": _plain(q), "rounding": "floor(u/step + 1/2)"},
     )
 
 
-def relay(amplitude: float, hysteresis: float) -> Element:
-    """Relay with hysteresis; memory = previous output (starts at 0)."""
-    u, m = ca.SX.sym("u"), ca.SX.sym("m", 1)
-    v = ca.if_else(u > hysteresis, amplitude, ca.if_else(u < -hysteresis, -amplitude, m))
+def relay(amplitude: Any, hysteresis: Any, n: int | None = None) -> Element:
+    """Relay with hysteresis, per input; memory = previous outputs (start at 0)."""
+    amp, n = _levels(amplitude, n)
+    hys, _ = _levels(hysteresis, n)
+    u, m = ca.SX.sym("u", n), ca.SX.sym("m", n)
+    v = ca.vertcat(*[ca.if_else(u[j] > hys[j], amp[j], ca.if_else(u[j] < -hys[j], -amp[j], m[j])) for j in range(n)])
 
     def ref(u, m):
         u, m = np.asarray(u, float), np.asarray(m, float)
-        out = np.where(u > hysteresis, amplitude, np.where(u < -hysteresis, -amplitude, m))
+        out = np.where(u > hys, amp, np.where(u < -hys, -amp, m))
         return out, out
 
     return Element(
-        kind="relay", function=_function("relay", v, u, m, v), reference=ref, n_memory=1,
-        initial_memory=(0.0,), continuous=False,
-        settings={"kind": "relay", "amplitude": float(amplitude), "hysteresis": float(hysteresis),
-                  "initial_output": 0.0},
+        kind="relay", n=n, function=_function("relay", v, u, m, v), reference=ref, n_memory=n,
+        initial_memory=(0.0,) * n, continuous=False,
+        settings={"kind": "relay", "amplitude": _plain(amp), "hysteresis": _plain(hys), "initial_output": 0.0},
     )
 
 
-ELEMENTS: dict[str, Callable[[Any], Element]] = {
-    "saturation": lambda s: saturation(s.limit),
-    "dead_zone": lambda s: dead_zone(s.width),
-    "quantizer": lambda s: quantizer(s.step),
-    "relay": lambda s: relay(s.amplitude, s.hysteresis),
+ELEMENTS: dict[str, Callable[[Any, int], Element]] = {
+    "saturation": lambda s, n: saturation(s.limit, n),
+    "dead_zone": lambda s, n: dead_zone(s.width, n),
+    "quantizer": lambda s, n: quantizer(s.step, n),
+    "relay": lambda s, n: relay(s.amplitude, s.hysteresis, n),
 }
-"""Spec section kind -> element builder (takes the validated spec section)."""
+"""Spec section kind -> element builder (takes the validated spec section and the number of inputs)."""
+
+_LEVEL_KEYS = {"saturation": ("limit",), "dead_zone": ("width",), "quantizer": ("step",),
+               "relay": ("amplitude", "hysteresis")}
 
 
-def element_for(section: Any | None) -> Element:
-    """The element a ``simulation.nonlinearity`` section describes (``None``: identity)."""
+def element_for(section: Any | None, n: int = 1) -> Element:
+    """The element a ``simulation.nonlinearity`` section describes for ``n`` inputs (``None``: identity).
+
+    Raises
+    ------
+    SpecError
+        Unknown kind, or a per-input list whose length is not ``n``.
+    """
     if section is None:
-        return identity()
+        return identity(n)
     try:
         build = ELEMENTS[section.kind]
     except KeyError:
         raise SpecError(
             "simulation.nonlinearity.kind", f"unknown element {section.kind!r}; known: {sorted(ELEMENTS)}"
         ) from None
-    return build(section)
+    for key in _LEVEL_KEYS[section.kind]:
+        value = getattr(section, key)
+        if isinstance(value, list) and len(value) != n:
+            raise SpecError(f"simulation.nonlinearity.{key}",
+                            f"needs one value per input ({n}), got {len(value)}")
+    return build(section, n)

@@ -8,32 +8,40 @@ from typing import Any
 
 import numpy as np
 
+from designkit.synthesis.design import freeze
+
+__all__ = ["SimulationResult"]
+
 
 @dataclass(frozen=True, eq=False)
 class SimulationResult:
     """Sampled trajectories of one closed-loop simulation (SI units: s, rad, rad/s, N*m).
 
+    Every array is read-only; rows are the instants ``time``.
+
     Parameters
     ----------
     time : ndarray, shape (N,)
         Time instants (s).
-    reference : ndarray, shape (N, 3)
-        Desired position, speed and acceleration ``(xD, xD', xD'')``.
-    state : ndarray, shape (N, n)
-        Plant state (``x1`` position, ``x2`` speed, ...) as named by ``state_names``.
-    controller_state : ndarray, shape (N, m)
-        Internal state of the controller (e.g. the integral of the position error).
-    u_command : ndarray, shape (N,) or (N, k)
-        Control computed by the controller (before the nonlinear element).
-    u_applied : ndarray
-        Control reaching the plant (after nonlinear element, delay and hold).
-    perturbation : ndarray
-        Input-equivalent perturbation ``xi``.
-    measured : ndarray, shape (N, n)
+    reference : ndarray, shape (N, n, 3)
+        Desired position, velocity and acceleration of each of the ``n`` joints.
+    state : ndarray, shape (N, nx)
+        Plant state, columns named by ``state_names``.
+    controller_state : ndarray, shape (N, nc)
+        Continuous controller state (e.g. the integrals of the position errors).
+    u_command : ndarray, shape (N, nu)
+        Controls computed by the controller (before the nonlinear element).
+    u_applied : ndarray, shape (N, nu)
+        Controls reaching the plant (after nonlinear element, delay and hold).
+    perturbation : ndarray, shape (N, nd)
+        The plant's disturbances (input-equivalent perturbation ``xi``, load torques).
+    measured : ndarray, shape (N, nx)
         Measurements fed to the controller (state plus noise).
     kind : str
         ``"step"`` or ``"trajectory"``.
-    state_names, controller_state_names : tuple of str
+    positions, velocities : tuple of int
+        Columns of ``state`` holding the joint positions and velocities.
+    state_names, controller_state_names, input_names, disturbance_names : tuple of str
         Column names.
     settings : Mapping
         Every option used (dt, integrator, nonlinearity, delay, sampling period, noise seed...),
@@ -49,16 +57,53 @@ class SimulationResult:
     perturbation: np.ndarray
     measured: np.ndarray
     kind: str
+    positions: tuple[int, ...] = (0,)
+    velocities: tuple[int, ...] = (1,)
     state_names: tuple[str, ...] = ("x1", "x2")
     controller_state_names: tuple[str, ...] = ("x3",)
+    input_names: tuple[str, ...] = ("u",)
+    disturbance_names: tuple[str, ...] = ("xi",)
     settings: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n_t = np.size(self.time)
+        for name in ("time", "reference", "state", "controller_state", "u_command", "u_applied", "perturbation",
+                     "measured"):
+            arr = np.array(getattr(self, name), dtype=float)
+            if name in ("u_command", "u_applied", "perturbation", "controller_state") and arr.ndim == 1:
+                arr = arr.reshape(n_t, -1)
+            if name == "reference" and arr.ndim == 2:
+                arr = arr.reshape(n_t, -1, 3)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "settings", freeze(dict(self.settings)))
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joints."""
+        return len(self.positions)
+
+    @property
+    def joint_positions(self) -> np.ndarray:
+        """Joint positions ``(N, n)`` (rad)."""
+        return self.state[:, list(self.positions)]
+
+    @property
+    def desired(self) -> np.ndarray:
+        """Desired joint positions ``(N, n)`` (rad)."""
+        return self.reference[:, :, 0]
+
+    @property
+    def tracking_errors(self) -> np.ndarray:
+        """``q - qD`` per joint, ``(N, n)`` (rad)."""
+        return self.joint_positions - self.desired
 
     @property
     def position(self) -> np.ndarray:
-        """Link position ``x1`` (rad)."""
-        return self.state[:, 0]
+        """Position of the first joint (rad), shape ``(N,)``."""
+        return self.state[:, self.positions[0]]
 
     @property
     def tracking_error(self) -> np.ndarray:
-        """``x1 - xD`` (rad)."""
-        return self.state[:, 0] - self.reference[:, 0]
+        """``x1 - xD`` of the first joint (rad), shape ``(N,)``."""
+        return self.tracking_errors[:, 0]

@@ -1,147 +1,332 @@
-"""Closed-loop simulation of the link under a designed controller (the notes' POSSPEED, appendix B).
+"""Closed-loop simulation of any plant under a designed controller (the notes' POSSPEED and SIMNOG).
 
-Signal chain, per integration step ``[t_k, t_k + dt]`` (``dt`` from
-:mod:`designkit.simulation.timing`)::
+Signal chain, per integration step ``[t_k, t_k + dt]`` (``dt`` from :mod:`designkit.simulation.timing`)::
 
-    y = x + n_k                     measurement, Gaussian noise n_k held over the step
-    u_c = law.command(y, x_c, r)    controller (sampled: only at sampling instants, then held)
-    v = element(u_c, m)             nonlinear element (saturation, dead zone, relay, quantizer)
-    u_a(t) = v(t - delay)           delay line of ``delay/dt`` steps
-    x' = link(x, u_a, xi_k)         plant, RK4; x_c' = law.derivative(...) integrated alongside
+    y = x + n_k                        measurement, Gaussian noise n_k held over the step
+    u_c = law.command(y, xc, m, r)     controller (+ a per-step feedforward, zero unless a trial sets it);
+                                       sampled: only at sampling instants, then held
+    m <- law.update(y, xc, m, r)       the law's discrete memory, at each controller sample
+    v = element(u_c, e)                nonlinear element per input (saturation, dead zone, relay, quantizer)
+    u_a(t) = v(t - delay)              delay line of ``delay/dt`` steps
+    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative
+
+State layout (computed from the plant, the law and the element, never fixed)::
+
+    z = (x[nx], xc[nc], m[nm], e[ne], u_hold[nu], xc_dot_hold[nc], delay line[nu * delay_steps])
+    w = (r(t)[3n], r(t + dt/2)[3n], r(t + dt)[3n], noise[nx], d[nd], sample flag, u_feedforward[nu])
 
 Evaluation: when the controller is continuous (``sampling_period = 0``), there is no delay and
 the element is continuous and memoryless (none, saturation, dead zone), the whole chain is
-evaluated inside every RK4 stage (fourth-order accurate, with the reference at ``t``,
-``t + dt/2``, ``t + dt``).  Otherwise the discontinuous parts (relay switching, quantizer,
-sampling instants, delay line) are evaluated once per step, at the step's start, and the
-applied control is held over the step: ``dt`` must be small compared with the dynamics, which
-the default guarantees.  A sampled controller runs at ``t = j Ts``: it computes ``u`` and the
-derivative of its state there and holds both (rectangular integration of the integral).  The
+evaluated inside the integrator (fourth-order accurate with RK4).  Otherwise the discontinuous
+parts (relay switching, quantizer, sampling instants, delay line) are evaluated once per step,
+at the step's start, and the applied control is held over the step.  A sampled controller runs
+at ``t = j Ts``: it computes ``u`` and the derivative of its state there and holds both.  The
 anti-windup gate is evaluated at each step's start; its clamp after each step.  The
-perturbation ``xi`` is held per step: a step at ``time`` acts from the first ``t_k >= time``.
+disturbance is held per step: a step at ``time`` acts from the first ``t_k >= time``.
+
+Integrators (``numerics.integrator``): ``rk4`` (classical, fixed step) or ``cvodes`` (CasADi's
+variable-step BDF inside every step, for stiff plants).  Either way the steps are rolled by
+``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from designkit.models.link import LinkPlant
-from designkit.simulation.integrate import link_ode, rk4, run_steps
-from designkit.simulation.laws import Law, law_for
+from designkit.errors import SpecError
+from designkit.families import family
+from designkit.simulation.integrate import rk4, run_steps, variable_step
 from designkit.simulation.nonlinear import Element, element_for
-from designkit.simulation.reference import reference_for
+from designkit.simulation.reference import Reference, reference_for
 from designkit.simulation.result import SimulationResult
-from designkit.simulation.timing import Timing, grid, resolve
+from designkit.simulation.timing import Timing, grid, rates_of, resolve
+from designkit.spec.fields import per_joint
 from designkit.spec.schema import Spec
-from designkit.synthesis.design import Design
-from designkit.synthesis.registry import family
+from designkit.synthesis.closed_loop import linearize
+from designkit.synthesis.design import Design, freeze
+from designkit.synthesis.law import Law
 
-N_INPUTS = 13
-"""Per-step inputs: reference at start, middle, end (3 x 3), noise (2), xi, sampling flag."""
+__all__ = ["Simulator", "build", "simulate"]
 
 
-def _step_function(plant: LinkPlant, law: Law, element: Element, timing: Timing) -> ca.Function:
-    """One integration step ``sim_step: (z, w) -> (z_next, record)`` of the augmented state.
+@dataclass(frozen=True)
+class _Layout:
+    nx: int
+    nc: int
+    nm: int
+    ne: int
+    nu: int
+    nd: int
+    n: int
+    delay_steps: int
 
-    ``z = (x[2], x_c[nc], m[nm], u_hold, d_hold[nc], line[nd])``: plant, controller state,
-    element memory, the zero-order-hold values (control and controller-state derivative) and the
-    delay line (most recent first).  ``w`` is described by :data:`N_INPUTS`.  ``record`` is
-    ``(x, x_c, u_command, u_applied, y, xi)`` at the step's start.
+    @property
+    def z_sizes(self) -> list[int]:
+        return [self.nx, self.nc, self.nm, self.ne, self.nu, self.nc, self.nu * self.delay_steps]
+
+    @property
+    def w_sizes(self) -> list[int]:
+        return [3 * self.n, 3 * self.n, 3 * self.n, self.nx, self.nd, 1, self.nu]
+
+
+def _split(v: Any, sizes: list[int]) -> list[Any]:
+    return ca.vertsplit(v, np.cumsum([0, *sizes]).tolist())
+
+
+def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numerics: Any) -> ca.Function:
+    """One integration step ``sim_step: (z, w) -> (z_next, record)`` (layout in the module docstring).
+
+    ``record`` is ``(x, xc, u_command, u_applied, y, d)`` at the step's start.
     """
-    nc, nm, nd = law.n_state, element.n_memory, timing.delay_steps
+    L = _Layout(len(plant.states), law.n_state, law.n_memory, element.n_memory, len(plant.inputs),
+                len(plant.disturbances), len(plant.positions), timing.delay_steps)
     sampled = timing.steps_per_sample > 0
-    per_step = sampled or nd > 0 or not element.continuous
-    ode = link_ode(plant)
-    z = ca.SX.sym("z", 2 + nc + nm + 1 + nc + nd)
-    w = ca.SX.sym("w", N_INPUTS)
-    parts = ca.vertsplit(z, np.cumsum([0, 2, nc, nm, 1, nc, nd]).tolist())
-    x, xc, mem, u_hold, d_hold, line = parts
-    r0, rm, r1, noise, xi, flag = w[0:3], w[3:6], w[6:9], w[9:11], w[11], w[12]
+    per_step = sampled or L.delay_steps > 0 or not element.continuous
+    p_true = ca.DM(np.asarray(plant.parameter_vector, dtype=float))
+    ode = plant.ode()
 
+    # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values
+    s, a = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", 3 * L.n)
+    h_sizes = [L.nx, L.nd, L.nu, L.nm, L.ne, L.nc, L.nu, L.nc]
+    h = ca.SX.sym("h", sum(h_sizes))
+    noise, dist, uff, m, e, gate, u_held, d_held = _split(h, h_sizes)
+    x, xc = s[:L.nx], s[L.nx:]
+    if per_step:
+        u_in = u_held
+    else:
+        u_in = element.function(law.command(x + noise, xc, m, a) + uff, e)[0]
+    xc_dot = d_held if sampled else law.derivative(x + noise, xc, m, a, gate)
+    rhs = ca.Function("loop_rhs", [s, a, h], [ca.vertcat(ode(x, u_in, dist, p_true), xc_dot)], ["s", "a", "h"],
+                      ["s_dot"])
+
+    sym = ca.MX.sym if numerics.integrator == "cvodes" else ca.SX.sym
+    z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
+    x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
+    r0, rm, r1, noise, dist, flag, uff = _split(w, L.w_sizes)
     y = x + noise
-    gate = law.gate(y, xc, r0)
+    gate = law.gate(y, xc, m, r0)
     if sampled:
-        u_hold = ca.if_else(flag, law.command(y, xc, r0), u_hold)
-        d_hold = ca.if_else(flag, law.derivative(y, xc, r0, gate), d_hold)
+        u_hold = ca.if_else(flag, law.command(y, xc, m, r0) + uff, u_hold)
+        d_hold = ca.if_else(flag, law.derivative(y, xc, m, r0, gate), d_hold)
         u_cmd = u_hold
     else:
-        u_cmd = law.command(y, xc, r0)
-
+        u_cmd = law.command(y, xc, m, r0) + uff
+    m_next = ca.if_else(flag, law.update(y, xc, m, r0), m) if L.nm else m
     if per_step:
-        v, mem_next = element.function(u_cmd, mem)
-        u_app = line[nd - 1] if nd > 0 else v
-        line_next = ca.vertcat(v, line[: nd - 1]) if nd > 0 else line
-
-        def applied(s, r):
-            return u_app
+        v, e_next = element.function(u_cmd, e)
+        u_app = line[L.nu * (L.delay_steps - 1):] if L.delay_steps > 0 else v
+        line_next = ca.vertcat(v, line[: L.nu * (L.delay_steps - 1)]) if L.delay_steps > 0 else line
     else:
-        u_app, mem_next, line_next = element.function(u_cmd, mem)[0], mem, line
-
-        def applied(s, r):
-            return element.function(law.command(s[:2] + noise, s[2:], r), mem)[0]
-
-    def rhs(s, r):
-        xc_dot = d_hold if sampled else law.derivative(s[:2] + noise, s[2:], r, gate)
-        return ca.vertcat(ode(s[:2], applied(s, r), xi), xc_dot)
-
-    s_next = rk4(rhs, ca.vertcat(x, xc), timing.dt, (r0, rm, r1))
-    z_next = ca.vertcat(s_next[:2], law.project(s_next[2:]), mem_next, u_hold, d_hold, line_next)
-    record = ca.vertcat(x, xc, u_cmd, u_app, y, xi)
+        u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
+    held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold)
+    s0 = ca.vertcat(x, xc)
+    if numerics.integrator == "cvodes":
+        s_next = variable_step(rhs, s0, timing.dt, (r0, rm, r1), held, rtol=numerics.rtol, atol=numerics.atol)
+    else:
+        s_next = rk4(lambda state, ref: rhs(state, ref, held), s0, timing.dt, (r0, rm, r1))
+    z_next = ca.vertcat(s_next[:L.nx], law.project(s_next[L.nx:]), m_next, e_next, u_hold, d_hold, line_next)
+    record = ca.vertcat(x, xc, u_cmd, u_app, y, dist)
     return ca.Function("sim_step", [z, w], [z_next, record], ["z", "w"], ["z_next", "record"])
 
 
-def _noise(spec: Spec, n: int) -> tuple[np.ndarray, dict[str, Any]]:
+def _joint_values(value: Any, n: int, path: str) -> np.ndarray:
+    try:
+        return np.array(per_joint(value, n, path))
+    except ValueError as exc:
+        key, msg = str(exc).split(": ", 1)
+        raise SpecError(key, msg.replace("per joint", "per entry")) from None
+
+
+def _noise(spec: Spec, n: int, nx: int, names: tuple[str, ...]) -> tuple[np.ndarray, dict[str, Any]]:
     noise = spec.simulation.noise
-    if noise is None or noise.std == 0.0:
-        return np.zeros((2, n)), {"std": 0.0, "seed": None}
+    if noise is None:
+        return np.zeros((nx, n)), {"std": 0.0, "seed": None}
+    std = _joint_values(noise.std, nx, "simulation.noise.std")
+    if not np.any(std > 0):
+        return np.zeros((nx, n)), {"std": 0.0, "seed": None}
     rng = np.random.default_rng(noise.seed)
-    samples = rng.normal(0.0, noise.std, size=(n, 2)).T
-    return samples, {"std": float(noise.std), "seed": int(noise.seed), "on": ["x1", "x2"],
-                     "samples": "one per integration step, held over the step", "generator": "numpy PCG64"}
+    samples = rng.normal(0.0, 1.0, size=(n, nx)).T * std[:, None]
+    return samples, {"std": float(std[0]) if np.all(std == std[0]) else std.tolist(), "seed": int(noise.seed),
+                     "on": list(names), "samples": "one per integration step, held over the step",
+                     "generator": "numpy PCG64"}
 
 
-def _perturbation(spec: Spec, t: np.ndarray, dt: float) -> tuple[np.ndarray, dict[str, Any] | None]:
+def _perturbation(spec: Spec, t: np.ndarray, dt: float, nd: int) -> tuple[np.ndarray, dict[str, Any] | None]:
     pert = spec.simulation.perturbation
     if pert is None:
-        return np.zeros_like(t), None
+        return np.zeros((nd, t.size)), None
+    value = _joint_values(pert.value, nd, "simulation.perturbation.value")
     on = t >= pert.time - 1e-9 * dt
     applied = float(t[on][0]) if on.any() else None
-    return np.where(on, pert.value, 0.0), {"value": float(pert.value), "time": float(pert.time),
-                                           "time_applied": applied}
+    return np.where(on[None, :], value[:, None], 0.0), {
+        "value": float(value[0]) if nd == 1 else value.tolist(), "time": float(pert.time), "time_applied": applied}
 
 
-def simulate(spec: Spec, design: Design, *, plant: LinkPlant | None = None) -> SimulationResult:
-    """Simulate the link under ``design``'s controller in the scenario ``spec.simulation``.
+def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]:
+    """Poles that set the time scales: the nominal and true closed loops and the open-loop plant."""
+    out = []
+    if design.closed_loop is not None:
+        out.append(design.closed_loop.poles)
+    op = design.operating_point
+    if plant is not design.plant and op:
+        try:
+            out.append(linearize(plant, law, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
+        except ValueError:
+            pass  # no equilibrium on the true plant: the nominal rates stand
+    if op:
+        out.append(np.linalg.eigvals(plant.linearize(op["x"], np.zeros(len(plant.inputs))).A))
+    return out
+
+
+def _requested_poles(design: Design) -> list[complex]:
+    return [*design.poles, *[p for loop in design.loops for p in loop.poles]]
+
+
+@dataclass(frozen=True, eq=False)
+class Simulator:
+    """A built simulation (step function, per-step inputs, initial state), ready to run.
+
+    Building is the costly part (CasADi graphs); :meth:`run` only evaluates, so repeated trials
+    (:mod:`designkit.simulation.trials`) reuse one simulator.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        ``sim_step: (z, w) -> (z_next, record)``.
+    inputs : ndarray, shape (nw, N)
+        Per-step inputs (reference, noise, disturbance, sample flag; the feedforward rows zero).
+    z0 : ndarray
+        Initial augmented state.
+    time, reference : ndarray
+        Instants (s) and the reference ``(N, n, 3)``.
+    plant, law : Plant, Law
+        The simulated plant and controller.
+    settings : Mapping
+        Every option used.
+    """
+
+    step: ca.Function
+    inputs: np.ndarray
+    z0: np.ndarray
+    time: np.ndarray
+    reference: np.ndarray
+    kind: str
+    plant: Any
+    law: Law
+    settings: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of plant inputs (columns of a feedforward)."""
+        return len(self.plant.inputs)
+
+    def run(self, *, feedforward: np.ndarray | None = None) -> SimulationResult:
+        """Simulate; ``feedforward`` ``(N, nu)`` (N*m) is added to the controller's command at each step."""
+        inputs = self.inputs
+        if feedforward is not None:
+            ff = np.asarray(feedforward, dtype=float).reshape(self.time.size, self.n_inputs)
+            inputs = inputs.copy()
+            inputs[-self.n_inputs:] = ff.T
+        rec = run_steps(self.step, self.z0, inputs)
+        p, law = self.plant, self.law
+        nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
+        cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
+        x, xc, u_c, u_a, y, d = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
+        return SimulationResult(
+            time=self.time, reference=self.reference, state=x, controller_state=xc, u_command=u_c, u_applied=u_a,
+            perturbation=d, measured=y, kind=self.kind, positions=tuple(p.positions), velocities=tuple(p.velocities),
+            state_names=tuple(s.name for s in p.states), controller_state_names=law.state_names,
+            input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
+            settings=self.settings,
+        )
+
+
+def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
+    """Build the simulation of ``design`` in the scenario ``spec.simulation`` on ``plant``.
 
     Parameters
     ----------
     spec : Spec
-        The validated spec; its ``simulation`` section (and ``requirements.settling_time`` for
-        the default duration) is used.
+        Its ``simulation`` (and ``requirements.settling_time`` for the default duration) and
+        ``numerics`` sections are used.
     design : Design
-        Gains of a ``pid_servo`` or ``pid_tracking`` controller; ``design.plant`` is the nominal
-        link the tracking law's model terms use.
-    plant : LinkPlant, optional
-        The true plant (default: ``design.plant``).
-
-    Returns
-    -------
-    SimulationResult
-        Trajectories at ``t_k = k dt`` (values at each step's start) and every option used.
+        The controller; ``design.plant`` is the nominal plant its model terms use.
+    plant : Plant, optional
+        The true plant (default: ``design.plant``), e.g. with other parameter values.
 
     Raises
     ------
     SpecError
-        On ``simulation.dt`` incompatible with the sampling period, the delay or the poles, or a
-        controller kind without a simulation law.
+        On a per-joint list of the wrong length, or ``simulation.dt`` incompatible with the
+        sampling period, the delay or the poles.
+    """
+    true_plant = design.plant if plant is None else plant
+    sim, fam = spec.simulation, family(design.kind)
+    n = len(true_plant.positions)
+    ref: Reference = reference_for(fam.reference, sim, n)
+    law = fam.law(design, sim.anti_windup)
+    element = element_for(sim.nonlinearity, len(true_plant.inputs))
+    rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant, law), reference_rate=ref.rate)
+    timing = resolve(spec, rates, ref.horizon)
+
+    t = grid(timing)
+    N, dt = timing.n_samples, timing.dt
+    nx, nd, nu = len(true_plant.states), len(true_plant.disturbances), len(true_plant.inputs)
+    noise, noise_settings = _noise(spec, N, nx, tuple(s.name for s in true_plant.states))
+    dist, pert_settings = _perturbation(spec, t, dt, nd)
+    flag = np.ones((1, N))
+    if timing.steps_per_sample:
+        flag[:] = 0.0
+        flag[0, :: timing.steps_per_sample] = 1.0
+    inputs = np.vstack([ref.flat(t).T, ref.flat(t + 0.5 * dt).T, ref.flat(t + dt).T, noise, dist, flag,
+                        np.zeros((nu, N))])
+    x0 = np.asarray(true_plant.rest_state(ref.start), dtype=float)
+    z0 = np.concatenate([x0, np.zeros(law.n_state), np.asarray(law.initial_memory, dtype=float),
+                         np.asarray(element.initial_memory, dtype=float),
+                         np.zeros(nu + law.n_state + nu * timing.delay_steps)])
+    step = _step_function(true_plant, law, element, timing, spec.numerics)
+
+    unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
+              "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[fam.reference]
+    ignored = [f"simulation.{unused[0]} ({unused[1]})"] if unused[0] in sim.model_fields_set else []
+    numerics = spec.numerics
+    integrator = ("rk4 (classical, fixed step)" if numerics.integrator == "rk4" else
+                  f"cvodes (variable-step BDF inside each step, rtol {numerics.rtol:g}, atol {numerics.atol:g})")
+    settings = {
+        "integrator": integrator,
+        **timing.settings,
+        "evaluation": "chain inside every integration step" if (
+            timing.steps_per_sample == 0 and timing.delay_steps == 0 and element.continuous)
+        else "controller output, nonlinear element and delay once per step, held over the step",
+        "plant": {q.name: q.value for q in true_plant.parameters},
+        "nominal_plant": {q.name: q.value for q in design.plant.parameters},
+        "controller": {"kind": design.kind, **law.settings},
+        "reference": dict(ref.settings),
+        "nonlinearity": element.settings,
+        "delay": float(sim.delay),
+        "sampling_period": float(sim.sampling_period),
+        "noise": noise_settings,
+        "perturbation": pert_settings,
+        "initial_state": {**{s.name: float(v) for s, v in zip(true_plant.states, x0, strict=True)},
+                          **dict.fromkeys(law.state_names, 0.0)},
+        "ignored": ignored,
+    }
+    return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=fam.reference,
+                     plant=true_plant, law=law, settings=freeze(settings))
+
+
+def simulate(spec: Spec, design: Design, *, plant: Any = None) -> SimulationResult:
+    """Simulate ``design`` in the scenario ``spec.simulation`` (see :func:`build`).
 
     Examples
     --------
     >>> from designkit.spec.loader import parse_spec
-    >>> from designkit.synthesis.registry import synthesize
+    >>> from designkit.families import synthesize
     >>> spec = parse_spec(
     ...     "name: demo\\nplant: {kind: link, Km: 2, tau: 0.5}\\n"
     ...     "controller: {kind: pid_servo, poles: [-4, -5, -20], zero: -3}\\n"
@@ -153,59 +338,5 @@ def simulate(spec: Spec, design: Design, *, plant: LinkPlant | None = None) -> S
     >>> float(abs(res.u_applied).max())
     20.0
     """
-    true_plant = design.plant if plant is None else plant
-    sim = spec.simulation
-    ref_kind = family(design.kind).reference
-    ref = reference_for(ref_kind, sim)
-    law = law_for(design, sim.anti_windup)
-    element = element_for(sim.nonlinearity)
-    timing = resolve(spec, design, true_plant, ref.rate, ref.horizon)
+    return build(spec, design, plant=plant).run()
 
-    t = grid(timing)
-    n, dt = timing.n_samples, timing.dt
-    noise, noise_settings = _noise(spec, n)
-    xi, pert_settings = _perturbation(spec, t, dt)
-    flag = np.zeros(n)
-    if timing.steps_per_sample:
-        flag[:: timing.steps_per_sample] = 1.0
-    inputs = np.vstack([ref.evaluate(t).T, ref.evaluate(t + 0.5 * dt).T, ref.evaluate(t + dt).T, noise, xi, flag])
-
-    z0 = np.concatenate([np.zeros(2 + law.n_state), element.initial_memory,
-                         np.zeros(1 + law.n_state + timing.delay_steps)])
-    records = run_steps(_step_function(true_plant, law, element, timing), z0, inputs)
-    nc = law.n_state
-    unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
-              "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[ref_kind]
-    ignored = [f"simulation.{unused[0]} ({unused[1]})"] if unused[0] in sim.model_fields_set else []
-    settings = {
-        "integrator": "rk4 (classical, fixed step)",
-        **timing.settings,
-        "evaluation": "chain inside every RK4 stage" if (
-            timing.steps_per_sample == 0 and timing.delay_steps == 0 and element.continuous)
-        else "controller output, nonlinear element and delay once per step, held over the step",
-        "plant": {"Km": float(true_plant.Km), "tau": float(true_plant.tau)},
-        "nominal_plant": {"Km": float(design.plant.Km), "tau": float(design.plant.tau)},
-        "controller": {"kind": design.kind, **law.settings},
-        "reference": ref.settings,
-        "nonlinearity": element.settings,
-        "delay": float(sim.delay),
-        "sampling_period": float(sim.sampling_period),
-        "noise": noise_settings,
-        "perturbation": pert_settings,
-        "initial_state": {"x1": 0.0, "x2": 0.0, **dict.fromkeys(law.state_names, 0.0)},
-        "ignored": ignored,
-    }
-    return SimulationResult(
-        time=t,
-        reference=ref.evaluate(t),
-        state=records[0:2].T.copy(),
-        controller_state=records[2:2 + nc].T.copy(),
-        u_command=records[2 + nc].copy(),
-        u_applied=records[3 + nc].copy(),
-        perturbation=records[6 + nc].copy(),
-        measured=records[4 + nc:6 + nc].T.copy(),
-        kind=ref_kind,
-        state_names=("x1", "x2"),
-        controller_state_names=law.state_names,
-        settings=settings,
-    )

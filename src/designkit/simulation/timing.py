@@ -1,7 +1,8 @@
 """Integration step and duration of a simulation: defaults, and checks of the user's values.
 
 Defaults (``|p|`` over the requested closed-loop poles, the closed-loop poles on the true
-plant, the plant pole ``1/tau`` and the reference's rate; see :mod:`designkit.simulation.reference`):
+plant, the open-loop plant poles at the operating point and the reference's rate; see
+:func:`rates_of` and :mod:`designkit.simulation.reference`):
 
 * ``dt``: ``min(DT_FACTOR / |p|max, duration / MIN_SAMPLES)`` rounded down to a "round" value
   ``{1, 2, 2.5, 5} x 10^k`` (so that round event times fall on the grid), then the largest step
@@ -25,8 +26,6 @@ import numpy as np
 
 from designkit.errors import SpecError
 from designkit.spec.schema import Spec
-from designkit.synthesis.design import Design
-from designkit.synthesis.registry import family
 
 DT_FACTOR = 0.02
 """Default step as a fraction of the fastest time constant ``1/|p|max``."""
@@ -64,12 +63,30 @@ class Timing:
     settings: dict[str, Any]
 
 
-def _rates(design: Design, plant: Any, ref_rate: float) -> tuple[float, float]:
-    """(fastest rate |p|max over every relevant pole, slowest |Re p| of the requested poles), 1/s."""
-    true_poles = family(design.kind).closed_loop(design, plant).poles
-    fast = [abs(complex(p)) for p in (*design.poles, *true_poles)] + [1.0 / float(plant.tau), ref_rate]
-    slow = min(abs(complex(p).real) for p in design.poles)
-    return max(fast), slow
+@dataclass(frozen=True)
+class Rates:
+    """Time scales of a simulated loop.
+
+    Parameters
+    ----------
+    fast : float
+        Fastest rate ``|p|max`` over every relevant pole and the reference (1/s).
+    slow : float
+        Slowest decay ``|Re p|min`` of the requested (or, without any, the closed-loop) poles (1/s).
+    """
+
+    fast: float
+    slow: float
+
+
+def rates_of(requested: Any, *pole_sets: Any, reference_rate: float = 0.0) -> Rates:
+    """:class:`Rates` from the requested poles and any further sets of poles (closed and open loop)."""
+    requested = [complex(p) for p in requested]
+    others = [complex(p) for poles in pole_sets for p in np.asarray(poles).ravel()]
+    fast = max([abs(p) for p in (*requested, *others)] + [float(reference_rate)])
+    decays = [abs(p.real) for p in requested] or [abs(p.real) for p in others if abs(p.real) > 0]
+    slow = min(decays) if decays else 1.0
+    return Rates(fast=fast if fast > 0 else 1.0, slow=slow if slow > 0 else 1.0)
 
 
 def _nice_floor(value: float) -> float:
@@ -111,10 +128,10 @@ def _duration(spec: Spec, slow: float, horizon: float) -> tuple[float, str]:
     return start + settle + sim.delay, f"default: max(reference horizon, perturbation time) + {why} + delay"
 
 
-def resolve(spec: Spec, design: Design, plant: Any, ref_rate: float, ref_horizon: float) -> Timing:
+def resolve(spec: Spec, rates: Rates, ref_horizon: float) -> Timing:
     """Integration step, number of samples, sampling and delay steps for ``spec.simulation``."""
     sim = spec.simulation
-    fast, slow = _rates(design, plant, ref_rate)
+    fast, slow = rates.fast, rates.slow
     duration, duration_source = _duration(spec, slow, ref_horizon)
     periods = {"simulation.sampling_period": sim.sampling_period, "simulation.delay": sim.delay}
     if sim.dt is None:

@@ -17,7 +17,21 @@ from pydantic import ValidationError
 from designkit.errors import SpecError
 from designkit.spec.schema import Spec
 
-_UNION_TAGS = {"link", "pid_servo", "pid_tracking", "saturation", "dead_zone", "relay", "quantizer"}
+
+
+def _union_tags() -> frozenset[str]:
+    """Tags pydantic inserts in error locations of the spec's discriminated unions (derived, not listed)."""
+    from designkit.families import FAMILIES
+    from designkit.spec import plants, sections
+
+    tags = set(FAMILIES)
+    for union in (plants.PlantSpec, sections.Nonlinearity, sections.Trajectory):
+        for model in union.__origin__.__args__:  # Annotated[Union[...], Field(discriminator)]
+            tags.update(model.model_fields["kind"].annotation.__args__)
+    return frozenset(tags)
+
+
+_UNION_TAGS = _union_tags()
 
 
 @dataclass(frozen=True)
@@ -42,12 +56,19 @@ class LoadedSpec:
     path: str
 
 
+_UNION_KEYS = frozenset({"plant", "controller", "nonlinearity", "trajectory"})
+"""Keys whose value is a discriminated union: pydantic puts the chosen tag right after them."""
+
+
 def _key_path(loc: tuple[int | str, ...]) -> str:
     parts: list[str] = []
+    previous: int | str | None = None
     for item in loc:
+        tag = previous in _UNION_KEYS and item in _UNION_TAGS
+        previous = item
         if isinstance(item, int):
             parts.append(f"[{item}]")
-        elif item in _UNION_TAGS or "[" in str(item) or str(item).startswith("function-"):
+        elif tag or "[" in str(item) or str(item).startswith("function-"):
             continue  # pydantic's tag for discriminated unions / validator wrappers
         else:
             parts.append(("." if parts else "") + str(item))
@@ -92,11 +113,13 @@ def parse_spec(text: str, *, path: str = "<string>") -> LoadedSpec:
         err = exc.errors()[0]
         key = _key_path(tuple(err.get("loc", ())))
         msg = _message(err)
-        m = re.match(r"^([A-Za-z_][\w.\[\]]*): (.*)$", msg)
+        m = re.match(r"^(\[[\w.\[\]]*|[A-Za-z_][\w.\[\]]*): (.*)$", msg)
         if m:
             inner, msg = m.group(1), m.group(2)
             if not key:
                 key = inner
+            elif inner.startswith("["):
+                key = f"{key}{inner}"
             elif not key.endswith(inner):
                 key = f"{key}.{inner}"
         raise SpecError(key, msg) from None

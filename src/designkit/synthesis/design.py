@@ -1,12 +1,209 @@
-"""The outcome of a synthesis: gains, the closed loop they give, and how they were obtained."""
+"""The outcome of a synthesis: named gains with units, the closed loop they give, how they were obtained.
+
+A :class:`Design` is deeply frozen: gains are a read-only :class:`Gains` mapping whose arrays
+cannot be written, every other mapping is a ``MappingProxyType`` over a private copy, and every
+sequence a tuple.  What a design *exposes* decides which checks apply to it
+(:mod:`designkit.verification.suite`): requested ``poles`` -> pole placement; a ``closed_loop``
+-> Lyapunov; a ``characteristic`` -> Routh-Hurwitz (and, with linear stability conditions in
+the plant parameters, the LP certificate over an uncertainty box); ``loops`` -> the checks of
+each per-joint loop; ``input_loop`` -> loop margins.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
-from designkit.synthesis.linear_system import LinearSystem
+import numpy as np
+
+from designkit.models.linear_system import LinearSystem
+
+__all__ = ["Characteristic", "Design", "Gain", "Gains", "LinearCondition", "freeze"]
+
+
+def freeze(value: Any) -> Any:
+    """A deeply immutable copy: mappings -> ``MappingProxyType``, lists -> tuples, arrays read-only."""
+    if isinstance(value, Mapping):
+        return MappingProxyType({k: freeze(v) for k, v in value.items()})
+    if isinstance(value, list | tuple):
+        return tuple(freeze(v) for v in value)
+    if isinstance(value, np.ndarray):
+        out = np.array(value, copy=True)
+        out.setflags(write=False)
+        return out
+    return value
+
+
+def thaw(value: Any) -> Any:
+    """JSON-serialisable form of a frozen value (mappings -> dict, tuples and arrays -> lists)."""
+    if isinstance(value, Mapping):
+        return {str(k): thaw(v) for k, v in value.items()}
+    if isinstance(value, tuple | list):
+        return [thaw(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, complex):
+        return [value.real, value.imag]
+    return value
+
+
+@dataclass(frozen=True)
+class Gain:
+    """One named gain.
+
+    Parameters
+    ----------
+    name : str
+        As in the control law (``"K1"``).
+    value : float or numpy.ndarray
+        A scalar, a vector with one entry per joint, or a matrix (read-only).
+    unit : str
+        SI unit of the value (``"N*m/rad"``).
+    meaning : str
+        Its role in a few words (``"proportional"``).
+    """
+
+    name: str
+    value: float | np.ndarray
+    unit: str = ""
+    meaning: str = ""
+
+    def __post_init__(self) -> None:
+        if isinstance(self.value, np.ndarray | list | tuple):
+            arr = np.array(self.value, dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, "value", arr)
+        else:
+            object.__setattr__(self, "value", float(self.value))
+
+    @property
+    def per_joint(self) -> bool:
+        """True for a vector with one entry per joint."""
+        return isinstance(self.value, np.ndarray) and self.value.ndim == 1
+
+
+@dataclass(frozen=True, eq=False)
+class Gains(Mapping[str, Any]):
+    """Read-only, ordered mapping gain name -> value (float or read-only array), with units.
+
+    Examples
+    --------
+    >>> g = Gains.of([Gain("K1", 50.0, "N*m/rad"), Gain("K2", [1.0, 2.0], "N*m*s/rad")])
+    >>> g["K1"], g.unit("K2"), g["K2"].tolist()
+    (50.0, 'N*m*s/rad', [1.0, 2.0])
+    """
+
+    entries: tuple[Gain, ...] = ()
+
+    @classmethod
+    def of(cls, entries: Iterable[Gain]) -> Gains:
+        """Gains from ``entries`` (names must be unique)."""
+        items = tuple(entries)
+        names = [g.name for g in items]
+        if len(set(names)) != len(names):
+            raise ValueError(f"duplicate gain names in {names}")
+        return cls(items)
+
+    def _find(self, name: str) -> Gain:
+        for g in self.entries:
+            if g.name == name:
+                return g
+        raise KeyError(name)
+
+    def __getitem__(self, name: str) -> Any:
+        return self._find(name).value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(g.name for g in self.entries)
+
+    def __len__(self) -> int:
+        return len(self.entries)
+
+    def unit(self, name: str) -> str:
+        """Unit of gain ``name``."""
+        return self._find(name).unit
+
+    def meaning(self, name: str) -> str:
+        """Role of gain ``name``."""
+        return self._find(name).meaning
+
+    def replace(self, **values: Any) -> Gains:
+        """The same gains with some values replaced (units kept)."""
+        return Gains(tuple(Gain(g.name, values.get(g.name, g.value), g.unit, g.meaning) for g in self.entries))
+
+    def to_json(self) -> dict[str, float | list[float]]:
+        """``{name: number or list}``."""
+        return {g.name: thaw(g.value) for g in self.entries}
+
+
+@dataclass(frozen=True)
+class LinearCondition:
+    """A stability condition affine in plant parameters: ``constant + sum coefficients[k] theta_k > 0``.
+
+    Parameters
+    ----------
+    label : str
+        The condition in words (``"K1 (1 + Km K2) - tau K3 > 0"``).
+    constant : float
+    coefficients : Mapping[str, float]
+        Coefficient of each named plant parameter (missing parameters: 0).
+    unit : str
+        Unit of the left-hand side.
+    """
+
+    label: str
+    constant: float
+    coefficients: Mapping[str, float] = field(default_factory=dict)
+    unit: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "coefficients", freeze({k: float(v) for k, v in self.coefficients.items()}))
+
+    def value(self, **theta: Any) -> Any:
+        """The left-hand side at parameters ``theta`` (arrays broadcast)."""
+        out = self.constant
+        for name, c in self.coefficients.items():
+            out = out + c * np.asarray(theta[name], dtype=float)
+        return out
+
+
+@dataclass(frozen=True)
+class Characteristic:
+    """A design's closed-loop characteristic polynomial as a vectorised function of plant parameters.
+
+    Parameters
+    ----------
+    parameters : tuple of str
+        Plant parameter names the coefficients depend on (``("Km", "tau")``).
+    coefficients : callable
+        ``(gains, **theta) -> tuple of arrays``, highest power first; ``theta`` arrays broadcast.
+    labels : tuple of str
+        The coefficients in words (``"tau"``, ``"1 + Km K2"``, ...).
+    gain_labels : Mapping[str, tuple[str, str]]
+        For a cubic ``a0 s^3 + a1 s^2 + a2 s + a3``: the gain each of ``a1``, ``a2``, ``a3`` is
+        affine in and the condition in the notes' gain form (``{"a1": ("K2", "K2 > -1/Km")}``).
+    linear_conditions : callable or None
+        ``gains -> tuple of LinearCondition``: the Hurwitz conditions, affine in the plant
+        parameters for fixed gains (enables the LP certificate over a parameter box).
+    """
+
+    parameters: tuple[str, ...]
+    coefficients: Callable[..., tuple[np.ndarray, ...]]
+    labels: tuple[str, ...] = ()
+    gain_labels: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+    linear_conditions: Callable[[Mapping[str, Any]], tuple[LinearCondition, ...]] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "gain_labels", freeze(dict(self.gain_labels)))
+
+    def at(self, gains: Mapping[str, Any], plant: Any) -> tuple[float, ...]:
+        """Coefficients on ``plant`` (its parameter values), as floats."""
+        theta = {name: plant.parameter(name).value for name in self.parameters}
+        return tuple(float(np.asarray(c)) for c in self.coefficients(gains, **theta))
 
 
 @dataclass(frozen=True, eq=False)
@@ -16,31 +213,64 @@ class Design:
     Parameters
     ----------
     kind : str
-        Controller family, e.g. ``"pid_servo"``.
-    plant : object
-        The nominal plant the gains were computed for (e.g. :class:`~designkit.models.link.LinkPlant`).
-    gains : Mapping[str, float]
-        Gain values by name (``"K1"`` ... ``"K4"``), SI units of the controller law.
+        Controller family (``design.kind`` selects the family in the registry).
+    plant : Plant
+        The nominal plant the gains were computed for.
+    gains : Gains
+        Named gains with units.
     poles : tuple of complex
-        Requested closed-loop poles (1/s).
+        Closed-loop poles (1/s) the synthesis places exactly on ``closed_loop``; empty when the
+        design does not claim exact placement (e.g. a decentralized design on a coupled arm,
+        whose per-joint loops carry the placed poles).
     zeros : tuple of complex
-        Closed-loop zeros of the reference-to-position transfer (1/s); empty when there is none.
-    closed_loop : LinearSystem
-        Nominal linear closed loop, inputs include the reference, outputs ``("x1", "u")``.
-    formulas : tuple of str
-        The design equations used, as plain-text lines for the report.
-    notes : tuple of str
-        Choices made on the user's behalf (defaults, derived poles, cancellations).
+        Requested zeros (1/s) of the reference-to-position transfer.
+    reference : str
+        ``"step"`` (servo: driven by a position step) or ``"trajectory"`` (tracker: by position,
+        velocity and acceleration).
+    closed_loop : LinearSystem or None
+        The plant with the control law, linearized at the design's operating point: inputs the
+        reference signals (``xD, xDd, xDdd`` per joint) and the plant disturbances, outputs the
+        joint positions and the plant inputs.
+    input_loop : LinearSystem or None
+        The same closed loop seen from the plant input: ``A`` the closed loop, ``B`` where the
+        control enters, ``C = -du/dz``; the loop broken at input ``i`` is
+        ``L_i(s) = C_i (sI - A + B_i (-C_i))^-1 B_i`` (loop margins).
+    operating_point : Mapping
+        ``x`` (plant state), ``xc`` (controller state), ``r`` (reference) of the linearization.
+    characteristic : Characteristic or None
+        Closed-form characteristic polynomial in the plant parameters.
+    loops : tuple of Design
+        Per-joint designs of a decentralized controller (each checked on its own).
+    loop_names : tuple of str
+        Names of ``loops`` (``"joint1"``).
+    formulas, notes : tuple of str
+        Design equations and the choices made on the user's behalf.
     extra : Mapping
-        Family-specific data (e.g. damping and natural frequency of derived poles).
+        Family-specific data (deeply frozen).
     """
 
     kind: str
     plant: Any
-    gains: Mapping[str, float]
-    poles: tuple[complex, ...]
-    zeros: tuple[complex, ...]
-    closed_loop: LinearSystem
+    gains: Gains
+    poles: tuple[complex, ...] = ()
+    zeros: tuple[complex, ...] = ()
+    reference: str = "step"
+    closed_loop: LinearSystem | None = None
+    input_loop: LinearSystem | None = None
+    operating_point: Mapping[str, Any] = field(default_factory=dict)
+    characteristic: Characteristic | None = None
+    loops: tuple[Design, ...] = ()
+    loop_names: tuple[str, ...] = ()
     formulas: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "poles", tuple(complex(p) for p in self.poles))
+        object.__setattr__(self, "zeros", tuple(complex(z) for z in self.zeros))
+        for name in ("formulas", "notes", "loops", "loop_names"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        for name in ("operating_point", "extra"):
+            object.__setattr__(self, name, freeze(dict(getattr(self, name))))
+        if self.reference not in ("step", "trajectory"):
+            raise ValueError(f"reference must be 'step' or 'trajectory', got {self.reference!r}")

@@ -32,8 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from designkit.models.link import LinkPlant
-from designkit.synthesis.design import Design
-from designkit.synthesis.linear_system import LinearSystem
+from designkit.synthesis.design import LinearCondition
 
 
 def _symmetric_functions(poles: Sequence[complex]) -> tuple[float, float, float]:
@@ -59,7 +58,7 @@ def servo_gains(plant: LinkPlant, poles: Sequence[complex], zero: float | None) 
     Returns
     -------
     dict
-        ``{"K1": N*m/rad, "K2": N*m*s/rad, "K3": N*m/(rad*s), "K4": rad (dimension of z^-1 K1/K3...)}``.
+        ``K1`` (N*m/rad), ``K2`` (N*m*s/rad), ``K3`` (N*m/(rad*s)), ``K4`` (s).
     """
     s1, s2, s3 = _symmetric_functions(poles)
     Km, tau = plant.Km, plant.tau
@@ -75,46 +74,6 @@ def tracking_gains(plant: LinkPlant, poles: Sequence[complex]) -> dict[str, floa
     s1, s2, s3 = _symmetric_functions(poles)
     Km, tau = plant.Km, plant.tau
     return {"K1": tau * s2 / Km, "K2": -tau * s1 / Km, "K3": -tau * s3 / Km}
-
-
-def servo_closed_loop(gains: dict[str, float], plant: LinkPlant) -> LinearSystem:
-    """Closed loop of the servo on ``plant``: states (x1, x2, x3), inputs (xD, xi), outputs (x1, u)."""
-    K1, K2, K3, K4 = (gains[k] for k in ("K1", "K2", "K3", "K4"))
-    a, b = 1.0 / plant.tau, plant.Km / plant.tau
-    # u = -K1 x1 - K2 x2 - K3 x3 + (K1 + K3 K4) xD
-    Ku = np.array([[-K1, -K2, -K3]])
-    Du = np.array([[K1 + K3 * K4, 0.0]])
-    A = np.array([[0.0, 1.0, 0.0], [0.0, -a, 0.0], [1.0, 0.0, 0.0]])
-    Bu = np.array([[0.0], [b], [0.0]])
-    B = np.array([[0.0, 0.0], [0.0, b], [-1.0, 0.0]])
-    C = np.vstack([[1.0, 0.0, 0.0], Ku])
-    D = np.vstack([[0.0, 0.0], Du])
-    return LinearSystem(
-        A=A + Bu @ Ku, B=B + Bu @ Du, C=C, D=D, states=("x1", "x2", "x3"), inputs=("xD", "xi"),
-        outputs=("x1", "u"),
-    )
-
-
-def tracking_closed_loop(gains: dict[str, float], plant: LinkPlant, nominal: LinkPlant) -> LinearSystem:
-    """Closed loop of the tracker designed for ``nominal`` acting on ``plant``.
-
-    States (x1, x2, x3), inputs (xD, xD', xD'', xi), outputs (x1, u).  With ``plant == nominal``
-    the error ``x1 - xD`` obeys ``tau e''' + Km K2 e'' + Km K1 e' + Km K3 e = Km xi'``.
-    """
-    K1, K2, K3 = (gains[k] for k in ("K1", "K2", "K3"))
-    a, b = 1.0 / plant.tau, plant.Km / plant.tau
-    # u = (tau0/Km0) xDdd + x2/Km0 - K1 (x1 - xD) - K2 (x2 - xDd) - K3 x3
-    Ku = np.array([[-K1, 1.0 / nominal.Km - K2, -K3]])
-    Du = np.array([[K1, K2, nominal.tau / nominal.Km, 0.0]])
-    A = np.array([[0.0, 1.0, 0.0], [0.0, -a, 0.0], [1.0, 0.0, 0.0]])
-    Bu = np.array([[0.0], [b], [0.0]])
-    B = np.array([[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, b], [-1.0, 0.0, 0.0, 0.0]])
-    C = np.vstack([[1.0, 0.0, 0.0], Ku])
-    D = np.vstack([[0.0, 0.0, 0.0, 0.0], Du])
-    return LinearSystem(
-        A=A + Bu @ Ku, B=B + Bu @ Du, C=C, D=D, states=("x1", "x2", "x3"),
-        inputs=("xD", "xDd", "xDdd", "xi"), outputs=("x1", "u"),
-    )
 
 
 def servo_characteristic(gains: dict[str, float], Km: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -149,32 +108,32 @@ TRACKING_FORMULAS = (
 )
 
 
-def design_servo(
-    plant: LinkPlant, poles: Sequence[complex], zero: float | None, *, notes: tuple[str, ...] = (),
-    extra: dict | None = None,
-) -> Design:
-    """Synthesise the PID position servo; see the module docstring for the derivation."""
-    gains = servo_gains(plant, poles, zero)
-    notes_out = list(notes)
-    if zero is None:
-        z = -gains["K3"] / gains["K1"]
-        notes_out.append(f"No zero given: K4 = 0, so x1/xD has its zero at -K3/K1 = {z:.6g} 1/s.")
-    else:
-        z = zero
-    return Design(
-        kind="pid_servo", plant=plant, gains=gains, poles=tuple(complex(p) for p in poles), zeros=(complex(z),),
-        closed_loop=servo_closed_loop(gains, plant), formulas=SERVO_FORMULAS, notes=tuple(notes_out),
-        extra=dict(extra or {}),
+def servo_conditions(gains: dict[str, float]) -> tuple[LinearCondition, ...]:
+    """The servo's Hurwitz conditions, affine in ``(Km, tau)`` for fixed gains.
+
+    With ``Km, tau > 0`` the cubic ``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3`` is Hurwitz iff
+    ``1 + Km K2 > 0``, ``K3 > 0`` and ``(1 + Km K2) Km K1 > tau Km K3``, i.e.
+    ``K1 + K1 K2 Km - K3 tau > 0`` (``a2 > 0`` follows).  Each is affine in the plant parameters,
+    so its minimum over a box (or any polytope) of ``(Km, tau)`` is a linear program.
+    """
+    K1, K2, K3 = (float(gains[k]) for k in ("K1", "K2", "K3"))
+    return (
+        LinearCondition("1 + Km K2 > 0", 1.0, {"Km": K2}, "1"),
+        LinearCondition("K3 > 0", K3, {}, "N*m/(rad*s)"),
+        LinearCondition("K1 (1 + Km K2) - tau K3 > 0", K1, {"Km": K1 * K2, "tau": -K3}, "N*m/rad"),
     )
 
 
-def design_tracking(
-    plant: LinkPlant, poles: Sequence[complex], *, notes: tuple[str, ...] = (), extra: dict | None = None
-) -> Design:
-    """Synthesise the PID trajectory tracker; see the module docstring for the derivation."""
-    gains = tracking_gains(plant, poles)
-    return Design(
-        kind="pid_tracking", plant=plant, gains=gains, poles=tuple(complex(p) for p in poles), zeros=(),
-        closed_loop=tracking_closed_loop(gains, plant, plant), formulas=TRACKING_FORMULAS,
-        notes=tuple(notes), extra=dict(extra or {}),
+def tracking_conditions(gains: dict[str, float], nominal: LinkPlant) -> tuple[LinearCondition, ...]:
+    """The tracker's Hurwitz conditions on a plant ``(Km, tau)``, designed for ``nominal`` ``Km0``.
+
+    ``tau s^3 + (1 + Km (K2 - 1/Km0)) s^2 + Km K1 s + Km K3``: ``1 + Km (K2 - 1/Km0) > 0``,
+    ``K3 > 0`` and ``K1 (1 + Km (K2 - 1/Km0)) - tau K3 > 0``, each affine in ``(Km, tau)``.
+    """
+    K1, K2, K3 = (float(gains[k]) for k in ("K1", "K2", "K3"))
+    c = K2 - 1.0 / float(nominal.Km)
+    return (
+        LinearCondition("1 + Km (K2 - 1/Km0) > 0", 1.0, {"Km": c}, "1"),
+        LinearCondition("K3 > 0", K3, {}, "N*m/(rad*s)"),
+        LinearCondition("K1 (1 + Km (K2 - 1/Km0)) - tau K3 > 0", K1, {"Km": K1 * c, "tau": -K3}, "N*m/rad"),
     )

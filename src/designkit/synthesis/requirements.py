@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from scipy.optimize import brentq
+
+from designkit.errors import SpecError
 
 
 @dataclass(frozen=True)
@@ -89,3 +92,41 @@ def dominant_poles(
     p1, p2 = complex(-sigma, wd), complex(-sigma, -wd)
     p3 = complex(-third_pole_factor * sigma, 0.0)
     return DominantPoles(zeta=zeta, wn=wn, poles=(p1, p2, p3))
+
+
+def poles_from_spec(controller: Any, requirements: Any) -> tuple[tuple[complex, ...], tuple[str, ...], dict[str, float]]:
+    """The three poles of a pole-placed controller section, given or derived from requirements.
+
+    Parameters
+    ----------
+    controller : PoleRequirementsController
+        ``poles`` (used as given when present), ``design_margin``, ``third_pole_factor``.
+    requirements : Requirements or None
+        ``overshoot`` (%), ``settling_time`` (s) and ``settling_band`` when the poles are derived.
+
+    Returns
+    -------
+    poles, notes, extra
+        The poles (1/s), a note saying how they were derived, and ``{"zeta", "wn"}``.
+
+    Raises
+    ------
+    SpecError
+        ``controller.poles`` when neither poles nor the two requirements are given.
+    """
+    if controller.poles is not None:
+        return tuple(complex(p) for p in controller.poles), (), {}
+    if requirements is None or requirements.overshoot is None or requirements.settling_time is None:
+        raise SpecError("controller.poles", "missing; give three poles, or requirements.overshoot and "
+                        "requirements.settling_time to derive them")
+    tighten = 1.0 - controller.design_margin
+    overshoot, settling = tighten * requirements.overshoot, tighten * requirements.settling_time
+    dom = dominant_poles(overshoot, settling, third_pole_factor=controller.third_pole_factor,
+                         band=requirements.settling_band)
+    note = (
+        f"Poles derived from requirements tightened by the design margin {controller.design_margin:g}: overshoot "
+        f"{overshoot:g} % -> zeta = {dom.zeta:.4f}; settling time {settling:g} s "
+        f"({100 * requirements.settling_band:g} % band, exact 2nd-order) -> wn = {dom.wn:.4f} rad/s; "
+        f"third pole at {controller.third_pole_factor:g} x Re(p1)."
+    )
+    return dom.poles, (note,), {"zeta": dom.zeta, "wn": dom.wn}

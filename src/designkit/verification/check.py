@@ -33,6 +33,9 @@ class Check:
     certificate : Mapping
         Evidence: e.g. ``{"P": [[...]], "eig_P": [...], "solver_status": "optimal"}``.
         Values are JSON-serialisable (lists, floats, str).
+    data : Mapping
+        Bulk data behind the check for the report's figures (time series, frequency responses);
+        not part of :meth:`to_dict`.
     required : bool
         Whether the verdict depends on this check.  An informational check (``False``) is
         reported with its status but does not make a design unverified, e.g. the common
@@ -49,6 +52,7 @@ class Check:
     detail: str = ""
     certificate: Mapping[str, Any] = field(default_factory=dict)
     required: bool = True
+    data: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def status(self) -> Status:

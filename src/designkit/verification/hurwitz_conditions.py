@@ -1,14 +1,15 @@
 """Routh-Hurwitz conditions of a design: the cubic coefficient conditions and their gain form.
 
 For a cubic the Routh array (:mod:`designkit.verification.routh`) reduces to the classical
-conditions ``a0 > 0, a1 > 0, a3 > 0, a1 a2 > a0 a3``.  For the PID link families, whose
-characteristic polynomials are ``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3`` (servo) and
-``tau s^3 + Km K2 s^2 + Km K1 s + Km K3`` (tracker on its nominal plant), each condition is
-solved for the gain entering it, using slopes read off the family's ``characteristic`` (no
-formula is retyped here); for the servo this reproduces the notes' ``K3 > 0``, ``K2 > -1/Km``,
-``K1 > tau K3/(1 + Km K2)`` and for the tracker ``K3 > 0``, ``K2 > 0``, ``K1 > tau K3/(Km K2)``.
-:func:`routh_hurwitz_design` is the ``"routh_hurwitz"`` check of a design: the verdict of the
-generic array, with these conditions, their values, thresholds and margins as certificate.
+conditions ``a0 > 0, a1 > 0, a3 > 0, a1 a2 > a0 a3``.  A design that exposes its characteristic
+polynomial in closed form (:class:`~designkit.synthesis.design.Characteristic`, e.g. the PID
+link families' ``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3``) also says which gain each
+coefficient is affine in; each condition is then solved for that gain, using slopes read off the
+characteristic itself (no formula is retyped here).  For the servo this reproduces the notes'
+``K3 > 0``, ``K2 > -1/Km``, ``K1 > tau K3/(1 + Km K2)`` and for the tracker ``K3 > 0``,
+``K2 > 0``, ``K1 > tau K3/(Km K2)``.  :func:`routh_hurwitz_design` is the ``"routh_hurwitz"``
+check of a design: the verdict of the generic array, with these conditions, their values,
+thresholds and margins as certificate.
 """
 
 from __future__ import annotations
@@ -21,16 +22,6 @@ import numpy as np
 
 from designkit.verification.check import Check
 from designkit.verification.routh import routh_hurwitz
-
-GAIN_UNITS = {"K1": "N*m/rad", "K2": "N*m*s/rad", "K3": "N*m/(rad*s)", "K4": "1"}
-"""Units of the PID gains of the link families (see :mod:`designkit.synthesis.pid`)."""
-
-CUBIC_GAINS = {
-    "pid_servo": {"a1": "K2", "a2": "K1", "a3": "K3"},
-    "pid_tracking": {"a1": "K2", "a2": "K1", "a3": "K3"},
-}
-"""For each family, the gain that enters each coefficient of ``a0 s^3 + a1 s^2 + a2 s + a3``."""
-
 
 @dataclass(frozen=True)
 class Condition:
@@ -73,65 +64,70 @@ def cubic_conditions(a0: float, a1: float, a2: float, a3: float) -> tuple[Condit
     )
 
 
-def _coefficients(design: Any, family: Any, Km: float, tau: float, gains: dict[str, float] | None = None):
-    d = design if gains is None else dataclasses.replace(design, gains=gains)
-    return tuple(float(np.asarray(c)) for c in family.characteristic(d, np.asarray(Km), np.asarray(tau)))
+def _theta(design: Any, plant: Any) -> dict[str, float]:
+    return {name: float(plant.parameter(name).value) for name in design.characteristic.parameters}
 
 
-def _slope(design: Any, family: Any, Km: float, tau: float, gain: str, index: int) -> float:
+def _coefficients(design: Any, plant: Any, gains: Any = None) -> tuple[float, ...]:
+    ch = design.characteristic
+    g = design.gains if gains is None else gains
+    return tuple(float(np.asarray(c)) for c in ch.coefficients(g, **_theta(design, plant)))
+
+
+def _slope(design: Any, plant: Any, gain: str, index: int) -> float:
     """``d a_index / d gain`` by a central difference (exact for coefficients affine in the gain)."""
     g = dict(design.gains)
-    h = max(1.0, abs(g[gain]))
-    up = _coefficients(design, family, Km, tau, {**g, gain: g[gain] + h})[index]
-    down = _coefficients(design, family, Km, tau, {**g, gain: g[gain] - h})[index]
+    h = max(1.0, abs(float(g[gain])))
+    up = _coefficients(design, plant, {**g, gain: float(g[gain]) + h})[index]
+    down = _coefficients(design, plant, {**g, gain: float(g[gain]) - h})[index]
     return (up - down) / (2.0 * h)
 
 
-def gain_conditions(design: Any, family: Any, Km: float, tau: float) -> tuple[Condition, ...]:
+def gain_conditions(design: Any, plant: Any = None) -> tuple[Condition, ...]:
     """The cubic conditions solved for the gains entering ``a3``, ``a1`` and ``a2`` (in that order).
 
-    Each coefficient of ``family.characteristic`` is affine in one gain (table
-    :data:`CUBIC_GAINS`); its slope is measured on the characteristic itself, so the thresholds
+    Each coefficient of the design's characteristic is affine in one gain (its
+    ``gain_labels``); the slope is measured on the characteristic itself, so the thresholds
     follow the family's own formula.  With ``a0 > 0`` and positive slopes:
 
     - ``a3 > 0``          <=>  ``K3 > K3 - a3/s3``
     - ``a1 > 0``          <=>  ``K2 > K2 - a1/s1``
     - ``a1 a2 > a0 a3``   <=>  ``K1 > K1 - (a2 - a0 a3/a1)/s2``  (defined when ``a1 > 0``)
 
-    Returns an empty tuple for a family not in :data:`CUBIC_GAINS` or a non-cubic characteristic.
+    Returns an empty tuple for a design without a cubic characteristic.
     """
-    names = CUBIC_GAINS.get(design.kind)
-    a = _coefficients(design, family, Km, tau)
-    if names is None or len(a) != 4:
+    plant = design.plant if plant is None else plant
+    ch = design.characteristic
+    if ch is None or not ch.gain_labels:
+        return ()
+    a = _coefficients(design, plant)
+    if len(a) != 4:
         return ()
     a0, a1, a2, a3 = a
     g = dict(design.gains)
     out = []
-    pretty = {
-        "pid_servo": {"a3": "K3 > 0", "a1": "K2 > -1/Km", "a2": "K1 > tau K3/(1 + Km K2)"},
-        "pid_tracking": {"a3": "K3 > 0", "a1": "K2 > (Km/Km0 - 1)/Km", "a2": "K1 > tau K3/(1 - Km/Km0 + Km K2)"},
-    }.get(design.kind, {})
     for coef in ("a3", "a1", "a2"):
-        gain = names[coef]
+        gain, label = ch.gain_labels[coef]
         idx = int(coef[1])
-        s = _slope(design, family, Km, tau, gain, idx)
+        s = _slope(design, plant, gain, idx)
         excess = {"a3": a3, "a1": a1, "a2": (a2 - a0 * a3 / a1) if a1 > 0 else None}[coef]
-        label = pretty.get(coef, f"{coef} condition on {gain}")
+        unit = design.gains.unit(gain)
+        value = float(g[gain])
         if excess is None or s == 0:
-            out.append(Condition(label + " (undefined: needs a1 > 0)", g[gain], None, None, GAIN_UNITS[gain]))
+            out.append(Condition(label + " (undefined: needs a1 > 0)", value, None, None, unit))
             continue
-        threshold = g[gain] - excess / s
-        margin = (g[gain] - threshold) if s > 0 else (threshold - g[gain])
+        threshold = value - excess / s
+        margin = (value - threshold) if s > 0 else (threshold - value)
         if s < 0:
             label = label.replace(">", "<")
-        out.append(Condition(label, g[gain], threshold, margin, GAIN_UNITS[gain]))
+        out.append(Condition(label, value, threshold, margin, unit))
     return tuple(out)
 
 
-def routh_hurwitz_design(design: Any, family: Any, plant: Any = None) -> Check:
+def routh_hurwitz_design(design: Any, plant: Any = None) -> Check:
     """Check ``"routh_hurwitz"`` of a design's closed loop on ``plant`` (default: its nominal plant).
 
-    The verdict comes from the generic Routh array of ``family.characteristic`` at the plant;
+    The verdict comes from the generic Routh array of the design's characteristic at the plant;
     the certificate adds the cubic coefficient conditions and their gain form (notes 3.2),
     each with value, threshold and margin.  If the closed-form conditions and the array
     disagree (only possible within rounding of the boundary) the check is undecided.
@@ -139,25 +135,20 @@ def routh_hurwitz_design(design: Any, family: Any, plant: Any = None) -> Check:
     Parameters
     ----------
     design : Design
-    family : ControllerFamily
-    plant : LinkPlant, optional
-        Plant (Km in (rad/s)/(N*m), tau in s) on which the gains act.
+        With a ``characteristic``.
+    plant : Plant, optional
+        Plant on which the gains act (its parameters named by the characteristic).
     """
     plant = design.plant if plant is None else plant
-    Km, tau = float(plant.Km), float(plant.tau)
-    coeffs = _coefficients(design, family, Km, tau)
-    labels = {
-        "pid_servo": ("tau", "1 + Km K2", "Km K1", "Km K3"),
-        "pid_tracking": ("tau", "1 - Km/Km0 + Km K2", "Km K1", "Km K3"),
-    }.get(design.kind)
-    base = routh_hurwitz(coeffs, labels)
+    coeffs = _coefficients(design, plant)
+    base = routh_hurwitz(coeffs, design.characteristic.labels or None)
     cert = dict(base.certificate)
-    cert["plant"] = {"Km": Km, "tau": tau}
+    cert["plant"] = _theta(design, plant)
     passed = base.passed
     detail = base.detail
     if len(coeffs) == 4:
         cubic = cubic_conditions(*coeffs)
-        gains = gain_conditions(design, family, Km, tau)
+        gains = gain_conditions(design, plant)
         cert["coefficient_conditions"] = [c.to_dict() for c in cubic]
         cert["conditions"] = [c.to_dict() for c in gains]
         closed_form = all(c.margin is not None and c.margin > 0 for c in cubic)

@@ -29,6 +29,10 @@ decrease along a non-decaying mode), so the check fails with that eigenvalue as 
 
 :func:`lyapunov_equation` is a second, solver-free route (SciPy's Bartels-Stewart solver of
 ``A'P + PA = -Q``); :func:`recheck` is the NumPy test both routes' certificates go through.
+
+The balancing, the solve and the re-check are the shared LMI core of
+:mod:`designkit.verification.lmi` (also used by the positive-real check); this module adds the
+decision rules and the keys of the certificate stored in the :class:`Check`.
 """
 
 from __future__ import annotations
@@ -41,146 +45,53 @@ import numpy as np
 import scipy.linalg
 
 from designkit.verification.check import Check
+from designkit.verification.lmi import (
+    Coordinates,
+    LmiSolution,
+    LyapunovCertificate,
+    LyapunovRecheck,
+    coordinates,
+    lyapunov_recheck,
+    solve_lyapunov,
+    unstable_eigenvalue,
+)
 from designkit.verification.tolerances import EIG_RECHECK_TOL, LMI_EPS, LMI_SOLVER_OK
 
+__all__ = [
+    "Coordinates",
+    "CrossCheck",
+    "LmiSolution",
+    "LyapunovCertificate",
+    "Recheck",
+    "common_lyapunov",
+    "coordinates",
+    "cross_check",
+    "lyapunov_equation",
+    "lyapunov_lmi",
+    "recheck",
+    "solve_lmi",
+    "unstable_eigenvalue",
+]
 
-@dataclass(frozen=True)
-class Coordinates:
-    """Balanced, scaled coordinates shared by the LMI and its re-check.
-
-    Parameters
-    ----------
-    d : ndarray, shape (n,)
-        Diagonal of ``D`` (powers of two); ``x = D z``.
-    scale : float
-        ``s = max_i ||D^-1 A_i D||_2`` (1/s).
-    Ah : tuple of ndarray
-        ``D^-1 A_i D / s`` (dimensionless).
-    """
-
-    d: np.ndarray
-    scale: float
-    Ah: tuple[np.ndarray, ...]
-
-
-def coordinates(As: Sequence[np.ndarray]) -> Coordinates:
-    """The common balancing ``D`` and scale ``s`` of the matrices ``A_i`` (see module docstring)."""
-    As = [np.asarray(A, dtype=float) for A in As]
-    _, T = scipy.linalg.matrix_balance(sum(np.abs(A) for A in As), permute=False, separate=True)
-    d = np.asarray(T[0], dtype=float) if isinstance(T, tuple) else np.diag(T)
-    Ab = [A * d[None, :] / d[:, None] for A in As]  # exact: d holds powers of two
-    s = max(float(np.linalg.norm(A, 2)) for A in Ab)
-    s = s if s > 0 else 1.0
-    return Coordinates(d=d, scale=s, Ah=tuple(A / s for A in Ab))
+Recheck = LyapunovRecheck
+"""The detailed result of :func:`recheck` (kept under its former name)."""
 
 
-@dataclass(frozen=True)
-class Recheck:
-    """NumPy re-check of a candidate ``P`` for matrices ``A_i``.
-
-    Parameters
-    ----------
-    Pb : ndarray
-        ``D P D`` symmetrised and divided by its largest eigenvalue (balanced coordinates).
-    eig_P : ndarray
-        Eigenvalues of ``Pb`` (ascending; the largest is 1).
-    eig_lyap : tuple of ndarray
-        Eigenvalues of ``Ah_i'Pb + Pb Ah_i`` for each ``i`` (ascending, dimensionless).
-    coords : Coordinates
-    margin : float
-        ``min(min eig_P, -max eig_lyap) - eps``: non-negative iff the certificate holds with margin eps.
-    ok : bool
-        ``margin >= 0``.
-    """
-
-    Pb: np.ndarray
-    eig_P: np.ndarray
-    eig_lyap: tuple[np.ndarray, ...]
-    coords: Coordinates
-    margin: float
-    ok: bool
-
-
-def recheck(As: Sequence[np.ndarray], P: np.ndarray, *, eps: float = LMI_EPS) -> Recheck:
+def recheck(As: Sequence[np.ndarray], P: np.ndarray, *, eps: float = LMI_EPS) -> LyapunovRecheck:
     """Is ``x'Px`` a Lyapunov function of every ``x' = A_i x`` with margin ``eps``?  (NumPy only.)
 
     ``P`` (original coordinates, any positive scale) is moved to the balanced coordinates,
     ``Pb = D P D``, symmetrised and divided by its largest eigenvalue (the LMI's ``Pb <= I``), so
     certificates from any route (e.g. :func:`lyapunov_equation`) are judged on the same footing:
-    ``eig(Pb) >= eps`` and ``eig(Ah_i'Pb + Pb Ah_i) <= -eps``.
+    ``eig(Pb) >= eps`` and ``eig(Ah_i'Pb + Pb Ah_i) <= -eps``.  The shared re-check of
+    :mod:`designkit.verification.lmi` (also behind :class:`LyapunovCertificate`).
     """
-    c = coordinates(As)
-    P = np.asarray(P, dtype=float)
-    Pb = (P * c.d[None, :]) * c.d[:, None]
-    Pb = 0.5 * (Pb + Pb.T)
-    top = float(np.max(np.linalg.eigvalsh(Pb))) if np.all(np.isfinite(Pb)) else float("nan")
-    if not np.isfinite(top) or top <= 0:
-        nan = np.full(len(P), np.nan)
-        return Recheck(Pb, nan, tuple(nan for _ in As), c, -np.inf, False)
-    Pb = Pb / top
-    eig_P = np.linalg.eigvalsh(Pb)
-    eig_l = []
-    for Ah in c.Ah:
-        M = Ah.T @ Pb + Pb @ Ah
-        eig_l.append(np.linalg.eigvalsh(0.5 * (M + M.T)))
-    worst = min(float(eig_P[0]), min(-float(e[-1]) for e in eig_l))
-    margin = worst - eps
-    return Recheck(Pb, eig_P, tuple(eig_l), c, margin, bool(margin >= 0))
-
-
-def unstable_eigenvalue(A: np.ndarray) -> complex | None:
-    """The eigenvalue of ``A`` with the largest real part if that part is ``>= 0``, else None."""
-    ev = np.linalg.eigvals(np.asarray(A, dtype=float))
-    k = int(np.argmax(ev.real))
-    return complex(ev[k]) if ev[k].real >= 0 else None
-
-
-@dataclass(frozen=True)
-class LmiSolution:
-    """Raw outcome of the LMI solve (before the NumPy re-check).
-
-    Parameters
-    ----------
-    P : ndarray or None
-        Solution in the *original* coordinates, ``P = D^-1 Pb D^-1``; None when the solver
-        returned none.
-    t : float or None
-        Optimal margin ``t`` reported by the solver (dimensionless).
-    status : str
-        cvxpy status (``"optimal"``, ``"optimal_inaccurate"``, ``"infeasible"``, ``"solver_error: ..."``).
-    solver : str
-    """
-
-    P: np.ndarray | None
-    t: float | None
-    status: str
-    solver: str
+    return lyapunov_recheck(As, P, eps=eps)
 
 
 def solve_lmi(As: Sequence[np.ndarray], *, solver: str = "CLARABEL") -> LmiSolution:
-    """Solve the normalised common-Lyapunov LMI of the module docstring with cvxpy."""
-    import cvxpy as cp
-
-    c = coordinates(As)
-    n = c.Ah[0].shape[0]
-    Pb = cp.Variable((n, n), symmetric=True)
-    t = cp.Variable()
-    eye = np.eye(n)
-    cons = [Pb >> t * eye, Pb << eye]
-    for Ah in c.Ah:
-        M = Ah.T @ Pb + Pb @ Ah
-        cons.append(0.5 * (M + M.T) << -t * eye)
-    prob = cp.Problem(cp.Maximize(t), cons)
-    try:
-        prob.solve(solver=solver)
-    except cp.error.SolverError as exc:
-        return LmiSolution(None, None, f"solver_error: {exc}", solver)
-    status = str(prob.status)
-    P = None
-    if Pb.value is not None:
-        P = np.array(Pb.value, dtype=float) / c.d[None, :] / c.d[:, None]
-    tv = None if t.value is None else float(t.value)
-    return LmiSolution(P, tv, status, solver)
+    """Solve the normalised common-Lyapunov LMI of the module docstring with cvxpy (the shared core)."""
+    return solve_lyapunov(As, solver=solver)
 
 
 def _certificate(sol: LmiSolution | None, rc: Recheck | None, As: Sequence[np.ndarray], eps: float) -> dict:

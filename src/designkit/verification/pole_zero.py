@@ -9,12 +9,15 @@ python-control:
   double pole of a critically damped pair) to ``POLE_REL**(1/m)``, the accuracy to which any
   algorithm can compute an ``m``-fold root.  The characteristic polynomial (well conditioned even
   for multiple roots) must agree to ``POLE_REL`` in scaled coefficients ``c_k / R^k``.
-- servo (inputs ``xD, xi``): zeros of the SISO ``xD -> x1`` subsystem by ``control.zeros``, after
+The reference kind is the design's (``design.reference``), never guessed from signal names; the
+first joint's channels are used (the families that place zeros have one joint).
+
+- servo (``reference == "step"``): zeros of the SISO ``xD -> x1`` subsystem by ``control.zeros``, after
   discarding infinite zeros that the QZ algorithm returns as huge finite numbers
   (``|z| > ZERO_INFINITE_REL * ||[A B; C D]||``), matched to ``design.zeros``.  A zero cancelling a
   pole (zero placed on the third pole) is a genuine root of the numerator and is matched like any
   other.  DC gain of ``x1/xD`` must be 1.
-- tracker (inputs ``xD, xD', xD''``, xi): the reference transfer with ``xD' = s xD`` and
+- tracker (``reference == "trajectory"``): the reference transfer with ``xD' = s xD`` and
   ``xD'' = s^2 xD`` must be identically 1 (perfect tracking, notes F1) -- evaluated at
   ``s = 0, jR/10, jR, 10jR`` -- so it has no zeros (``design.zeros == ()``); and ``xi -> x1`` must have
   its single finite zero at 0 (integral action; notes F2 = (Km/tau) s / ((s-p1)(s-p2)(s-p3))).
@@ -105,23 +108,29 @@ def finite_zeros(sys: Any) -> tuple[np.ndarray, int]:
     return z[keep], int(np.count_nonzero(~keep))
 
 
-def _siso(sys: Any, out: str, inp: str) -> Any:
+def _siso(sys: Any, i: int, j: int) -> Any:
     import control
 
-    i = list(sys.output_labels).index(out)
-    j = list(sys.input_labels).index(inp)
     return control.ss(sys.A, sys.B[:, j : j + 1], sys.C[i : i + 1, :], sys.D[i : i + 1, j : j + 1])
 
 
-def reference_transfer(closed_loop: Any, s: complex) -> complex:
+def _channels(design: Any) -> tuple[int, int, int, int]:
+    """Indices of the first joint's ``xD``, ``xD'``, ``xD''`` and disturbance inputs of the closed loop
+    (its inputs are the ``3 n`` reference signals, then the disturbances)."""
+    n = len(design.plant.positions)
+    return 0, n, 2 * n, 3 * n
+
+
+def reference_transfer(design: Any, s: complex) -> complex:
     """``x1(s)/xD(s)`` of a tracker driven by ``(xD, s xD, s^2 xD)`` (dimensionless)."""
-    A, B, C, D = closed_loop.A, closed_loop.B, closed_loop.C, closed_loop.D
-    ins, i = list(closed_loop.inputs), list(closed_loop.outputs).index("x1")
-    w = np.zeros(len(ins), dtype=complex)
-    for name, factor in (("xD", 1.0), ("xDd", s), ("xDdd", s * s)):
-        w[ins.index(name)] = factor
+    cl = design.closed_loop
+    A, B, C, D = cl.A, cl.B, cl.C, cl.D
+    i_pos, i_vel, i_acc, _ = _channels(design)
+    w = np.zeros(len(cl.inputs), dtype=complex)
+    for k, factor in ((i_pos, 1.0), (i_vel, s), (i_acc, s * s)):
+        w[k] = factor
     x = np.linalg.solve(s * np.eye(len(A)) - A, B @ w)
-    return complex(C[i] @ x + D[i] @ w)
+    return complex(C[0] @ x + D[0] @ w)
 
 
 def pole_placement(design: Any) -> Check:
@@ -130,8 +139,8 @@ def pole_placement(design: Any) -> Check:
     Parameters
     ----------
     design : Design
-        With ``closed_loop`` (inputs ``xD, xi`` or ``xD, xDd, xDdd, xi``; outputs ``x1, u``),
-        requested ``poles`` and ``zeros`` (1/s).
+        With ``closed_loop`` (inputs the reference signals then the disturbances; first output the
+        first joint's position), requested ``poles`` and ``zeros`` (1/s) and its ``reference`` kind.
 
     Returns
     -------
@@ -157,9 +166,9 @@ def pole_placement(design: Any) -> Check:
         "poles": _pairs(poles), "requested_poles": _pairs(ref), "pole_scale": R, "pole_matching": pm["rows"],
         "coefficient_error": cerr, "tolerance": POLE_REL,
     }
-    ins = list(cl.inputs)
-    if "xDd" not in ins:  # servo: zeros and DC gain of x1/xD
-        sub = _siso(sys, "x1", "xD")
+    i_pos, _, _, i_dist = _channels(design)
+    if design.reference == "step":  # servo: zeros and DC gain of x1/xD
+        sub = _siso(sys, 0, i_pos)
         z, n_inf = finite_zeros(sub)
         zref = np.asarray(design.zeros, dtype=complex)
         Rz = max([R, *np.abs(zref).tolist()])
@@ -178,7 +187,7 @@ def pole_placement(design: Any) -> Check:
         )
     else:  # tracker: x1/xD == 1 identically, xi -> x1 zero at 0
         points = [0.0, 0.1j * R, 1j * R, 10j * R]
-        vals = [reference_transfer(cl, s) for s in points]
+        vals = [reference_transfer(design, s) for s in points]
         errs = [scaled_error(v, 1.0) for v in vals]
         ratios["reference transfer"] = max(errs) / DC_GAIN_TOL
         if max(errs) > DC_GAIN_TOL:
@@ -186,7 +195,7 @@ def pole_placement(design: Any) -> Check:
         if len(design.zeros):
             failures.append(f"the tracker's reference transfer has no zeros, but the design lists {design.zeros}")
             ratios["requested zeros"] = np.inf
-        dz, n_inf = finite_zeros(_siso(sys, "x1", "xi"))
+        dz, n_inf = finite_zeros(_siso(sys, 0, i_dist))
         dm = match_roots(dz, [0.0], R)
         ratios["xi zeros"] = dm["ratio"]
         if not dm["ok"]:

@@ -1,167 +1,258 @@
-"""Robust stability of a design over a box of plant parameters ``Km x tau``.
+"""Robust stability of a design over a box of any named plant parameters.
 
-Three checks, each answering a different question:
+The box comes from the spec's ``plant.uncertainty`` (``{Km: [1.5, 2.5], tau: [0.4, 0.6]}``,
+``{m2: [2.5, 3.5]}``, ...).  For every sampled parameter vector ``p`` the designed law acts on
+``plant.with_params(p)``: the closed loop's equilibrium for the design's reference is found by
+Newton's method and its Jacobian ``A(p)`` taken (:mod:`designkit.synthesis.closed_loop`), all
+samples at once (CasADi ``map`` and batched NumPy; a loop over Newton iterations, never over
+plants).  Each ``A(p)`` is judged twice: the Routh array of its characteristic polynomial
+(Faddeev-LeVerrier, on ``A`` scaled to unit norm) and its eigenvalues; a disagreement (possible
+only within rounding of the stability boundary) is undecided.
 
 ``robust_vertices``
-    Is the closed loop stable at the four corners of the box?  (Routh test of the family's
-    characteristic polynomial at each corner.)
+    Stable at every corner of the box?
 ``robust_grid``
-    Is it stable on a ``grid x grid`` lattice of the box (corners included)?  The Routh arrays of
-    all lattice plants are built at once on coefficient arrays (:func:`routh_batch`), with no
-    Python loop per plant.  Reports the worst (smallest) scaled Routh margin and where it occurs,
-    and the worst spectral abscissa ``max Re(pole)`` (1/s).  The checks' ``margin`` is minus the
-    worst spectral abscissa: the decay rate (1/s) of the slowest mode over the corners / grid.
-``common_lyapunov``
-    Is there one quadratic Lyapunov function for the four corner closed loops?  For the link
-    families the closed-loop matrix is *affine* in ``(1/tau, Km/tau)``, and the image of the box
-    in those coordinates is the quadrilateral with the corners' images as vertices (it is bounded
-    by ``a = 1/tau_hi``, ``a = 1/tau_lo``, ``b = Km_lo a`` and ``b = Km_hi a``, hence convex).  So
-    every plant of the box has its ``A`` in the convex hull of the corner ``A``'s, and a common
-    ``P`` proves stability of the *whole continuum* of the box, even for parameters varying in
-    time inside it -- something no grid can.  Meaning of the outcome:
-
-    - ``True``: common ``P`` found and re-checked: quadratic stability over the box;
-    - ``False``: some corner is itself unstable (eigenvalue evidence), so no common ``P`` exists;
-    - ``None`` (undecided): the corners are stable but no common ``P`` was found.  This is *not*
-      instability: the box may still be stable (see ``robust_grid``), only not provably so by a
-      single quadratic function.
-
-A missing axis of the uncertainty (``Km`` or ``tau`` not given) is held at its nominal value.
+    Stable on the lattice of the box (``grid`` points per parameter, capped at
+    :data:`~designkit.spec.plants.MAX_GRID_POINTS` plants) and at ``samples`` seeded random
+    interior points?  Reports the worst (largest) spectral abscissa and where it occurs; the
+    margin is minus that abscissa, the decay rate (1/s) of the slowest mode.
+``common_lyapunov`` (informational)
+    One quadratic Lyapunov function for the corner closed loops: quadratic stability of their
+    convex hull, even under arbitrarily fast variation inside it.  It covers every plant of the
+    box only when the plant says its closed-loop ``A`` is affine in coordinates that map the
+    box onto the hull of its corners (the link, whose ``A`` is affine in ``(1/tau, Km/tau)``);
+    otherwise it is evidence, not proof, for the continuum.  Sufficient, not necessary: not
+    finding one is undecided, never a failure of the design.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
-from designkit.models.link import LinkPlant
+from designkit.spec.plants import MAX_GRID_POINTS
+from designkit.synthesis.closed_loop import equilibria, loop_functions, state_matrices
 from designkit.verification.check import Check
 from designkit.verification.lyapunov import common_lyapunov
 from designkit.verification.routh import MARGINAL, STABLE, UNSTABLE, routh_batch
 from designkit.verification.tolerances import LMI_EPS
 
+__all__ = ["Box", "Sweeper", "box_from_uncertainty", "characteristic_coefficients", "grid_check",
+           "lyapunov_vertex_check", "robustness_checks", "stable_fraction", "vertex_check"]
+
 MAX_LISTED_POINTS = 10
-"""At most this many failing grid points are listed in a certificate."""
+"""At most this many failing points are listed in a certificate."""
+MAX_ROUTH_ORDER = 10
+"""Above this closed-loop order the verdict rests on the eigenvalues alone (Faddeev-LeVerrier
+coefficients lose accuracy as the order grows)."""
 
 
 @dataclass(frozen=True)
 class Box:
-    """Plant parameter box.
+    """A box of named plant parameters.
 
     Parameters
     ----------
-    Km : (float, float)
-        Link gain interval ((rad/s)/(N*m)).
-    tau : (float, float)
-        Time-constant interval (s).
+    names : tuple of str
+        Parameter names (plant parameters).
+    lo, hi : tuple of float
+        Bounds (units of the parameters).
+    units : tuple of str
+        Units, for reports.
     grid : int
-        Points per axis of the lattice.
+        Lattice points per parameter (before the cap).
+    samples : int
+        Seeded random interior points.
+    seed : int
+        Their seed.
     """
 
-    Km: tuple[float, float]
-    tau: tuple[float, float]
+    names: tuple[str, ...]
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
+    units: tuple[str, ...] = ()
     grid: int = 21
+    samples: int = 0
+    seed: int = 0
 
     @property
-    def vertices(self) -> tuple[tuple[float, float], ...]:
-        """Distinct corners ``(Km, tau)``, in the order (lo, lo), (lo, hi), (hi, lo), (hi, hi)."""
-        out: list[tuple[float, float]] = []
-        for k in self.Km:
-            for t in self.tau:
-                if (k, t) not in out:
-                    out.append((float(k), float(t)))
-        return tuple(out)
+    def vertices(self) -> np.ndarray:
+        """Distinct corners, shape ``(V, k)`` (a degenerate axis contributes one value)."""
+        axes = [sorted({lo, hi}) for lo, hi in zip(self.lo, self.hi, strict=True)]
+        return np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, len(self.names))
+
+    @property
+    def points_per_axis(self) -> int:
+        """Lattice points per non-degenerate axis, reduced so that the lattice has at most the cap."""
+        k = sum(lo != hi for lo, hi in zip(self.lo, self.hi, strict=True)) or 1
+        return max(2, min(self.grid, int(np.floor(MAX_GRID_POINTS ** (1.0 / k) + 1e-9))))
+
+    @property
+    def axes(self) -> tuple[np.ndarray, ...]:
+        """The lattice's values along each parameter."""
+        g = self.points_per_axis
+        return tuple(np.linspace(lo, hi, g) if lo != hi else np.array([lo])
+                     for lo, hi in zip(self.lo, self.hi, strict=True))
+
+    @property
+    def lattice(self) -> np.ndarray:
+        """Every lattice point, shape ``(G, k)``, the first parameter varying slowest."""
+        mesh = np.meshgrid(*self.axes, indexing="ij")
+        return np.stack([m.ravel() for m in mesh], axis=-1)
+
+    @property
+    def random(self) -> np.ndarray:
+        """``samples`` seeded uniform points, shape ``(samples, k)``."""
+        rng = np.random.default_rng(self.seed)
+        lo, hi = np.asarray(self.lo), np.asarray(self.hi)
+        return lo + (hi - lo) * rng.random((self.samples, len(self.names)))
+
+    def describe(self) -> dict[str, list[float]]:
+        """``{name: [lo, hi]}``."""
+        return {n: [lo, hi] for n, lo, hi in zip(self.names, self.lo, self.hi, strict=True)}
 
 
-def box_from_uncertainty(design: Any, uncertainty: Any) -> Box:
-    """The box of a spec's ``plant.uncertainty``; a missing axis is held at the design's nominal value."""
-    Km0, tau0 = float(design.plant.Km), float(design.plant.tau)
-    Km = tuple(float(x) for x in uncertainty.Km) if uncertainty.Km is not None else (Km0, Km0)
-    tau = tuple(float(x) for x in uncertainty.tau) if uncertainty.tau is not None else (tau0, tau0)
-    return Box(Km=Km, tau=tau, grid=int(uncertainty.grid))
+def box_from_uncertainty(plant: Any, uncertainty: Any) -> Box:
+    """The box of a spec's ``plant.uncertainty`` (parameters in the order written)."""
+    intervals = uncertainty.intervals
+    names = tuple(intervals)
+    return Box(
+        names=names, lo=tuple(intervals[n][0] for n in names), hi=tuple(intervals[n][1] for n in names),
+        units=tuple(plant.parameter(n).unit for n in names), grid=int(uncertainty.grid),
+        samples=int(uncertainty.samples), seed=int(uncertainty.seed),
+    )
 
 
-def stable_fraction(design: Any, family: Any, Km_samples: np.ndarray, tau_samples: np.ndarray) -> np.ndarray:
-    """Which sampled plants the design stabilises, decided by a vectorised Routh test.
+def characteristic_coefficients(A: np.ndarray) -> np.ndarray:
+    """Coefficients of ``det(sI - A)`` (highest power first, monic) for a batch ``(N, n, n)`` (Faddeev-LeVerrier)."""
+    A = np.asarray(A, dtype=float)
+    N, n, _ = A.shape
+    c = np.zeros((N, n + 1))
+    c[:, 0] = 1.0
+    M = np.zeros_like(A)
+    eye = np.eye(n)[None, :, :]
+    for k in range(1, n + 1):
+        M = A @ M + c[:, k - 1][:, None, None] * eye
+        c[:, k] = -np.einsum("nii->n", A @ M) / k
+    return c
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Stability of the loop at a batch of parameter vectors.
+
+    Parameters
+    ----------
+    theta : ndarray, shape (N, k)
+        The uncertain parameters' values.
+    status : ndarray of int8, shape (N,)
+        1 stable, 0 undecided (marginal, no equilibrium, or Routh and eigenvalues disagree), -1 unstable.
+    abscissa : ndarray, shape (N,)
+        Spectral abscissa ``max Re(eig A)`` (1/s); NaN without an equilibrium.
+    routh_margin : ndarray, shape (N,)
+        Smallest scaled Routh first-column entry (NaN when not used).
+    A : ndarray, shape (N, nz, nz)
+        The closed-loop Jacobians.
+    """
+
+    theta: np.ndarray
+    status: np.ndarray
+    abscissa: np.ndarray
+    routh_margin: np.ndarray
+    A: np.ndarray
+
+
+class Sweeper:
+    """The design's loop on many plants: builds the CasADi functions once, evaluates batches.
 
     Parameters
     ----------
     design : Design
-    family : ControllerFamily
-        Supplies the vectorised characteristic polynomial.
-    Km_samples : array_like
-        Link gains ((rad/s)/(N*m)).
-    tau_samples : array_like
-        Time constants (s), broadcastable with ``Km_samples``.
+        Its nominal plant, law (from its family) and operating point.
+    names : sequence of str
+        The plant parameters that vary.
+    """
+
+    def __init__(self, design: Any, names: tuple[str, ...]) -> None:
+        from designkit.families import family
+
+        self.design = design
+        self.names = tuple(names)
+        self.law = family(design.kind).law(design, None)
+        plant = design.plant
+        self._index = [plant.parameter_names.index(n) for n in self.names]
+        self._p0 = np.asarray(plant.parameter_vector, dtype=float)
+        op = design.operating_point
+        self._r0 = np.asarray(op["r"], dtype=float)
+        self._z0 = np.concatenate([np.asarray(op["x"], dtype=float), np.asarray(op["xc"], dtype=float)])
+
+    @cached_property
+    def _functions(self) -> Any:
+        return loop_functions(self.design.plant, self.law)
+
+    def parameters(self, theta: np.ndarray) -> np.ndarray:
+        """Full parameter vectors ``(N, n_par)`` for the varying values ``theta`` ``(N, k)``."""
+        P = np.tile(self._p0, (theta.shape[0], 1))
+        P[:, self._index] = theta
+        return P
+
+    def sweep(self, theta: Any) -> SweepResult:
+        """Stability of the loop at every row of ``theta``."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        P = self.parameters(theta)
+        eq = equilibria(self._functions, self._z0, self._r0, P)
+        A = state_matrices(self._functions, eq.z, self._r0, P)
+        with np.errstate(all="ignore"):
+            eig = np.linalg.eigvals(np.nan_to_num(A))
+        abscissa = np.where(eq.converged, eig.real.max(axis=1), np.nan)
+        n = A.shape[1]
+        if n <= MAX_ROUTH_ORDER:
+            scale = np.maximum(np.linalg.norm(A, ord=2, axis=(1, 2)), 1e-300)
+            coeffs = characteristic_coefficients(np.nan_to_num(A) / scale[:, None, None])
+            rb = routh_batch(coeffs)
+            status = rb.status.copy()
+            margin = rb.margin
+            stable_eig = abscissa < 0
+            status[(status == STABLE) & ~stable_eig] = MARGINAL
+            status[(status == UNSTABLE) & stable_eig] = MARGINAL
+        else:
+            status = np.where(abscissa < 0, STABLE, UNSTABLE).astype(np.int8)
+            margin = np.full(len(status), np.nan)
+        status[~eq.converged] = MARGINAL
+        return SweepResult(theta=theta, status=status, abscissa=abscissa, routh_margin=margin, A=A)
+
+
+def stable_fraction(design: Any, samples: dict[str, Any]) -> np.ndarray:
+    """Which plants of a batch the design stabilises.
+
+    Parameters
+    ----------
+    design : Design
+    samples : dict
+        Parameter name -> array of values (broadcast together).
 
     Returns
     -------
-    ndarray of bool, broadcast shape of the inputs
-        True where the closed loop is asymptotically stable (a marginal plant counts as not
-        stable); ``result.mean()`` is the stable fraction.
+    ndarray of bool, the broadcast shape of the samples
+        True where the closed loop is asymptotically stable (undecided counts as not stable).
 
     Examples
     --------
     >>> from designkit.models.link import LinkPlant
-    >>> from designkit.synthesis.pid import design_servo
-    >>> from designkit.synthesis.registry import family
-    >>> d = design_servo(LinkPlant(2.0, 0.5), [-4, -5, -20], -3.0)
-    >>> stable_fraction(d, family("pid_servo"), [1.0, 2.0, 4.0], 0.5).tolist()
+    >>> from designkit.families.pid_servo import design
+    >>> d = design(LinkPlant(2.0, 0.5), [-4, -5, -20], -3.0)
+    >>> stable_fraction(d, {"Km": [1.0, 2.0, 4.0], "tau": 0.5}).tolist()
     [True, True, True]
     """
-    Km, tau = np.broadcast_arrays(np.asarray(Km_samples, float), np.asarray(tau_samples, float))
-    coeffs = family.characteristic(design, Km, tau)
-    return (routh_batch(coeffs).status == STABLE).reshape(Km.shape)
-
-
-@dataclass(frozen=True)
-class GridSweep:
-    """Routh test on a lattice of the box.
-
-    Parameters
-    ----------
-    Km, tau : ndarray, shape (g,)
-        Axes of the lattice.
-    status : ndarray of int8, shape (g, g)
-        ``[i, j]`` for ``(Km[i], tau[j])``: 1 stable, 0 marginal, -1 unstable.
-    margin : ndarray, shape (g, g)
-        Smallest scaled Routh first-column entry (dimensionless, > 0 iff stable).
-    abscissa : ndarray, shape (g, g)
-        Spectral abscissa ``max Re(root)`` of the characteristic polynomial (1/s).
-    """
-
-    Km: np.ndarray
-    tau: np.ndarray
-    status: np.ndarray
-    margin: np.ndarray
-    abscissa: np.ndarray
-
-
-def _abscissa(coeffs: tuple[np.ndarray, ...]) -> np.ndarray:
-    """``max Re(root)`` of many polynomials, via batched eigenvalues of companion matrices."""
-    arrays = np.broadcast_arrays(*[np.asarray(c, float) for c in coeffs])
-    a = np.stack([x.ravel() for x in arrays], axis=-1)
-    n = a.shape[1] - 1
-    comp = np.zeros((a.shape[0], n, n))
-    comp[:, 0, :] = -a[:, 1:] / a[:, :1]
-    comp[:, np.arange(1, n), np.arange(n - 1)] = 1.0
-    return np.linalg.eigvals(comp).real.max(axis=1).reshape(arrays[0].shape)
-
-
-def grid_sweep(design: Any, family: Any, box: Box) -> GridSweep:
-    """Routh status, margin and spectral abscissa on the ``grid x grid`` lattice of ``box``."""
-    Km = np.linspace(box.Km[0], box.Km[1], box.grid)
-    tau = np.linspace(box.tau[0], box.tau[1], box.grid)
-    KK, TT = np.meshgrid(Km, tau, indexing="ij")
-    coeffs = family.characteristic(design, KK, TT)
-    rb = routh_batch(coeffs)
-    shape = KK.shape
-    return GridSweep(
-        Km=Km, tau=tau, status=rb.status.reshape(shape), margin=rb.margin.reshape(shape),
-        abscissa=_abscissa(coeffs),
-    )
+    names = tuple(samples)
+    arrays = np.broadcast_arrays(*[np.asarray(samples[k], dtype=float) for k in names])
+    theta = np.stack([a.ravel() for a in arrays], axis=-1)
+    res = Sweeper(design, names).sweep(theta)
+    return (res.status == STABLE).reshape(arrays[0].shape)
 
 
 def _verdict(status: np.ndarray) -> bool | None:
@@ -172,120 +263,118 @@ def _verdict(status: np.ndarray) -> bool | None:
     return True
 
 
-def _consistent(verdict: bool | None, abscissa: np.ndarray) -> bool | None:
-    """A Routh "all stable" whose eigenvalues say otherwise (possible only within rounding of the
-    boundary) is downgraded to undecided, so that ``margin > 0`` whenever ``passed`` is True."""
-    if verdict is True and not np.all(abscissa < 0):
-        return None
-    return verdict
-
-
 def _word(code: int) -> str:
-    return {STABLE: "stable", MARGINAL: "marginal", UNSTABLE: "unstable"}[int(code)]
+    return {STABLE: "stable", MARGINAL: "undecided", UNSTABLE: "unstable"}[int(code)]
 
 
-def vertex_check(design: Any, family: Any, box: Box) -> Check:
-    """Check ``"robust_vertices"``: Routh test at the corners of the box."""
-    Km = np.array([v[0] for v in box.vertices])
-    tau = np.array([v[1] for v in box.vertices])
-    coeffs = family.characteristic(design, Km, tau)
-    rb = routh_batch(coeffs)
-    absc = _abscissa(coeffs)
-    rows = [
-        {"Km": float(k), "tau": float(t), "status": _word(s), "routh_margin": float(m), "spectral_abscissa": float(a)}
-        for k, t, s, m, a in zip(Km, tau, rb.status, rb.margin, absc, strict=True)
-    ]
-    passed = _consistent(_verdict(rb.status), absc)
-    worst = int(np.argmax(absc))
-    bad = [r for r in rows if r["status"] != "stable"]
+def _where(box: Box, theta: np.ndarray) -> str:
+    return ", ".join(f"{n}={v:.4g}" for n, v in zip(box.names, theta, strict=True))
+
+
+def vertex_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
+    """Check ``"robust_vertices"``: stability at the corners of the box."""
+    sweeper = sweeper or Sweeper(design, box.names)
+    res = sweeper.sweep(box.vertices)
+    rows = [{**dict(zip(box.names, map(float, th), strict=True)), "status": _word(s), "routh_margin": float(m),
+             "spectral_abscissa": float(a)}
+            for th, s, m, a in zip(res.theta, res.status, res.routh_margin, res.abscissa, strict=True)]
+    passed = _verdict(res.status)
+    finite = np.where(np.isfinite(res.abscissa), res.abscissa, np.inf)
+    worst = int(np.argmax(finite))
+    bad = [(th, s) for th, s in zip(res.theta, res.status, strict=True) if s != STABLE]
     if passed:
-        detail = (
-            f"all {len(rows)} corners stable; slowest pole Re = {absc[worst]:.4g} 1/s at "
-            f"Km={Km[worst]:g}, tau={tau[worst]:g}"
-        )
-    elif bad:
-        detail = "corner(s) not stable: " + ", ".join(f"(Km={r['Km']:g}, tau={r['tau']:g}) {r['status']}" for r in bad)
+        detail = f"all {len(rows)} corners stable; slowest pole Re = {res.abscissa[worst]:.4g} 1/s at " + \
+            _where(box, res.theta[worst])
     else:
-        detail = "Routh test and eigenvalues disagree within rounding at a corner: undecided"
+        detail = "corner(s) not stable: " + "; ".join(f"({_where(box, th)}) {_word(s)}" for th, s in bad[:3])
+    achieved = float(res.abscissa[worst]) if np.isfinite(res.abscissa[worst]) else None
     return Check(
-        name="robust_vertices", passed=passed, target="stable at every corner of Km x tau",
-        achieved=float(absc[worst]), margin=float(-absc[worst]), unit="1/s", detail=detail,
-        certificate={"box": {"Km": list(box.Km), "tau": list(box.tau)}, "vertices": rows},
+        name="robust_vertices", passed=passed, target="stable at every corner of the parameter box",
+        achieved=achieved, margin=None if achieved is None else -achieved, unit="1/s", detail=detail,
+        certificate={"box": box.describe(), "vertices": rows},
     )
 
 
-def grid_check(design: Any, family: Any, box: Box) -> Check:
-    """Check ``"robust_grid"``: vectorised Routh test on the ``grid x grid`` lattice."""
-    g = grid_sweep(design, family, box)
-    i, j = np.unravel_index(int(np.argmin(g.margin)), g.margin.shape)
-    ia, ja = np.unravel_index(int(np.argmax(g.abscissa)), g.abscissa.shape)
-    n_unstable = int(np.count_nonzero(g.status == UNSTABLE))
-    n_marginal = int(np.count_nonzero(g.status == MARGINAL))
-    bad_i, bad_j = np.nonzero(g.status != STABLE)
-    listed = [
-        {"Km": float(g.Km[a]), "tau": float(g.tau[b]), "status": _word(g.status[a, b])}
-        for a, b in list(zip(bad_i, bad_j, strict=True))[:MAX_LISTED_POINTS]
-    ]
-    passed = _consistent(_verdict(g.status), g.abscissa)
-    total = g.status.size
-    worst = {"Km": float(g.Km[i]), "tau": float(g.tau[j]), "routh_margin": float(g.margin[i, j])}
-    slowest = {"Km": float(g.Km[ia]), "tau": float(g.tau[ja]), "spectral_abscissa": float(g.abscissa[ia, ja])}
+def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
+    """Check ``"robust_grid"``: the lattice of the box plus seeded random samples."""
+    sweeper = sweeper or Sweeper(design, box.names)
+    lattice = box.lattice
+    theta = np.vstack([lattice, box.random]) if box.samples else lattice
+    res = sweeper.sweep(theta)
+    n_unstable = int(np.count_nonzero(res.status == UNSTABLE))
+    n_undecided = int(np.count_nonzero(res.status == MARGINAL))
+    total = len(res.status)
+    finite = np.where(np.isfinite(res.abscissa), res.abscissa, np.inf)
+    worst = int(np.argmax(finite))
+    bad = np.flatnonzero(res.status != STABLE)
+    listed = [{**dict(zip(box.names, map(float, res.theta[i]), strict=True)), "status": _word(res.status[i])}
+              for i in bad[:MAX_LISTED_POINTS]]
+    passed = _verdict(res.status)
+    where = _where(box, res.theta[worst])
     if passed:
-        detail = (
-            f"{total} plants stable; slowest pole Re = {g.abscissa[ia, ja]:.4g} 1/s at Km={g.Km[ia]:g}, "
-            f"tau={g.tau[ja]:g}; worst Routh margin {g.margin[i, j]:.3g} at Km={g.Km[i]:g}, tau={g.tau[j]:g}"
-        )
-    elif listed:
-        detail = f"{n_unstable} unstable and {n_marginal} marginal of {total} grid plants; e.g. " + ", ".join(
-            f"(Km={p['Km']:g}, tau={p['tau']:g})" for p in listed[:3]
-        )
+        detail = f"{total} plants stable; slowest pole Re = {res.abscissa[worst]:.4g} 1/s at {where}"
     else:
-        detail = "Routh test and eigenvalues disagree within rounding on the grid: undecided"
+        detail = f"{n_unstable} unstable and {n_undecided} undecided of {total} plants; e.g. " + "; ".join(
+            f"({_where(box, res.theta[i])})" for i in bad[:3])
+    cert: dict[str, Any] = {
+        "box": box.describe(), "points_per_axis": box.points_per_axis, "lattice_plants": len(lattice),
+        "random_samples": box.samples, "seed": box.seed if box.samples else None, "plants": total,
+        "stable": total - n_unstable - n_undecided, "unstable": n_unstable, "undecided": n_undecided,
+        "worst_abscissa": {**dict(zip(box.names, map(float, res.theta[worst]), strict=True)),
+                           "spectral_abscissa": float(res.abscissa[worst])},
+        "failing_points": listed,
+    }
+    varying = [k for k, (lo, hi) in enumerate(zip(box.lo, box.hi, strict=True)) if lo != hi]
+    if len(varying) in (1, 2):
+        shape = tuple(len(a) for a in box.axes)
+        values = (-res.abscissa[: len(lattice)]).reshape(shape)
+        axes = [{"name": box.names[k], "unit": box.units[k] if box.units else "", "values": box.axes[k].tolist()}
+                for k in varying]
+        cert["grid"] = {
+            "axes": axes,
+            "values": np.squeeze(values).T.tolist() if len(varying) == 2 else np.squeeze(values).tolist(),
+            "label": "stability margin -max Re(pole) (1/s); > 0 is stable",
+        }
+    achieved = float(res.abscissa[worst]) if np.isfinite(res.abscissa[worst]) else None
     return Check(
-        name="robust_grid", passed=passed, target=f"stable on the {box.grid} x {box.grid} grid of Km x tau",
-        achieved=float(g.abscissa[ia, ja]), margin=float(-g.abscissa[ia, ja]), unit="1/s", detail=detail,
-        certificate={
-            "box": {"Km": list(box.Km), "tau": list(box.tau)}, "points_per_axis": box.grid, "plants": total,
-            "grid": {
-                "Km": [float(k) for k in g.Km], "tau": [float(t) for t in g.tau],
-                "values": (-np.asarray(g.abscissa, dtype=float)).T.tolist(),
-                "label": "stability margin -max Re(pole) (1/s); > 0 is stable",
-            },
-            "stable": int(total - n_unstable - n_marginal), "unstable": n_unstable, "marginal": n_marginal,
-            "worst_margin": worst, "worst_abscissa": slowest, "failing_points": listed,
-        },
+        name="robust_grid", passed=passed,
+        target=f"stable on the {box.points_per_axis}-point lattice" + (f" and {box.samples} random samples"
+                                                                        if box.samples else ""),
+        achieved=achieved, margin=None if achieved is None else -achieved, unit="1/s", detail=detail,
+        certificate=cert,
     )
 
 
-def lyapunov_vertex_check(
-    design: Any, family: Any, box: Box, *, eps: float = LMI_EPS, solver: str = "CLARABEL"
-) -> Check:
-    """Check ``"common_lyapunov"``: one ``P`` for the corner closed loops (see module docstring)."""
-    As = [family.closed_loop(design, LinkPlant(Km=k, tau=t)).A for k, t in box.vertices]
-    c = common_lyapunov(As, eps=eps, solver=solver)
+def lyapunov_vertex_check(design: Any, box: Box, sweeper: Sweeper | None = None, *, eps: float = LMI_EPS,
+                          solver: str = "CLARABEL") -> Check:
+    """Check ``"common_lyapunov"`` (informational): one ``P`` for the corner closed loops."""
+    sweeper = sweeper or Sweeper(design, box.names)
+    res = sweeper.sweep(box.vertices)
+    c = common_lyapunov(list(res.A), eps=eps, solver=solver)
     cert = dict(c.certificate)
-    cert["vertices"] = [{"Km": k, "tau": t} for k, t in box.vertices]
+    cert["vertices"] = [dict(zip(box.names, map(float, th), strict=True)) for th in res.theta]
+    hull = set(getattr(design.plant, "hull_parameters", ()))
+    covers = set(box.names) <= hull
     cert["covers_box"] = (
-        "A is affine in (1/tau, Km/tau) and the box maps onto the hull of its corners: "
-        "a common P proves quadratic stability of every plant in the box"
-    )
+        f"yes: {design.plant.kind} plant, closed-loop A affine in coordinates that map the box onto the hull of its "
+        "corners, so a common P proves quadratic stability of every plant in the box"
+        if covers else "not claimed: A is not known to be affine in these parameters; the common P proves "
+        "quadratic stability of the hull of the corner loops only")
     meaning = {
-        True: " -> quadratic stability over the whole box",
+        True: " -> quadratic stability over the whole box" if covers else " -> quadratic stability of the corners' hull",
         False: "",
-        None: " (corners stable; robust stability of the box rests on the grid check, not proven for the continuum)",
+        None: " (corners stable; robust stability rests on the lattice check, not proven for the continuum)",
     }[c.passed]
-    # Informational: a common quadratic Lyapunov function is sufficient, not necessary, for
-    # robust stability, so not finding one must not make a design unverified.
     return replace(c, detail=c.detail + meaning + " [informational]", certificate=cert, required=False)
 
 
-def robustness_checks(
-    design: Any, family: Any, uncertainty: Any, *, eps: float = LMI_EPS, solver: str = "CLARABEL"
-) -> tuple[Check, Check, Check]:
+def robustness_checks(design: Any, uncertainty: Any, *, eps: float = LMI_EPS,
+                      solver: str = "CLARABEL") -> tuple[Check, Check, Check]:
     """``robust_vertices``, ``robust_grid`` and ``common_lyapunov`` for a spec's ``plant.uncertainty``."""
-    box = box_from_uncertainty(design, uncertainty)
+    box = box_from_uncertainty(design.plant, uncertainty)
+    sweeper = Sweeper(design, box.names)
     return (
-        vertex_check(design, family, box),
-        grid_check(design, family, box),
-        lyapunov_vertex_check(design, family, box, eps=eps, solver=solver),
+        vertex_check(design, box, sweeper),
+        grid_check(design, box, sweeper),
+        lyapunov_vertex_check(design, box, sweeper, eps=eps, solver=solver),
     )

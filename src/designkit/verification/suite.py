@@ -1,54 +1,176 @@
-"""Every verification check of a design, in report order.
+"""Every verification check of a design, chosen by what the design exposes, in report order.
 
-1. ``pole_placement``  -- closed-loop poles/zeros equal the requested ones (python-control);
-2. ``routh_hurwitz``   -- Routh array of the nominal characteristic polynomial, with the notes'
-   gain conditions and their margins;
-3. ``lyapunov``        -- quadratic Lyapunov function of the nominal closed loop (cvxpy LMI,
-   re-checked with NumPy);
-4. ``robust_vertices``, ``robust_grid``, ``common_lyapunov`` -- only when the spec gives
-   ``plant.uncertainty``;
-5. time-domain requirements (``overshoot``, ``settling_time``, ``rise_time``,
-   ``steady_state_error``, ``max_control``) -- only when a simulation was run and the spec has
-   requirements; measured on the :class:`~designkit.simulation.result.SimulationResult` fields only.
+A check runs when the design's family offers it (``Family.checks``) *and* the design exposes what
+it needs (:data:`CHECKS`, the ``applies`` column); the solver or simulation results never decide
+which checks exist.  In report order:
+
+================== ===================================== ==============================================
+check              needs                                 what it proves
+================== ===================================== ==============================================
+pole_placement     requested ``poles``, ``closed_loop``  closed-loop poles/zeros are the requested ones
+routh_hurwitz      a closed-form ``characteristic``      Routh array + the notes' gain conditions
+lyapunov           ``closed_loop``                       quadratic Lyapunov function (LMI, NumPy re-check)
+loops              per-joint ``loops``                   the three above for each joint loop
+robust_box         ``characteristic.linear_conditions``  stability on the whole (Km, tau) box (LP + duality)
+                   and an uncertainty on its parameters
+robustness         ``plant.uncertainty``                 corners, lattice, samples; common Lyapunov P
+loop_margins       ``input_loop``                        gain/phase/modulus margins (informational)
+coupling           per-joint ``loops``                   intercoupling left to the loops (informational)
+time_domain        a simulation and ``requirements``     overshoot, settling, rise, error, peak control
+================== ===================================== ==============================================
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from designkit.verification.check import Check
-from designkit.verification.hurwitz_conditions import routh_hurwitz_design
-from designkit.verification.lyapunov import lyapunov_lmi
-from designkit.verification.pole_zero import pole_placement
-from designkit.verification.robustness import robustness_checks
-from designkit.verification.time_domain import time_domain_checks
+
+__all__ = ["CHECKS", "CheckRule", "applicable", "run_checks"]
 
 
-def run_checks(spec: Any, design: Any, family: Any, simulation: Any = None) -> tuple[Check, ...]:
-    """Run the checks of the module docstring.
+@dataclass(frozen=True)
+class Context:
+    """What a check may read besides the design: the spec and the simulation."""
+
+    spec: Any
+    simulation: Any
+    solver: str
+
+
+@dataclass(frozen=True)
+class CheckRule:
+    """One entry of :data:`CHECKS`: when it applies and how to run it."""
+
+    applies: Callable[[Any, Context], bool]
+    run: Callable[[Any, Context], tuple[Check, ...]]
+
+
+def _uncertainty(ctx: Context) -> Any:
+    return getattr(ctx.spec.plant, "uncertainty", None)
+
+
+def _pole_placement(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.pole_zero import pole_placement
+
+    return (pole_placement(design),)
+
+
+def _routh(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.hurwitz_conditions import routh_hurwitz_design
+
+    return (routh_hurwitz_design(design),)
+
+
+def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.lyapunov import lyapunov_lmi
+
+    return (lyapunov_lmi(design.closed_loop.A, solver=ctx.solver),)
+
+
+def _loops(design: Any, ctx: Context) -> tuple[Check, ...]:
+    out: list[Check] = []
+    for name, loop in zip(design.loop_names, design.loops, strict=True):
+        for key in ("pole_placement", "routh_hurwitz", "lyapunov"):
+            rule = CHECKS[key]
+            if rule.applies(loop, ctx):
+                out.extend(dataclasses.replace(c, name=f"{c.name}[{name}]",
+                                               detail=f"{name} on its simplified link model: {c.detail}")
+                           for c in rule.run(loop, ctx))
+    return tuple(out)
+
+
+def _box_applies(design: Any, ctx: Context) -> bool:
+    unc = _uncertainty(ctx)
+    ch = design.characteristic
+    return (unc is not None and ch is not None and ch.linear_conditions is not None
+            and set(unc.intervals) <= set(ch.parameters))
+
+
+def _robust_box(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.lp import LinearCondition, Polytope, robust_linear_conditions
+
+    intervals = _uncertainty(ctx).intervals
+    names = tuple(design.characteristic.parameters)
+    lo = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[0] for n in names]
+    hi = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[1] for n in names]
+    conditions = [LinearCondition(c.label, c.constant, dict(c.coefficients), c.unit)
+                  for c in design.characteristic.linear_conditions(design.gains)]
+    check = robust_linear_conditions("robust_box", conditions, Polytope.box(names, lo, hi), solver=ctx.solver)
+    what = ("the closed-loop Hurwitz conditions, affine in " + ", ".join(names) + " for fixed gains, hold on the "
+            "whole box (every plant in it, not a sample)")
+    return (dataclasses.replace(check, detail=f"{what}: {check.detail}"),)
+
+
+def _robustness(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.robustness import robustness_checks
+
+    return robustness_checks(design, _uncertainty(ctx), solver=ctx.solver)
+
+
+def _loop_margins(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.loop import loop_margins_check
+
+    return (loop_margins_check(design),)
+
+
+def _coupling(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.coupling import coupling_check
+
+    return (coupling_check(design, ctx.simulation),)
+
+
+def _time_domain(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.time_domain import time_domain_checks
+
+    return time_domain_checks(ctx.spec.requirements, ctx.simulation)
+
+
+CHECKS: dict[str, CheckRule] = {
+    "pole_placement": CheckRule(lambda d, c: bool(d.poles) and d.closed_loop is not None, _pole_placement),
+    "routh_hurwitz": CheckRule(lambda d, c: d.characteristic is not None, _routh),
+    "lyapunov": CheckRule(lambda d, c: d.closed_loop is not None, _lyapunov),
+    "loops": CheckRule(lambda d, c: bool(d.loops), _loops),
+    "robust_box": CheckRule(_box_applies, _robust_box),
+    "robustness": CheckRule(lambda d, c: _uncertainty(c) is not None and d.operating_point != {}, _robustness),
+    "loop_margins": CheckRule(lambda d, c: d.input_loop is not None, _loop_margins),
+    "coupling": CheckRule(lambda d, c: bool(d.loops), _coupling),
+    "time_domain": CheckRule(lambda d, c: c.simulation is not None and c.spec.requirements is not None,
+                             _time_domain),
+}
+"""Check name -> :class:`CheckRule`, in report order (a table, not if/elif)."""
+
+
+def applicable(design: Any, spec: Any, simulation: Any = None) -> tuple[str, ...]:
+    """Names of the checks that run for ``design`` (offered by its family and exposed by the design)."""
+    from designkit.families import family
+
+    offered = set(family(design.kind).checks)
+    ctx = Context(spec, simulation, spec.numerics.solver)
+    return tuple(name for name, rule in CHECKS.items() if name in offered and rule.applies(design, ctx))
+
+
+def run_checks(spec: Any, design: Any, simulation: Any = None) -> tuple[Check, ...]:
+    """Run every applicable check (see the module docstring).
 
     Parameters
     ----------
     spec : Spec
-        Validated spec (``plant.uncertainty`` and ``requirements`` are read).
+        Validated spec (``plant.uncertainty``, ``requirements`` and ``numerics.solver`` are read).
     design : Design
         The synthesised controller.
-    family : ControllerFamily
-        Its family (characteristic polynomial and closed loop on other plants).
     simulation : SimulationResult or None
-        Closed-loop run for the time-domain checks.
+        Closed-loop run for the time-domain and coupling checks.
 
     Returns
     -------
     tuple of Check
     """
-    checks: list[Check] = [
-        pole_placement(design),
-        routh_hurwitz_design(design, family),
-        lyapunov_lmi(design.closed_loop.A),
-    ]
-    if spec.plant.uncertainty is not None:
-        checks.extend(robustness_checks(design, family, spec.plant.uncertainty))
-    if simulation is not None and spec.requirements is not None:
-        checks.extend(time_domain_checks(spec.requirements, simulation))
+    ctx = Context(spec, simulation, spec.numerics.solver)
+    checks: list[Check] = []
+    for name in applicable(design, spec, simulation):
+        checks.extend(CHECKS[name].run(design, ctx))
     return tuple(checks)

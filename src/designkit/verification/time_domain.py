@@ -36,7 +36,7 @@ samples) fails (``passed=False``) with a detail saying why.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -71,6 +71,10 @@ class ResponseMetrics:
         Length of the run, s.
     why_undefined : dict
         Reason for each None metric.
+    per_joint : tuple of ResponseMetrics
+        Each joint's own metrics (empty for one joint).
+    worst_joint : dict
+        Metric name -> 0-based joint of its worst value (several joints only).
     """
 
     kind: str
@@ -84,6 +88,8 @@ class ResponseMetrics:
     peak_u_applied: float | None
     duration: float
     why_undefined: dict[str, str]
+    per_joint: tuple[ResponseMetrics, ...] = ()
+    worst_joint: dict[str, int] = field(default_factory=dict)
 
 
 def _first_crossing(t: np.ndarray, x: np.ndarray, level: float) -> float | None:
@@ -118,22 +124,13 @@ def _peak(u: np.ndarray) -> float | None:
     return float(np.max(np.abs(u)))
 
 
-def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetrics:
-    """Metrics of a step or trajectory run (see module docstring).
-
-    Parameters
-    ----------
-    sim : SimulationResult
-        ``time`` (N,), ``reference`` (N, 3), ``state`` (N, >=1), ``u_command``, ``u_applied``, ``kind``.
-    settling_band : float
-        Half-width of the settling band as a fraction of the step (or move).
-    """
-    t = np.asarray(sim.time, dtype=float)
-    y = np.asarray(sim.state, dtype=float)[:, 0]
-    xd = np.asarray(sim.reference, dtype=float)[:, 0]
+def _joint_metrics(t: np.ndarray, y: np.ndarray, xd: np.ndarray, u_c: np.ndarray, u_a: np.ndarray, kind: str,
+                   settling_band: float, scale: float | None) -> ResponseMetrics:
+    """Metrics of one joint; ``scale`` (rad) replaces the joint's own step/move for the settling band when it
+    does not move itself (a resting joint disturbed by the others)."""
     why: dict[str, str] = {}
     duration = float(t[-1] - t[0])
-    peak_c, peak_a = _peak(sim.u_command), _peak(sim.u_applied)
+    peak_c, peak_a = _peak(u_c), _peak(u_a)
     if peak_c is None:
         why["peak_u_command"] = "non-finite or empty u_command"
     if peak_a is None:
@@ -146,14 +143,15 @@ def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetric
         for k in ("overshoot", "rise_time", "settling_time", "steady_state_error", "max_tracking_error"):
             why[k] = "the simulated position is not finite (diverged?)"
         amp = float("nan")
-        return ResponseMetrics(sim.kind, amp, None, None, None, None, None, peak_c, peak_a, duration, why)
-    if sim.kind == "trajectory":
+        return ResponseMetrics(kind, amp, None, None, None, None, None, peak_c, peak_a, duration, why)
+    if kind == "trajectory":
         amp = float(np.max(np.abs(xd - xd[0])))
         settle = None
-        if amp <= REST_TOL * (1.0 + np.max(np.abs(xd))):
+        band_scale = amp if amp > REST_TOL * (1.0 + np.max(np.abs(xd))) else (scale or 0.0)
+        if band_scale <= 0:
             why["settling_time"] = "the trajectory does not move (zero move amplitude)"
         else:
-            settle = _settling(t, err, settling_band * amp)
+            settle = _settling(t, err, settling_band * band_scale)
             if settle is None:
                 why["settling_time"] = (
                     f"|x1 - xD| still outside the {100 * settling_band:g} % band at the end of the run ({duration:g} s)"
@@ -165,9 +163,18 @@ def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetric
     r = float(xd[-1])
     amp = r - float(y[0])
     if abs(amp) <= REST_TOL * (1.0 + abs(r)):
-        for k in ("overshoot", "rise_time", "settling_time"):
+        for k in ("overshoot", "rise_time"):
             why[k] = "the commanded step is zero (command equals the initial position)"
-        return ResponseMetrics("step", amp, None, None, None, sse, None, peak_c, peak_a, duration, why)
+        settle = None
+        if scale:
+            settle = _settling(t, np.abs(y - r), settling_band * scale)
+            if settle is None:
+                why["settling_time"] = (f"the joint is still outside the {100 * settling_band:g} % band of the largest "
+                                        f"step at the end of the run ({duration:g} s)")
+        else:
+            why["settling_time"] = "the commanded step is zero (command equals the initial position)"
+        return ResponseMetrics("step", amp, None, None, settle, sse, float(np.max(err)), peak_c, peak_a, duration,
+                               why)
     yn = (y - y[0]) / amp
     overshoot = float(100.0 * max(0.0, float(np.max(yn)) - 1.0))
     lo, hi = (_first_crossing(t, yn, level) for level in RISE_LIMITS)
@@ -180,6 +187,70 @@ def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetric
             f"the response is still outside the {100 * settling_band:g} % band at the end of the run ({duration:g} s)"
         )
     return ResponseMetrics("step", amp, overshoot, rise, settle, sse, None, peak_c, peak_a, duration, why)
+
+
+_WORST = ("overshoot", "rise_time", "settling_time", "steady_state_error", "max_tracking_error")
+
+
+def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetrics:
+    """Metrics of a step or trajectory run (see module docstring), the worst over the joints.
+
+    Parameters
+    ----------
+    sim : SimulationResult
+        ``time`` (N,), ``reference`` (N, n, 3), ``state``, ``positions``, ``u_command``, ``u_applied``, ``kind``.
+    settling_band : float
+        Half-width of the settling band as a fraction of the step (or move).
+
+    Returns
+    -------
+    ResponseMetrics
+        For one joint, its metrics.  For several: each metric's worst value over the joints
+        (a metric undefined for some joint is undefined, with that joint's reason), the largest
+        step as ``amplitude``, ``per_joint`` the joints' own metrics and ``worst_joint`` the
+        0-based joint of each worst value.  A joint commanded to stay where it is counts for
+        the settling time (within the band of the largest step: the intercoupling it suffers)
+        and the steady-state error, not for overshoot and rise time.
+    """
+    t = np.asarray(sim.time, dtype=float)
+    pos = np.asarray(sim.state, dtype=float)[:, list(getattr(sim, "positions", (0,)))]
+    ref = np.asarray(sim.reference, dtype=float)
+    xd = ref[:, :, 0] if ref.ndim == 3 else ref[:, :1]
+    n = pos.shape[1]
+    kind = sim.kind
+    amps = np.abs(xd[-1] - pos[0]) if kind == "step" else np.max(np.abs(xd - xd[0]), axis=0)
+    scale = float(np.max(amps)) if np.all(np.isfinite(amps)) and amps.size else None
+    joints = tuple(_joint_metrics(t, pos[:, j], xd[:, j], sim.u_command, sim.u_applied, kind, settling_band,
+                                  scale if n > 1 else None) for j in range(n))
+    if n == 1:
+        return joints[0]
+    moving = [j for j, m in enumerate(joints) if m.amplitude == m.amplitude and abs(m.amplitude) > 0]
+    values: dict[str, float | None] = {}
+    worst: dict[str, int] = {}
+    why: dict[str, str] = {}
+    for key in _WORST:
+        candidates = moving if key in ("overshoot", "rise_time") else list(range(n))
+        if kind == "trajectory" and key in ("overshoot", "rise_time"):
+            candidates = []
+        vals = [(getattr(joints[j], key), j) for j in candidates]
+        missing = [j for v, j in vals if v is None]
+        if not vals or missing:
+            values[key] = None
+            j = missing[0] if missing else 0
+            why[key] = (f"joint {j + 1}: " + joints[j].why_undefined.get(key, "undefined")) if vals else \
+                joints[0].why_undefined.get(key, "no joint moves")
+            continue
+        v, j = max(vals)
+        values[key], worst[key] = float(v), j
+    for key in ("peak_u_command", "peak_u_applied"):
+        if key in joints[0].why_undefined:
+            why[key] = joints[0].why_undefined[key]
+    big = int(np.argmax(amps)) if scale is not None else 0
+    return ResponseMetrics(
+        kind, float(joints[big].amplitude), values["overshoot"], values["rise_time"], values["settling_time"],
+        values["steady_state_error"], values["max_tracking_error"], joints[0].peak_u_command, joints[0].peak_u_applied,
+        joints[0].duration, why, per_joint=joints, worst_joint=worst,
+    )
 
 
 def _check(name: str, limit: float, value: float | None, unit: str, what: str, why: str | None,
@@ -213,28 +284,36 @@ def time_domain_checks(requirements: Any, sim: Any) -> tuple[Check, ...]:
     out: list[Check] = []
     req = requirements
     traj = m.kind == "trajectory"
+    if m.per_joint:
+        cert["worst_joint"] = {k: j + 1 for k, j in m.worst_joint.items()}
+        cert["joints"] = len(m.per_joint)
+
+    def at(key: str) -> str:
+        return f" (worst: joint {m.worst_joint[key] + 1})" if key in m.worst_joint else ""
+
     if req.overshoot is not None:
         if traj:
             pct = None
             if m.max_tracking_error is not None and m.amplitude > 0:
                 pct = 100.0 * m.max_tracking_error / m.amplitude
             why = m.why_undefined.get("max_tracking_error", "the trajectory does not move (zero move amplitude)")
-            out.append(_check("overshoot", req.overshoot, pct, "%", "max |x1 - xD| as % of the move", why, cert))
+            out.append(_check("overshoot", req.overshoot, pct, "%", "max |x1 - xD| as % of the move", why, cert,
+                              note=at("max_tracking_error")))
         else:
             out.append(_check("overshoot", req.overshoot, m.overshoot, "%", "overshoot",
-                              m.why_undefined.get("overshoot"), cert))
+                              m.why_undefined.get("overshoot"), cert, note=at("overshoot")))
     if req.settling_time is not None:
         what = f"settling time of |x1 - xD| to {100 * req.settling_band:g} % of the move" if traj else \
             f"settling time to the {100 * req.settling_band:g} % band"
         out.append(_check("settling_time", req.settling_time, m.settling_time, "s", what,
-                          m.why_undefined.get("settling_time"), cert))
+                          m.why_undefined.get("settling_time"), cert, note=at("settling_time")))
     if req.rise_time is not None:
         out.append(_check("rise_time", req.rise_time, m.rise_time, "s", "10-90 % rise time",
-                          m.why_undefined.get("rise_time"), cert))
+                          m.why_undefined.get("rise_time"), cert, note=at("rise_time")))
     if req.steady_state_error is not None:
         what = ("final tracking error" if traj else "steady-state error") + " (mean |x1 - xD|, last 5 %)"
         out.append(_check("steady_state_error", req.steady_state_error, m.steady_state_error, "rad", what,
-                          m.why_undefined.get("steady_state_error"), cert, fmt=".3g"))
+                          m.why_undefined.get("steady_state_error"), cert, fmt=".3g", note=at("steady_state_error")))
     if req.max_control is not None:
         note = f" (peak |u_applied| {m.peak_u_applied:.4g} N*m)" if m.peak_u_applied is not None else ""
         out.append(_check("max_control", req.max_control, m.peak_u_command, "N*m", "peak |u_command|",

@@ -99,3 +99,46 @@ def scaled_error(x: np.ndarray | float | complex, ref: np.ndarray | float | comp
 def cluster_tolerance(multiplicity: int) -> float:
     """Tolerance of a pole belonging to a cluster of ``multiplicity`` poles (see :data:`POLE_CLUSTER_REL`)."""
     return POLE_REL ** (1.0 / max(1, int(multiplicity)))
+
+
+# ----------------------------------------------------------------------------- positive real (KYP)
+
+KYP_EQ_TOL = 1e-7
+"""Largest accepted relative residual ``||P B - alpha C'|| / (||P|| ||B|| + alpha ||C||)`` of the
+KYP equality, in the normalised problem (``||P|| = ||B|| = ||C|| = 1``).  The residual is the
+relative backward error of the equation: ``P`` is an exact solution for data changed by at most
+this fraction.  Clarabel stops at a primal residual of 1e-8 (its ``tol_feas``) on its internally
+scaled problem; the measured residuals of the returned ``P`` are 1e-10 to 1e-8, so 1e-7 accepts
+every solution the solver calls optimal, and it stays ten times below ``LMI_EPS``: a change of
+``P`` by that fraction cannot undo the strict inequalities, which hold with margin ``LMI_EPS``."""
+
+SPR_CB_TOL = 1e-9
+"""Relative size (to ``|| |C| |B| ||_2``) beyond which an asymmetry of ``C B`` or a negative
+eigenvalue of its symmetric part is a fact and not rounding: each entry of the computed ``C B``
+is within ``n u (|C| |B|)`` of the exact one (``u = 1.1e-16``), far below 1e-9 for any state
+dimension in use.  Inside the band the necessary condition ``C B = (C B)' > 0`` is undecided."""
+
+SPR_FREQ_TOL = 1e-8
+"""A smallest eigenvalue of ``H(jw) + H(jw)^*`` counts as negative (evidence that ``H`` is not
+positive real) only below ``-SPR_FREQ_TOL * ||C||_2 ||(jwI - A)^-1 B||_2``: the rounding error of
+``H(jw)`` computed by a linear solve is about ``u cond(jwI - A)`` times that product, and the
+balanced, Hurwitz ``A`` of the designs keeps ``cond(jwI - A)`` well below 1e7."""
+
+# ----------------------------------------------------------------------------- linear programs
+
+LP_EPS = 1e-6
+"""Relative margin of a strict linear condition ``c0 + c . theta > 0``: it is certified when its
+rigorous lower bound over the polytope is at least ``LP_EPS * (|c0| + sum_j |c_j| max|theta_j|)``
+(the size of its terms over the bounding box).  Clarabel solves LPs to about 1e-8 relative; a
+smaller certified minimum is at the level of the solver's accuracy and is left undecided."""
+
+LP_SOLVER_OK = ("optimal",)
+"""cvxpy statuses whose LP solution (point and dual multipliers) is re-checked; any other status
+leaves the condition undecided unless NumPy finds a counterexample on its own."""
+
+FARKAS_TOL = 1e-9
+"""Largest accepted ``||G'y||_2 / sum_i y_i ||G_i||_2`` for a Farkas vector ``y >= 0`` proving that
+``G x <= h`` has no solution: with ``h . y < 0`` it excludes every ``x`` with
+``||x||_2 < -h . y / ||G'y||_2`` (reported as the radius).  1e-9 is ten times Clarabel's
+equality accuracy on the normalised dual, so a correct dual passes and the radius is at least
+about ``1e9`` times the problem's length scale ``-h . y / sum_i y_i ||G_i||``."""

@@ -16,13 +16,14 @@ The ROBEL elastic link is not a rigid chain: its defaults are
 from __future__ import annotations
 
 from collections.abc import Callable
+from types import ModuleType
 from typing import Any
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.robot import Robot
 from designkit.models.robots import onelink, planar2r, puma560, scara
 
-__all__ = ["ROBOTS", "robot"]
+__all__ = ["ROBOTS", "robot", "zoo_module"]
 
 ROBOTS: dict[str, Callable[..., Robot]] = {
     "onelink": onelink.build,
@@ -31,6 +32,16 @@ ROBOTS: dict[str, Callable[..., Robot]] = {
     "puma560": puma560.build,
 }
 """Robot name -> builder ``(*, friction=False, motor_inertia=False, symbolic=(), **overrides) -> Robot``."""
+
+_MODULES: dict[str, ModuleType] = {"onelink": onelink, "planar2r": planar2r, "scara": scara, "puma560": puma560}
+
+
+def zoo_module(name: str) -> ModuleType:
+    """The module of a built-in robot: its ``DEFAULTS`` (values) and ``UNITS`` ((unit, meaning)) by parameter name."""
+    try:
+        return _MODULES[name]
+    except KeyError:
+        raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
 
 
 def robot(name: str, **overrides: Any) -> Robot:
@@ -47,7 +58,7 @@ def robot(name: str, **overrides: Any) -> Robot:
 
     Raises
     ------
-    SpecError
+    ModelError
         For an unknown robot or parameter name.
 
     Examples
@@ -59,5 +70,5 @@ def robot(name: str, **overrides: Any) -> Robot:
     try:
         builder = ROBOTS[name]
     except KeyError:
-        raise SpecError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
+        raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
     return builder(**overrides)

@@ -7,7 +7,7 @@ from typing import Any
 
 import casadi as ca
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 
 __all__ = ["resolve"]
 
@@ -36,24 +36,24 @@ def resolve(
 
     Raises
     ------
-    SpecError
+    ModelError
         For an unknown name or a value that is neither a finite number nor a symbol.
     """
     names = tuple(defaults) if symbolic is True else tuple(symbolic or ())
     for key in (*overrides, *names):
         if key not in defaults:
-            raise SpecError(f"{robot}.{key}", f"unknown parameter; choose from {sorted(defaults)}")
+            raise ModelError(f"{robot}.{key}", f"unknown parameter; choose from {sorted(defaults)}")
     values: dict[str, Any] = dict(defaults)
     for key, value in overrides.items():
         if isinstance(value, ca.SX):
             if not (value.numel() == 1 and value.is_symbolic()):
-                raise SpecError(f"{robot}.{key}", "a symbolic override must be a scalar casadi.SX symbol")
+                raise ModelError(f"{robot}.{key}", "a symbolic override must be a scalar casadi.SX symbol")
             values[key] = value
             continue
         try:
             values[key] = float(value)
         except (TypeError, ValueError):
-            raise SpecError(f"{robot}.{key}", f"must be a number or a casadi.SX symbol, got {value!r}") from None
+            raise ModelError(f"{robot}.{key}", f"must be a number or a casadi.SX symbol, got {value!r}") from None
     for key in names:
         if key not in overrides:
             values[key] = ca.SX.sym(key)

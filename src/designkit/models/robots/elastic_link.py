@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from designkit.errors import SpecError
+from designkit.errors import ModelError
 from designkit.models.elastic import ElasticLinkParameters
 
 __all__ = ["DEFAULTS", "elastic_link"]
@@ -34,5 +34,5 @@ def elastic_link(**overrides: Any) -> ElasticLinkParameters:
     known = {f.name for f in dataclasses.fields(ElasticLinkParameters)}
     for key in overrides:
         if key not in known:
-            raise SpecError(f"elastic_link.{key}", f"unknown parameter; choose from {sorted(known)}")
+            raise ModelError(f"elastic_link.{key}", f"unknown parameter; choose from {sorted(known)}")
     return dataclasses.replace(DEFAULTS, **overrides)

@@ -14,7 +14,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "build", "description"]
+__all__ = ["DEFAULTS", "UNITS", "build", "description"]
 
 DEFAULTS: dict[str, float] = {
     "m": 1.0,  # rod mass (kg)
@@ -26,6 +26,18 @@ DEFAULTS: dict[str, float] = {
     "G": 1.0,  # gear ratio (motor turns per joint turn)
     "g": 9.81,  # gravitational acceleration (m/s^2)
 }
+
+UNITS: dict[str, tuple[str, str]] = {
+    "m": ("kg", "rod mass"),
+    "l": ("m", "rod length"),
+    "I": ("kg*m^2", "inertia about the centre of mass"),
+    "f": ("N*m*s/rad", "joint viscous friction"),
+    "fc": ("N*m", "joint Coulomb friction"),
+    "Jm": ("kg*m^2", "motor rotor inertia"),
+    "G": ("1", "gear ratio"),
+    "g": ("m/s^2", "gravitational acceleration"),
+}
+"""Parameter name -> (SI unit, meaning), for reports and specs."""
 
 
 def description(*, symbolic: bool | tuple[str, ...] = (), **overrides: Any) -> ChainDescription:

@@ -22,7 +22,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "build", "description"]
+__all__ = ["DEFAULTS", "UNITS", "build", "description"]
 
 DEFAULTS: dict[str, float] = {
     "m1": 5.0,  # link 1 mass (kg)
@@ -35,6 +35,19 @@ DEFAULTS: dict[str, float] = {
     "f2": 1.0,  # joint 2 viscous friction (N*m*s/rad)
     "g": 9.81,  # gravitational acceleration (m/s^2)
 }
+
+UNITS: dict[str, tuple[str, str]] = {
+    "m1": ("kg", "link 1 mass"),
+    "m2": ("kg", "link 2 mass"),
+    "d1": ("m", "link 1 length"),
+    "d2": ("m", "link 2 length"),
+    "I1": ("kg*m^2", "link 1 inertia about its centre of mass"),
+    "I2": ("kg*m^2", "link 2 inertia about its centre of mass"),
+    "f1": ("N*m*s/rad", "joint 1 viscous friction"),
+    "f2": ("N*m*s/rad", "joint 2 viscous friction"),
+    "g": ("m/s^2", "gravitational acceleration"),
+}
+"""Parameter name -> (SI unit, meaning), for reports and specs."""
 
 
 def description(*, symbolic: bool | tuple[str, ...] = (), **overrides: Any) -> ChainDescription:

@@ -28,7 +28,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "QN", "QR", "QS", "QZ", "build", "description"]
+__all__ = ["DEFAULTS", "UNITS", "QN", "QR", "QS", "QZ", "build", "description"]
 
 _DEG = math.pi / 180
 
@@ -41,6 +41,17 @@ DEFAULTS: dict[str, float] = {
     "m6": 0.09,
     "g": 9.81,  # gravitational acceleration (m/s^2), along -z of the base
 }
+
+UNITS: dict[str, tuple[str, str]] = {
+    "m1": ("kg", "link 1 mass"),
+    "m2": ("kg", "link 2 mass"),
+    "m3": ("kg", "link 3 mass"),
+    "m4": ("kg", "link 4 mass"),
+    "m5": ("kg", "link 5 mass"),
+    "m6": ("kg", "link 6 mass"),
+    "g": ("m/s^2", "gravitational acceleration"),
+}
+"""Parameter name -> (SI unit, meaning), for reports and specs."""
 
 # d (m), a (m), alpha (rad), centre of mass (m), (Ixx, Iyy, Izz) about it (kg*m^2),
 # Jm (kg*m^2), G, B (N*m*s/rad, motor side), Tc = (Tc+, Tc-) (N*m, motor side), qlim (rad)

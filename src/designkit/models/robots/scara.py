@@ -19,7 +19,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "build", "description"]
+__all__ = ["DEFAULTS", "UNITS", "build", "description"]
 
 DEFAULTS: dict[str, float] = {
     "d1": 0.387,  # height of the shoulder (m)
@@ -35,6 +35,22 @@ DEFAULTS: dict[str, float] = {
     "f4": 0.05,  # joint 4 viscous friction (N*m*s/rad)
     "g": 9.81,  # gravitational acceleration (m/s^2)
 }
+
+UNITS: dict[str, tuple[str, str]] = {
+    "d1": ("m", "shoulder height"),
+    "a1": ("m", "link 1 length"),
+    "a2": ("m", "link 2 length"),
+    "m1": ("kg", "link 1 mass"),
+    "m2": ("kg", "link 2 mass"),
+    "m3": ("kg", "quill mass"),
+    "m4": ("kg", "wrist mass"),
+    "f1": ("N*m*s/rad", "joint 1 viscous friction"),
+    "f2": ("N*m*s/rad", "joint 2 viscous friction"),
+    "f3": ("N*s/m", "quill viscous friction"),
+    "f4": ("N*m*s/rad", "joint 4 viscous friction"),
+    "g": ("m/s^2", "gravitational acceleration"),
+}
+"""Parameter name -> (SI unit, meaning), for reports and specs."""
 
 _ARM_RADIUS = 0.05  # m
 _QUILL_LENGTH, _QUILL_RADIUS = 0.3, 0.01  # m

@@ -1,0 +1,55 @@
+"""The controller families, one module each, and the registry derived from them.
+
+Every module of this package (other than those starting with ``_``) defines ``FAMILY``, a
+:class:`~designkit.synthesis.family.Family`.  :data:`FAMILIES` maps each ``kind`` to it, in
+module-name order; the spec's ``controller`` union, the loader's tags, the checks that run and
+the report's law and gain tables are derived from it.  Adding a family is adding a module here
+(see ``docs/architecture.md`` for the worked example).
+"""
+
+from __future__ import annotations
+
+import pkgutil
+from importlib import import_module
+from types import MappingProxyType
+
+from designkit.errors import SpecError
+from designkit.synthesis.family import Family
+
+__all__ = ["FAMILIES", "family", "synthesize"]
+
+
+def _discover() -> dict[str, Family]:
+    found: dict[str, Family] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = import_module(f"{__name__}.{info.name}")
+        fam = getattr(module, "FAMILY", None)
+        if not isinstance(fam, Family):
+            raise TypeError(f"{module.__name__} defines no FAMILY")
+        if fam.kind in found:
+            raise TypeError(f"controller kind {fam.kind!r} registered twice ({module.__name__})")
+        found[fam.kind] = fam
+    return found
+
+
+FAMILIES: MappingProxyType[str, Family] = MappingProxyType(_discover())
+"""Controller kind -> :class:`~designkit.synthesis.family.Family` (read-only)."""
+
+
+def family(kind: str) -> Family:
+    """The family registered for ``kind``; :class:`SpecError` naming ``controller.kind`` otherwise."""
+    try:
+        return FAMILIES[kind]
+    except KeyError:
+        raise SpecError("controller.kind", f"unknown controller kind {kind!r}; known: {sorted(FAMILIES)}") from None
+
+
+def synthesize(spec, plant=None, *, base_dir=None):
+    """The design a spec asks for (the nominal plant is built from ``spec.plant`` when not given)."""
+    if plant is None:
+        from designkit.models.from_spec import plant_from_spec
+
+        plant = plant_from_spec(spec.plant, base_dir)
+    return family(spec.controller.kind).synthesize(spec, plant)

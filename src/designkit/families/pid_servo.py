@@ -1,0 +1,159 @@
+"""PID position servo of one link (notes section 3.2, fig. 2.1): the ``pid_servo`` family.
+
+Plant: the simplified link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)``.  Law, with the
+integral ``x3' = x1 - xD``::
+
+    u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD
+
+Gains from three closed-loop poles and the zero of ``x1/xD`` by matching the characteristic
+polynomial (derivation in :mod:`designkit.synthesis.pid`); K1 N*m/rad, K2 N*m*s/rad,
+K3 N*m/(rad*s), K4 s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Literal
+
+from pydantic import field_validator, model_validator
+
+from designkit.spec.controllers import PoleRequirementsController
+from designkit.spec.fields import Finite
+from designkit.synthesis import pid
+from designkit.synthesis.closed_loop import with_closed_loop
+from designkit.synthesis.design import Characteristic, Design, Gain, Gains
+from designkit.synthesis.family import Display, Family
+from designkit.synthesis.law import Law, integral_law
+from designkit.synthesis.requirements import poles_from_spec
+
+KIND = "pid_servo"
+
+GAIN_INFO = {
+    "K1": ("N*m/rad", "proportional"),
+    "K2": ("N*m*s/rad", "derivative (rate feedback)"),
+    "K3": ("N*m/(rad*s)", "integral"),
+    "K4": ("s", "reference feedforward (places the zero)"),
+}
+
+
+class PidServoSpec(PoleRequirementsController):
+    """PID position servo ``u = -K1 (x1 - xD) - K2 x2 - K3 int(x1 - xD) + K3 K4 xD``.
+
+    ``zero`` (1/s) is the closed-loop zero of ``x1/xD``; when omitted, ``K4 = 0`` and the zero
+    falls at ``-K3/K1`` (reported), or, with poles derived from requirements, on the third pole.
+    """
+
+    kind: Literal["pid_servo"]
+    zero: Finite | None = None
+
+    @field_validator("zero")
+    @classmethod
+    def _lhp_zero(cls, v: float | None) -> float | None:
+        if v is not None and v >= 0:
+            raise ValueError(f"must be negative (left half plane), got {v:g}")
+        return v
+
+    @model_validator(mode="after")
+    def _zero_not_pole(self) -> PidServoSpec:
+        if self.zero is not None and self.poles is not None:
+            for p in self.poles:
+                if abs(p - self.zero) <= 1e-9 * (1 + abs(p)):
+                    raise ValueError(f"zero: must differ from every pole, got {self.zero:g} equal to a pole")
+        return self
+
+
+def gains(plant: Any, poles: Sequence[complex], zero: float | None) -> Gains:
+    """The servo's named gains on the link ``plant`` (see :func:`designkit.synthesis.pid.servo_gains`)."""
+    values = pid.servo_gains(plant, poles, zero)
+    return Gains.of(Gain(k, v, *GAIN_INFO[k]) for k, v in values.items())
+
+
+CHARACTERISTIC_LABELS = ("tau", "1 + Km K2", "Km K1", "Km K3")
+
+
+def characteristic() -> Characteristic:
+    """``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3`` as a function of ``(Km, tau)``."""
+    return Characteristic(
+        parameters=("Km", "tau"),
+        coefficients=lambda g, Km, tau: pid.servo_characteristic(dict(g), Km, tau),
+        labels=CHARACTERISTIC_LABELS,
+        gain_labels={"a1": ("K2", "K2 > -1/Km"), "a2": ("K1", "K1 > tau K3/(1 + Km K2)"), "a3": ("K3", "K3 > 0")},
+        linear_conditions=lambda g: pid.servo_conditions(dict(g)),
+    )
+
+
+def law(design: Design, anti_windup: Any = None) -> Law:
+    """``u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD``, ``x3' = x1 - xD`` (N*m)."""
+    K1, K2, K3, K4 = (float(design.gains[k]) for k in ("K1", "K2", "K3", "K4"))
+    v = design.plant.velocities[0]
+    return integral_law(
+        KIND, design.plant, [K3], anti_windup,
+        lambda y, xc, r, e: -K1 * e[0] - K2 * y[v] - K3 * xc[0] + K3 * K4 * r[0],
+        {"gains": design.gains.to_json()},
+    )
+
+
+def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, notes: tuple[str, ...] = (),
+           extra: dict | None = None) -> Design:
+    """The PID servo of the link ``plant`` placing ``poles`` (1/s) and ``zero`` (1/s).
+
+    Examples
+    --------
+    >>> from designkit.models.link import LinkPlant
+    >>> d = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0)
+    >>> [round(float(d.gains[k]), 6) for k in ("K1", "K2", "K3", "K4")]
+    [50.0, 6.75, 100.0, -0.166667]
+    >>> sorted(round(p.real, 6) for p in d.closed_loop.poles)
+    [-20.0, -5.0, -4.0]
+    """
+    g = gains(plant, poles, zero)
+    notes_out = list(notes)
+    if zero is None:
+        z = -float(g["K3"]) / float(g["K1"])
+        notes_out.append(f"No zero given: K4 = 0, so x1/xD has its zero at -K3/K1 = {z:.6g} 1/s.")
+    else:
+        z = zero
+    d = Design(
+        kind=KIND, plant=plant, gains=g, poles=tuple(poles), zeros=(complex(z),), reference="step",
+        characteristic=characteristic(), formulas=pid.SERVO_FORMULAS, notes=tuple(notes_out), extra=extra or {},
+    )
+    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0])
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The servo a spec asks for: poles given, or derived from the requirements (zero on the third pole)."""
+    poles, notes, extra = poles_from_spec(spec.controller, spec.requirements)
+    zero = spec.controller.zero
+    if zero is None and spec.controller.poles is None:
+        zero = poles[2].real
+        notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
+                 "reference response is the dominant second-order one.")
+    return design(plant, poles, zero, notes=notes, extra=extra)
+
+
+def validate(spec: Any) -> None:
+    """Poles, or the requirements they are derived from."""
+    req = spec.requirements
+    if spec.controller.poles is None and (req is None or req.overshoot is None or req.settling_time is None):
+        raise ValueError("controller.poles: missing; give three poles, or requirements.overshoot and "
+                         "requirements.settling_time to derive them")
+
+
+FAMILY = Family(
+    kind=KIND,
+    spec=PidServoSpec,
+    plants=("link",),
+    reference="step",
+    synthesize=synthesize,
+    law=law,
+    checks=("pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins",
+            "time_domain"),
+    display=Display(
+        label="PID position servo",
+        law=("u = -K1 (x1 - xD) - K2 x2 - K3 ∫(x1 - xD) dt + K3 K4 xD",),
+        loop_transfer="L(s) = Km (K2 s² + K1 s + K3) / (s² (τ s + 1))",
+        summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
+                "closed-loop poles and the zero of x1/xD.",
+    ),
+    validate=validate,
+)

@@ -1,0 +1,204 @@
+"""A serial manipulator as a :class:`~designkit.models.plant.Plant`: any :class:`~designkit.models.robot.Robot`.
+
+States ``x = (q, qd)`` (rad or m, rad/s or m/s per joint type), inputs ``u`` the joint torques
+(N*m or N), disturbances ``d`` torques added to ``u`` (load, unmodelled forces); the ODE is
+``q' = qd``, ``qd' = M(q)^-1 (u + d - C(q, qd) qd - g(q) - F(qd))`` from the model layer's forward
+dynamics (``casadi.solve``, friction and rotor inertia as the robot's options say).
+
+The robot is built *symbolic in its named parameters* once; a plant holds the numeric values,
+so :meth:`RobotPlant.with_params` (robustness sweeps, model mismatch) never rebuilds the model:
+
+* a zoo robot (:func:`zoo_plant`) exposes the parameters of its module's ``DEFAULTS`` (e.g. the
+  SIMNOG arm's ``m1, m2, d1, d2, I1, I2, f1, f2, g``) with the units of its ``UNITS`` table;
+* a DH or URDF chain (:func:`chain_plant`) exposes each link's mass ``m<i>`` (kg) and viscous
+  friction ``f<i>`` (1-based), the data a user most often varies; every other number is fixed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import casadi as ca
+
+from designkit.errors import ModelError
+from designkit.models.chain import numeric_value
+from designkit.models.description import ChainDescription
+from designkit.models.plant import Parameter, PlantBase, Signal, named, ode_function
+from designkit.models.robot import Robot
+
+__all__ = ["RobotPlant", "chain_plant", "zoo_plant"]
+
+_NON_NEGATIVE_UNITS = frozenset({"kg", "kg*m^2", "N*m*s/rad", "N*s/m", "N*m", "m/s^2"})
+
+
+@dataclass(frozen=True, eq=False)
+class RobotPlant(PlantBase):
+    """A serial manipulator as a plant.
+
+    Parameters
+    ----------
+    robot : Robot
+        The model, symbolic in exactly the parameters listed in ``parameters`` (same order as
+        ``robot.symbol_names``).
+    parameters : tuple of Parameter
+        Named parameters with their values and units.
+    source : str
+        Where the robot comes from (zoo name, DH table, URDF file), for reports.
+
+    Examples
+    --------
+    >>> plant = zoo_plant("planar2r")
+    >>> plant.n_joints, [s.name for s in plant.states]
+    (2, ['q1', 'q2', 'qd1', 'qd2'])
+    >>> plant.with_params(m2=4.0).parameter("m2").value
+    4.0
+    """
+
+    robot: Robot
+    parameters: tuple[Parameter, ...]
+    source: str = ""
+
+    kind = "robot"
+
+    def __post_init__(self) -> None:
+        names = tuple(p.name for p in self.parameters)
+        if names != self.robot.symbol_names:
+            raise ModelError("parameters", f"must list the robot's symbols {self.robot.symbol_names}, got {names}")
+
+    # ----------------------------------------------------------------- signals
+
+    @cached_property
+    def _units(self) -> tuple[tuple[str, str, str], ...]:
+        out = []
+        for link in self.robot.description.links:
+            out.append(("rad", "rad/s", "N*m") if link.joint == "revolute" else ("m", "m/s", "N"))
+        return tuple(out)
+
+    @property
+    def states(self) -> tuple[Signal, ...]:
+        """Joint positions ``q1..qn`` then velocities ``qd1..qdn``."""
+        pos = tuple(Signal(f"q{i + 1}", u[0], f"joint {i + 1} position") for i, u in enumerate(self._units))
+        vel = tuple(Signal(f"qd{i + 1}", u[1], f"joint {i + 1} velocity") for i, u in enumerate(self._units))
+        return pos + vel
+
+    @property
+    def inputs(self) -> tuple[Signal, ...]:
+        """Joint torques (forces for prismatic joints) ``u1..un``."""
+        return tuple(Signal(f"u{i + 1}", u[2], f"joint {i + 1} torque") for i, u in enumerate(self._units))
+
+    @property
+    def disturbances(self) -> tuple[Signal, ...]:
+        """Disturbance torques ``d1..dn`` added to the inputs."""
+        return tuple(Signal(f"d{i + 1}", u[2], f"joint {i + 1} disturbance") for i, u in enumerate(self._units))
+
+    @property
+    def positions(self) -> tuple[int, ...]:
+        """State indices of ``q``."""
+        return tuple(range(self.robot.n))
+
+    @property
+    def velocities(self) -> tuple[int, ...]:
+        """State indices of ``qd``."""
+        return tuple(range(self.robot.n, 2 * self.robot.n))
+
+    # ----------------------------------------------------------------- dynamics
+
+    @cached_property
+    def _ode(self) -> ca.Function:
+        n = self.robot.n
+        x, u, d = ca.SX.sym("x", 2 * n), ca.SX.sym("u", n), ca.SX.sym("d", n)
+        p = ca.SX.sym("p", len(self.parameters))
+        args = [x[:n], x[n:], u + d] + ([p] if self.parameters else [])
+        qdd = self.robot.functions["forward_dynamics"](*args)
+        return ode_function(f"{self.robot.name}_ode", x, u, d, p, ca.vertcat(x[n:], qdd))
+
+    def ode(self) -> ca.Function:
+        """``<robot>_ode: (x = (q, qd), u, d, p) -> xdot``."""
+        return self._ode
+
+    def equations(self) -> tuple[str, ...]:
+        """The model in plain text."""
+        terms = "M(q) q̈ + C(q, q̇) q̇ + g(q)"
+        if self.robot.friction:
+            terms += " + Fv q̇ + Fc sign(q̇)"
+        rotor = " (M includes the reflected rotor inertias)" if self.robot.motor_inertia else ""
+        return (f"{terms} = u + d{rotor}", f"{self.robot.n} joints: {self.source or self.robot.name}")
+
+    def _replace(self, values: Mapping[str, float]) -> RobotPlant:
+        return dataclasses.replace(self, parameters=named(self.parameters, values))
+
+    def model_parameters(self) -> Any:
+        """The ``p`` argument of the robot's functions (``None`` when the robot has no symbols)."""
+        return self.parameter_vector if self.parameters else None
+
+
+def _parameter(name: str, value: float, unit: str, meaning: str) -> Parameter:
+    return Parameter(name, float(value), unit, meaning, positive=unit not in _NON_NEGATIVE_UNITS)
+
+
+def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, friction: bool = True,
+              motor_inertia: bool = False) -> RobotPlant:
+    """A built-in robot (``planar2r``, ``scara``, ``puma560``, ``onelink``) as a plant.
+
+    Parameters
+    ----------
+    name : str
+        Zoo name (:data:`designkit.models.robots.ROBOTS`).
+    overrides : mapping, optional
+        Parameter values replacing the module's ``DEFAULTS``.
+    friction : bool
+        Joint friction (viscous and Coulomb, from the robot data) in the dynamics.
+    motor_inertia : bool
+        Reflected rotor inertia on the diagonal of ``M``.
+
+    Raises
+    ------
+    ModelError
+        Unknown robot (field ``robot``) or parameter (field ``parameters.<name>``).
+    """
+    from designkit.models.robots import ROBOTS, zoo_module
+
+    if name not in ROBOTS:
+        raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}")
+    module = zoo_module(name)
+    overrides = dict(overrides or {})
+    for key in overrides:
+        if key not in module.DEFAULTS:
+            raise ModelError(f"parameters.{key}", f"{name} has no parameter {key!r}; choose from {sorted(module.DEFAULTS)}")
+    robot = ROBOTS[name](symbolic=True, friction=friction, motor_inertia=motor_inertia)
+    params = tuple(_parameter(k, overrides.get(k, v), *module.UNITS[k]) for k, v in module.DEFAULTS.items())
+    plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}")
+    # validate the values through the same rule as with_params
+    return plant.with_params(**overrides) if overrides else plant
+
+
+def chain_plant(description: ChainDescription, *, friction: bool = True, motor_inertia: bool = False,
+                source: str = "") -> RobotPlant:
+    """A DH or URDF chain as a plant whose link masses ``m<i>`` and viscous frictions ``f<i>`` are parameters.
+
+    Parameters
+    ----------
+    description : ChainDescription
+        Numeric chain description (SI units).
+    friction, motor_inertia : bool
+        As in :func:`zoo_plant`.
+    source : str
+        Where the description comes from, for reports.
+    """
+    links, params = [], []
+    for i, link in enumerate(description.links, start=1):
+        mass, viscous = numeric_value(link.mass), numeric_value(link.viscous)
+        if mass is None or viscous is None:
+            raise ModelError(f"links[{i - 1}]", "a chain plant needs a numeric description")
+        m, f = ca.SX.sym(f"m{i}"), ca.SX.sym(f"f{i}")
+        links.append(dataclasses.replace(link, mass=m, viscous=f))
+        joint_unit = "N*m*s/rad" if link.joint == "revolute" else "N*s/m"
+        params += [(f"m{i}", m, _parameter(f"m{i}", mass, "kg", f"link {i} mass")),
+                   (f"f{i}", f, _parameter(f"f{i}", viscous, joint_unit, f"joint {i} viscous friction"))]
+    symbolic = dataclasses.replace(description, links=tuple(links), symbols=tuple((n, s) for n, s, _ in params))
+    robot = Robot(symbolic, friction=friction, motor_inertia=motor_inertia)
+    return RobotPlant(robot=robot, parameters=tuple(p for _, _, p in params), source=source or description.name)

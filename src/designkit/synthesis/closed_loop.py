@@ -1,0 +1,247 @@
+"""The plant composed with a control law, its equilibria, and its linearization.
+
+The continuous loop (no nonlinear element, no sampling, anti-windup gates open, memory at its
+initial value) is one CasADi function of the augmented state ``z = (x, xc)``::
+
+    loop: (z, r, d, p) -> (z_dot, u),   z_dot = (f(x, u, d, p), law.derivative(x, xc, m0, r, 1)),
+                                         u = law.command(x, xc, m0, r)
+
+An operating point is an equilibrium ``z*`` of ``z_dot = 0`` for a constant reference ``r0``,
+found by Newton's method from a guess (the reference position at rest): with integral action
+the positions settle on the reference and the integrals absorb constant loads such as gravity,
+so ``z*`` depends on the plant parameters.  :func:`equilibria` runs the Newton iteration on a
+whole batch of parameter vectors at once (a loop over iterations, never over plants).
+
+At ``z*`` the Jacobians give the linear closed loop (:func:`linearize`): inputs the reference
+signals and the disturbances, outputs the joint positions and the plant inputs -- exactly the
+python-control interconnection of the linearized plant with the law, which the tests check.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from designkit.models.linear_system import LinearSystem
+from designkit.synthesis.design import Design
+from designkit.synthesis.law import Law
+
+__all__ = ["Equilibria", "LoopFunctions", "equilibria", "linearize", "loop_functions", "reference_names",
+           "with_closed_loop"]
+
+NEWTON_ITERATIONS = 40
+"""Most Newton steps of the equilibrium search."""
+NEWTON_TOL = 1e-12
+"""Converged when ``|z_dot|`` is below this, scaled by ``1 + |z|`` (per component, 1/s)."""
+
+
+def reference_names(n: int) -> tuple[str, ...]:
+    """Names of the ``3 n`` reference signals: ``xD, xDd, xDdd`` (one joint) or ``xD1.. xDd1.. xDdd1..``."""
+    if n == 1:
+        return ("xD", "xDd", "xDdd")
+    return tuple(f"{base}{j}" for base in ("xD", "xDd", "xDdd") for j in range(1, n + 1))
+
+
+@dataclass(frozen=True)
+class LoopFunctions:
+    """The loop's CasADi functions (see the module docstring).
+
+    Parameters
+    ----------
+    loop : casadi.Function
+        ``(z, r, d, p) -> (z_dot, u)``.
+    jacobians : casadi.Function
+        ``(z, r, d, p) -> (z_dot, dz_dot/dz, dz_dot/d(r, d), du/dz, du/d(r, d), B_u)`` with ``B_u`` the
+        Jacobian of ``z_dot`` in the plant input at fixed controller (where the control enters).
+    n_state, n_controller, n_joints : int
+    """
+
+    loop: ca.Function
+    jacobians: ca.Function
+    n_state: int
+    n_controller: int
+    n_joints: int
+
+
+def loop_functions(plant: Any, law: Law) -> LoopFunctions:
+    """Compose ``plant`` (its symbolic ODE) with ``law``."""
+    f = plant.ode()
+    nx, nc, n = len(plant.states), law.n_state, len(plant.positions)
+    nu, nd, npar = len(plant.inputs), len(plant.disturbances), len(plant.parameters)
+    z, r, d, p = ca.SX.sym("z", nx + nc), ca.SX.sym("r", 3 * n), ca.SX.sym("d", nd), ca.SX.sym("p", npar)
+    v = ca.SX.sym("v", nu)  # the plant input as a free variable, for B_u
+    x, xc = z[:nx], z[nx:]
+    m0 = ca.DM(list(law.initial_memory)) if law.n_memory else ca.DM.zeros(0, 1)
+    u = law.command(x, xc, m0, r)
+    ones = ca.DM.ones(nc, 1)
+    xc_dot = law.derivative(x, xc, m0, r, ones)
+    z_dot = ca.vertcat(f(x, u, d, p), xc_dot)
+    z_dot_v = ca.vertcat(f(x, v, d, p), xc_dot)
+    B_u = ca.substitute(ca.jacobian(z_dot_v, v), v, u)
+    rd = ca.vertcat(r, d)
+    loop = ca.Function("closed_loop", [z, r, d, p], [z_dot, u], ["z", "r", "d", "p"], ["z_dot", "u"])
+    jac = ca.Function(
+        "closed_loop_jacobians", [z, r, d, p],
+        [z_dot, ca.jacobian(z_dot, z), ca.jacobian(z_dot, rd), ca.jacobian(u, z), ca.jacobian(u, rd), B_u],
+        ["z", "r", "d", "p"], ["z_dot", "A", "B", "Cu", "Du", "B_u"],
+    )
+    return LoopFunctions(loop, jac, nx, nc, n)
+
+
+@dataclass(frozen=True)
+class Equilibria:
+    """Equilibria of a batch of loops.
+
+    Parameters
+    ----------
+    z : ndarray, shape (N, nz)
+        The equilibrium states.
+    residual : ndarray, shape (N,)
+        ``max |z_dot| / (1 + max |z|)`` at ``z`` (1/s).
+    converged : ndarray of bool, shape (N,)
+        Residual below :data:`NEWTON_TOL` (a singular Jacobian or divergence leaves it False).
+    iterations : int
+        Newton steps taken.
+    """
+
+    z: np.ndarray
+    residual: np.ndarray
+    converged: np.ndarray
+    iterations: int
+
+
+def _batched(fn: ca.Function, n: int) -> ca.Function:
+    return fn if n == 1 else fn.map(n)
+
+
+def _reshape(block: np.ndarray, rows: int, cols: int, n: int) -> np.ndarray:
+    """``(rows, cols * n)`` as returned by ``Function.map`` -> ``(n, rows, cols)``."""
+    return np.asarray(block, dtype=float).reshape(rows, n, cols).transpose(1, 0, 2)
+
+
+def equilibria(fns: LoopFunctions, z0: np.ndarray, r0: np.ndarray, P: np.ndarray,
+               d0: np.ndarray | None = None) -> Equilibria:
+    """Newton's method on ``z_dot(z, r0, d0, p) = 0`` for every row ``p`` of ``P`` at once.
+
+    Parameters
+    ----------
+    fns : LoopFunctions
+    z0 : ndarray, shape (nz,)
+        Starting guess (the same for every plant).
+    r0 : ndarray, shape (3 n,)
+        Constant reference.
+    P : ndarray, shape (N, n_par)
+        Parameter vectors.
+    d0 : ndarray, optional
+        Constant disturbance (default zero).
+    """
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    N, nz = P.shape[0], fns.n_state + fns.n_controller
+    nd = fns.jacobians.size1_in(2)
+    d0 = np.zeros(nd) if d0 is None else np.asarray(d0, dtype=float)
+    jac = _batched(fns.jacobians, N)
+    z = np.tile(np.asarray(z0, dtype=float).reshape(1, nz), (N, 1))
+    residual = np.full(N, np.inf)
+    active = np.ones(N, dtype=bool)
+    it = 0
+    for it in range(1, NEWTON_ITERATIONS + 1):  # iterations, not plants
+        out = jac(z.T, r0, d0, P.T)
+        f = np.asarray(out[0], dtype=float).reshape(nz, N).T
+        J = _reshape(out[1], nz, nz, N)
+        residual = np.max(np.abs(f), axis=1) / (1.0 + np.max(np.abs(z), axis=1))
+        active = residual > NEWTON_TOL
+        if not np.any(active):
+            break
+        with np.errstate(all="ignore"):
+            try:
+                step = np.linalg.solve(J[active], f[active][..., None])[..., 0]
+            except np.linalg.LinAlgError:  # some Jacobian singular: solve one by one, leave those alone
+                step = np.stack([_safe_solve(Jk, fk) for Jk, fk in zip(J[active], f[active], strict=True)])
+        z[active] = z[active] - step
+        bad = ~np.all(np.isfinite(z), axis=1)
+        z[bad] = np.nan
+    finite = np.all(np.isfinite(z), axis=1)
+    return Equilibria(z=z, residual=residual, converged=(residual <= NEWTON_TOL) & finite, iterations=it)
+
+
+def _safe_solve(J: np.ndarray, f: np.ndarray) -> np.ndarray:
+    try:
+        return np.linalg.solve(J, f)
+    except np.linalg.LinAlgError:
+        return np.full_like(f, np.nan)
+
+
+def state_matrices(fns: LoopFunctions, z: np.ndarray, r0: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Closed-loop ``A = dz_dot/dz`` at each row of ``z`` and ``P``: shape ``(N, nz, nz)``."""
+    P = np.atleast_2d(np.asarray(P, dtype=float))
+    N, nz = P.shape[0], z.shape[1]
+    nd = fns.jacobians.size1_in(2)
+    out = _batched(fns.jacobians, N)(np.nan_to_num(z).T, r0, np.zeros(nd), P.T)
+    return _reshape(out[1], nz, nz, N)
+
+
+def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearSystem, LinearSystem, dict]:
+    """The closed loop of ``plant`` and ``law`` linearized at its equilibrium for the reference ``r0``.
+
+    Parameters
+    ----------
+    plant : Plant
+        Nominal plant.
+    law : Law
+    r0 : array_like, shape (3 n,)
+        Constant reference (positions, zero velocity and acceleration for an equilibrium).
+    z0 : array_like, optional
+        Newton's starting guess (default: positions at ``r0``, everything else zero).
+
+    Returns
+    -------
+    closed_loop, input_loop : LinearSystem
+        See :class:`~designkit.synthesis.design.Design`.
+    operating_point : dict
+        ``x``, ``xc``, ``r``, ``u`` (lists: the equilibrium, its reference and plant input) and the
+        Newton ``residual``.
+
+    Raises
+    ------
+    ValueError
+        When no equilibrium is found (a singular loop Jacobian: the closed loop has a pole at 0).
+    """
+    fns = loop_functions(plant, law)
+    nx, nc, n = fns.n_state, fns.n_controller, fns.n_joints
+    r0 = np.asarray(r0, dtype=float).reshape(3 * n)
+    if z0 is None:
+        z0 = np.zeros(nx + nc)
+        z0[list(plant.positions)] = r0[:n]
+    eq = equilibria(fns, np.asarray(z0, dtype=float), r0, np.asarray(plant.parameter_vector)[None, :])
+    if not bool(eq.converged[0]):
+        raise ValueError(f"no equilibrium of the closed loop found (residual {eq.residual[0]:.3g})")
+    z = eq.z[0]
+    nd = len(plant.disturbances)
+    z_dot, A, B, Cu, Du, B_u = (np.asarray(m, dtype=float) for m in
+                                fns.jacobians(z, r0, np.zeros(nd), plant.parameter_vector))
+    states = tuple(s.name for s in plant.states) + tuple(law.state_names)
+    inputs = reference_names(n) + tuple(s.name for s in plant.disturbances)
+    pos_names = tuple(plant.states[i].name for i in plant.positions)
+    u_names = tuple(s.name for s in plant.inputs)
+    C_pos = np.zeros((n, nx + nc))
+    C_pos[np.arange(n), list(plant.positions)] = 1.0
+    closed = LinearSystem(
+        A=A, B=B, C=np.vstack([C_pos, Cu]), D=np.vstack([np.zeros((n, B.shape[1])), Du]),
+        states=states, inputs=inputs, outputs=pos_names + u_names,
+    )
+    input_loop = LinearSystem(A=A, B=B_u, C=-Cu, D=np.zeros((Cu.shape[0], B_u.shape[1])), states=states,
+                              inputs=u_names, outputs=tuple(f"-{u}" for u in u_names))
+    u0 = np.asarray(fns.loop(z, r0, np.zeros(nd), plant.parameter_vector)[1], dtype=float).reshape(-1)
+    point = {"x": z[:nx].tolist(), "xc": z[nx:].tolist(), "r": r0.tolist(), "u": u0.tolist(),
+             "residual": float(eq.residual[0])}
+    return closed, input_loop, point
+
+
+def with_closed_loop(design: Design, law: Law, r0: Any) -> Design:
+    """``design`` with ``closed_loop``, ``input_loop`` and ``operating_point`` from :func:`linearize`."""
+    closed, input_loop, point = linearize(design.plant, law, r0)
+    return dataclasses.replace(design, closed_loop=closed, input_loop=input_loop, operating_point=point)

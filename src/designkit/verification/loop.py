@@ -1,0 +1,166 @@
+"""The loop transfer at each plant input, its margins, and the zeros of the closed loop.
+
+The loop is broken where the control enters the plant.  With the design's ``input_loop``
+(``A`` the linear closed loop, ``B`` the columns where the plant inputs enter, ``C = -du/dz``),
+breaking input ``i`` with the other loops closed gives ``A_i = A + B_i C_i`` and
+
+    L_i(s) = C_i (sI - A_i)^-1 B_i,     1 + L_i(s) = det(sI - A) / det(sI - A_i)
+
+For the PID servo on the link this is ``L(s) = Km (K2 s^2 + K1 s + K3) / (s^2 (tau s + 1))``,
+i.e. ``C(s) P(s)`` with ``C(s) = K1 + K2 s + K3/s`` acting on ``x1`` and ``P(s) = Km / (s (tau s + 1))``;
+for the tracker the ``x2/Km`` term replaces ``K2`` by ``K2 - 1/Km`` (tested against these closed
+forms).  The ``loop_margins`` check reports, per input, the gain and phase margins (python-control
+``stability_margins``) and the modulus margin ``min |1 + L(jw)|``; it is informational (the spec
+states no margin requirement), and its data drives the report's Bode plots.
+
+SciPy and python-control are imported lazily, inside the functions that need them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from designkit.verification.check import Check
+
+__all__ = ["LoopMargins", "achieved_zeros", "frequency_grid", "loop_frequency_response", "loop_margins",
+           "loop_margins_check", "loop_matrices", "siso_zeros"]
+
+
+@dataclass(frozen=True)
+class LoopMargins:
+    """Classical margins of the loop broken at one plant input.
+
+    Parameters
+    ----------
+    gain_margin : float
+        Gain margin (ratio; ``inf`` when the phase never crosses -180 deg at a finite frequency;
+        below 1 for a conditionally stable loop, where the gain may only be *reduced* by that factor).
+    phase_margin : float
+        Phase margin (deg), ``inf`` when ``|L|`` never crosses 1.
+    w_phase_crossover, w_gain_crossover : float
+        Frequencies (rad/s) of the phase and gain crossovers (``nan`` when absent).
+    modulus_margin : float
+        ``inf |1 + L(jw)|`` over the frequency grid and ``w -> inf`` (dimensionless; at most 1
+        because ``L`` is strictly proper).
+    """
+
+    gain_margin: float
+    phase_margin: float
+    w_phase_crossover: float
+    w_gain_crossover: float
+    modulus_margin: float
+
+
+def siso_zeros(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: float) -> np.ndarray:
+    """Finite transmission zeros of a SISO state-space system (generalised eigenvalues of the
+    Rosenbrock pencil)."""
+    from scipy.linalg import eigvals
+
+    n = A.shape[0]
+    M = np.block([[A, b.reshape(n, 1)], [c.reshape(1, n), np.array([[d]])]])
+    N = np.zeros((n + 1, n + 1))
+    N[:n, :n] = np.eye(n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = eigvals(M, N)
+    return np.sort_complex(z[np.isfinite(z)])
+
+
+def achieved_zeros(design: Any) -> np.ndarray:
+    """Zeros of the first joint's ``xD -> x1`` channel of the closed loop (empty when the design requests none)."""
+    cl = design.closed_loop
+    if not design.zeros or cl is None:
+        return np.array([], dtype=complex)
+    return siso_zeros(cl.A, cl.B[:, 0], cl.C[0], float(cl.D[0, 0]))
+
+
+def loop_matrices(design: Any, channel: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(A_i, b_i, c_i)`` of the loop broken at plant input ``channel`` (module docstring), or ``None``."""
+    lp = design.input_loop
+    if lp is None or channel >= lp.B.shape[1]:
+        return None
+    b = lp.B[:, [channel]]
+    c = lp.C[[channel], :]
+    return lp.A + b @ c, b, c
+
+
+def loop_frequency_response(design: Any, w: np.ndarray, channel: int = 0) -> np.ndarray | None:
+    """``L_i(jw)`` at the frequencies ``w`` (rad/s)."""
+    mats = loop_matrices(design, channel)
+    if mats is None:
+        return None
+    A, b, c = mats
+    eye = np.eye(A.shape[0])
+    return np.array([(c @ np.linalg.solve(1j * wk * eye - A, b))[0, 0] for wk in np.asarray(w, dtype=float)])
+
+
+def frequency_grid(design: Any) -> np.ndarray:
+    """600 log-spaced frequencies (rad/s), one decade beyond the slowest and fastest pole magnitudes."""
+    poles = list(np.linalg.eigvals(design.closed_loop.A)) if design.closed_loop is not None else []
+    mags = [abs(p) for p in (*poles, *design.poles) if abs(p) > 1e-9]
+    lo, hi = (min(mags), max(mags)) if mags else (1.0, 1.0)
+    return np.logspace(math.floor(math.log10(lo)) - 1, math.ceil(math.log10(hi)) + 1, 600)
+
+
+def loop_margins(design: Any, channel: int = 0) -> LoopMargins | None:
+    """Gain and phase margins of the loop broken at plant input ``channel`` (python-control
+    ``stability_margins``) and the modulus margin ``inf |1 + L(jw)|``."""
+    import control
+
+    mats = loop_matrices(design, channel)
+    if mats is None:
+        return None
+    A, b, c = mats
+    gm, pm, _sm, wpc, wgc, _wms = control.stability_margins(control.ss(A, b, c, 0.0))
+    resp = loop_frequency_response(design, frequency_grid(design), channel)
+    return LoopMargins(
+        gain_margin=float(gm), phase_margin=float(pm), w_phase_crossover=float(wpc),
+        # L is strictly proper, so |1 + L(jw)| -> 1 as w -> inf: the infimum is at most 1
+        w_gain_crossover=float(wgc), modulus_margin=min(float(np.min(np.abs(1.0 + resp))), 1.0),
+    )
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def loop_margins_check(design: Any) -> Check:
+    """Check ``"loop_margins"`` (informational): margins of the loop broken at each plant input.
+
+    ``achieved`` is the smallest modulus margin over the inputs (the distance of the Nyquist
+    curve to -1); the certificate lists every input's margins and crossovers; ``data`` holds the
+    frequency responses for the report's Bode plots.
+    """
+    inputs = list(design.input_loop.inputs) if design.input_loop is not None else []
+    rows, data = [], {"frequency": frequency_grid(design).tolist(), "channels": []}
+    for i, name in enumerate(inputs):
+        m = loop_margins(design, i)
+        if m is None:
+            continue
+        resp = loop_frequency_response(design, np.asarray(data["frequency"]), i)
+        rows.append({
+            "input": name, "gain_margin": _finite(m.gain_margin), "phase_margin_deg": _finite(m.phase_margin),
+            "phase_crossover_rad_s": _finite(m.w_phase_crossover), "gain_crossover_rad_s": _finite(m.w_gain_crossover),
+            "modulus_margin": m.modulus_margin,
+        })
+        data["channels"].append({"input": name, "margins": m, "response": resp})
+    if not rows:
+        return Check(name="loop_margins", passed=None, detail="no loop at the plant input to break", required=False)
+    worst = min(rows, key=lambda r: r["modulus_margin"])
+    stable = bool(np.all(np.linalg.eigvals(design.input_loop.A).real < 0))
+    parts = []
+    for r in rows:
+        pm = f"PM {r['phase_margin_deg']:.3g}°" if r["phase_margin_deg"] is not None else "PM ∞"
+        gm = f"GM {r['gain_margin']:.3g}" if r["gain_margin"] is not None else "GM ∞"
+        parts.append(f"{r['input']}: {pm}, {gm}, min|1+L| {r['modulus_margin']:.3g}")
+    return Check(
+        name="loop_margins", passed=stable, target="reported (no margin requirement in the spec)",
+        achieved=worst["modulus_margin"], margin=None, unit="1 (min |1 + L|)",
+        detail="loop broken at each plant input, the others closed: " + "; ".join(parts) + " [informational]",
+        certificate={"loops": rows, "convention": "L_i(s) = C_i (sI - A - B_i C_i)^-1 B_i, C = -du/dz; "
+                     "negative feedback: the loop is -L in the feedback path"},
+        required=False, data=data,
+    )
