@@ -18,10 +18,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from designkit.synthesis.registry import family
 
 from designkit.models.link import LinkPlant
 from designkit.synthesis.pid import design_tracking
-from designkit.synthesis.registry import family
 from designkit.verification.robustness import stable_fraction
 
 ROOT = Path(__file__).resolve().parents[1]

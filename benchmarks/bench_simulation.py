@@ -22,9 +22,9 @@ from pathlib import Path
 import casadi
 import numpy as np
 
+from designkit.families import synthesize
 from designkit.simulation.run import simulate
 from designkit.spec.schema import Spec
-from designkit.synthesis.registry import synthesize
 
 RESULTS = Path(__file__).resolve().parent / "results" / "simulation.json"
 LIMIT = 20.0

@@ -11,11 +11,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+from designkit.families import synthesize
 from designkit.pipeline import PipelineResult, versions
 from designkit.simulation.result import SimulationResult
 from designkit.spec.loader import parse_spec
-from designkit.synthesis.registry import synthesize
 from designkit.verification.check import Check
+from designkit.verification.loop import loop_margins_check
 from tests.problems import TRACKING_YAML
 
 SERVO_YAML = """\
@@ -53,7 +54,7 @@ def linear_simulation(design, spec, *, limit: float | None = None) -> Simulation
     duration = spec.simulation.duration or 4.0
     t = np.linspace(0.0, duration, 801)
     ref = np.zeros((t.size, 3))
-    tracking = "xDd" in cl.inputs
+    tracking = design.reference == "trajectory"
     if tracking:
         s = np.clip(t / 1.0, 0, 1)
         ref[:, 0] = 10 * s**3 - 15 * s**4 + 6 * s**5
@@ -99,18 +100,20 @@ def servo_checks(*, overshoot_passed: bool | None = True, detail_extra: str = ""
         Check("overshoot", overshoot_passed, target="<= 10 %", achieved=4.2, margin=5.8, unit="%",
               detail="peak of x1 over the step" + detail_extra),
         Check("robust_stability", True, target="stable over the box", achieved=0.1, margin=0.1, unit="1/s",
-              detail="min over the grid", certificate={"grid": {"Km": km.tolist(), "tau": tau.tolist(),
-                                                                  "values": grid, "label": "-max Re(pole) (1/s)"}}),
+              detail="min over the grid", certificate={"grid": {
+                  "axes": [{"name": "Km", "unit": "(rad/s)/(N*m)", "values": km.tolist()},
+                           {"name": "tau", "unit": "s", "values": tau.tolist()}],
+                  "values": grid, "label": "-max Re(pole) (1/s)"}}),
     )
 
 
 def make_result(yaml_text: str = SERVO_YAML, checks: tuple[Check, ...] | None = None, *, simulate: bool = True,
-                path: str = "specs/report-servo.yaml") -> PipelineResult:
+                path: str = "specs/report-servo.yaml", margins: bool = True) -> PipelineResult:
     loaded = parse_spec(yaml_text, path=path)
     design = synthesize(loaded.spec)
     sim = linear_simulation(design, loaded.spec) if simulate else None
-    return PipelineResult(loaded=loaded, design=design, checks=servo_checks() if checks is None else checks,
-                          simulation=sim, versions=versions())
+    checks = (*(servo_checks() if checks is None else checks), *([loop_margins_check(design)] if margins else []))
+    return PipelineResult(loaded=loaded, design=design, checks=checks, simulation=sim, versions=versions())
 
 
 @pytest.fixture(scope="session")

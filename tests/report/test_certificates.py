@@ -30,7 +30,7 @@ def test_certificate_records_become_a_table(servo_model):
 def test_certificate_grid_is_summarised(servo_model):
     (entry,) = servo_model.checks[3].certificate
     assert entry.key == "grid"
-    assert "Km ∈ [1.5, 2.5] (5 points)" in entry.text and "robustness figure" in entry.text
+    assert "Km ∈ [1.5, 2.5] (rad/s)/(N*m) (5 points)" in entry.text and "robustness figure" in entry.text
 
 
 def test_render_certificate_edge_cases():

@@ -3,30 +3,17 @@
 from __future__ import annotations
 
 import matplotlib
-import numpy as np
-import pytest
 
 from designkit.report import figures as fg
-from designkit.spec.loader import parse_spec
-from designkit.synthesis.registry import synthesize
-from tests.problems import POSSPEED_YAML
-from tests.report.conftest import assert_svg
-
-
-def _design(text):
-    return synthesize(parse_spec(text).spec)
+from tests.report.conftest import SERVO_YAML, assert_svg, make_result
 
 
 def test_figures_are_valid_and_deterministic(servo_result):
-    res = servo_result
-    spec = res.loaded.spec
-    first = fg.design_figures(res.design, requirements=spec.requirements, simulation_spec=spec.simulation,
-                             simulation=res.simulation, checks=res.checks)
-    second = fg.design_figures(res.design, requirements=spec.requirements, simulation_spec=spec.simulation,
-                              simulation=res.simulation, checks=res.checks)
+    first = fg.design_figures(servo_result)
+    second = fg.design_figures(servo_result)
     assert [f.filename for f in first] == [
-        "fig-pole-zero.svg", "fig-linear-response.svg", "fig-loop-bode.svg", "fig-simulation.svg",
-        "fig-robustness-robust_stability.svg",
+        "fig-pole-zero.svg", "fig-linear-response.svg", "fig-simulation.svg",
+        "fig-robustness-robust_stability.svg", "fig-loop-bode.svg",
     ]
     for a, b in zip(first, second, strict=True):
         assert_svg(a.svg)
@@ -35,32 +22,31 @@ def test_figures_are_valid_and_deterministic(servo_result):
 
 
 def test_optional_figures_are_left_out_without_data():
-    design = _design(POSSPEED_YAML)
-    figs = fg.design_figures(design)
+    res = make_result(checks=(), simulate=False)
+    figs = fg.design_figures(res)
     assert [f.filename for f in figs] == ["fig-pole-zero.svg", "fig-linear-response.svg", "fig-loop-bode.svg"]
-    assert fg.simulation_svg(None) is None
+    assert fg.simulation_figure(res) is None
 
 
-def test_rendering_leaves_matplotlib_global_state_alone():
+def test_rendering_leaves_matplotlib_global_state_alone(servo_result):
     before = dict(matplotlib.rcParams)
-    fg.pole_zero_svg(_design(POSSPEED_YAML))
+    fg.pole_zero_figure(servo_result)
     assert dict(matplotlib.rcParams) == before
 
 
-def test_tracking_response_uses_the_simulation_reference(tracking_result):
-    res = tracking_result
-    svg = fg.step_response_svg(res.design, res.loaded.spec.requirements, res.loaded.spec.simulation,
-                              res.simulation)
-    assert_svg(svg)
-    # and without a simulation: the spec's (default quintic) trajectory
-    assert_svg(fg.step_response_svg(res.design, res.loaded.spec.requirements, res.loaded.spec.simulation))
+def test_tracking_figures(tracking_result):
+    figs = {f.filename: f for f in fg.design_figures(tracking_result)}
+    assert "trajectory" in figs["fig-linear-response.svg"].title
+    assert_svg(figs["fig-simulation.svg"].svg)
+    assert "tracking error" in figs["fig-simulation.svg"].caption
 
 
-def test_linear_response_settles_at_the_step():
-    design = _design(POSSPEED_YAML)
-    t = np.linspace(0, 5, 501)
-    ref = np.zeros((t.size, 3))
-    ref[:, 0] = 1.0
-    x1, u = fg.linear_response(design, t, ref)
-    assert x1[-1] == pytest.approx(1.0, abs=1e-4)
-    assert u[-1] == pytest.approx(0.0, abs=1e-3)  # no steady control: the link has no spring
+def test_captions_name_only_what_is_drawn(servo_result):
+    figs = {f.filename: f for f in fg.design_figures(servo_result)}
+    sim = figs["fig-simulation.svg"].caption
+    assert "settling band" in sim and "overshoot limit" in sim and "perturbation" in sim
+    bare = make_result(yaml_text=SERVO_YAML.replace(
+        "requirements: {overshoot: 10, settling_time: 2.0, rise_time: 0.8, steady_state_error: 0.01, "
+        "max_control: 40}\n", ""), checks=())
+    cap = {f.filename: f for f in fg.design_figures(bare)}["fig-simulation.svg"].caption
+    assert "settling band" not in cap and "control limit" not in cap

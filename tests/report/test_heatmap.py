@@ -1,4 +1,4 @@
-"""Robustness heat map: the certificate grid formats it accepts, and its SVG."""
+"""Robustness figure: the certificate grid form it accepts (axes from the certificate), and its SVG."""
 
 from __future__ import annotations
 
@@ -8,18 +8,28 @@ from designkit.report import heatmap
 from tests.report.conftest import assert_svg
 
 
-def test_robustness_grid_formats():
-    km, tau = [1.0, 2.0, 3.0], [0.1, 0.2]
-    vals = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]  # (tau, Km)
-    got = heatmap.robustness_grid({"grid": {"Km": km, "tau": tau, "margin": vals}})
-    assert got is not None and got[2].shape == (2, 3) and got[3] == "margin"
-    transposed = heatmap.robustness_grid({"grid": {"Km": km, "tau": tau, "values": np.array(vals).T.tolist()}})
-    np.testing.assert_array_equal(transposed[2], np.array(vals))
-    assert heatmap.robustness_grid({"grid": {"Km": km, "tau": tau, "values": [[1.0]]}}) is None
-    assert heatmap.robustness_grid({"grid": {"Km": km}}) is None
+def _grid(values, axes=(("Km", [1.0, 2.0, 3.0]), ("tau", [0.1, 0.2]))):
+    return {"grid": {"axes": [{"name": n, "unit": "", "values": v} for n, v in axes], "values": values,
+                     "label": "margin (1/s)"}}
+
+
+def test_robustness_grid_form():
+    vals = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]  # (axis 2, axis 1)
+    got = heatmap.robustness_grid(_grid(vals))
+    assert got is not None and got.values.shape == (2, 3) and got.label == "margin (1/s)"
+    assert [a[0] for a in got.axes] == ["Km", "tau"]
+    assert heatmap.robustness_grid(_grid(np.array(vals).T.tolist())) is None  # wrong orientation is refused
+    assert heatmap.robustness_grid(_grid([[1.0]])) is None
+    assert heatmap.robustness_grid({"grid": {"axes": []}}) is None
     assert heatmap.robustness_grid({"grid": "coarse"}) is None
-    svg = heatmap.robustness_svg("robust", {"grid": {"Km": km, "tau": tau, "values": vals, "label": "margin (1/s)"}})
-    assert_svg(svg)
+    assert_svg(heatmap.robustness_svg("robust", _grid(vals)))
+
+
+def test_one_axis_is_a_line():
+    got = heatmap.robustness_grid(_grid([0.5, 0.2, -0.1], axes=(("m2", [1.0, 2.0, 3.0]),)))
+    assert got is not None and len(got.axes) == 1
+    root = assert_svg(heatmap.robustness_svg("robust_grid", _grid([0.5, 0.2, -0.1], axes=(("m2", [1.0, 2.0, 3.0]),))))
+    assert root is not None
 
 
 def test_no_heat_map_without_grid_data():

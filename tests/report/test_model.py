@@ -22,7 +22,7 @@ def test_verified_verdict(servo_result, servo_model):
     assert servo_model.verified is True
     assert servo_model.verdict == "VERIFIED"
     assert servo_model.verdict_kind == "verified"
-    assert servo_model.verdict_summary.startswith("4 passed, 0 failed, 0 undecided")
+    assert servo_model.verdict_summary.startswith("5 passed, 0 failed, 0 undecided")
 
 
 def test_failed_verdict_names_the_failed_checks(failed_result):
@@ -46,7 +46,7 @@ def test_failed_and_undecided_together():
 
 
 def test_no_checks_is_vacuously_verified_and_says_so():
-    result = make_result(checks=(), simulate=False)
+    result = make_result(checks=(), simulate=False, margins=False)
     model = build_report_model(result)
     assert result.verified and model.verdict == "VERIFIED"
     assert "No checks were run" in model.verdict_summary
@@ -88,7 +88,9 @@ def test_poles_requested_vs_achieved(servo_model):
 
 
 def test_formulas_notes_and_loop_margins(servo_result, servo_model):
-    assert servo_model.formulas == servo_result.design.formulas
+    from designkit.families import family
+
+    assert servo_model.formulas == (*family("pid_servo").display.law, *servo_result.design.formulas)
     assert servo_model.notes == servo_result.design.notes
     loop = {r.name: r for r in servo_model.loop}
     assert float(loop["phase margin"].value) == pytest.approx(78.75, abs=0.01)
@@ -97,8 +99,8 @@ def test_formulas_notes_and_loop_margins(servo_result, servo_model):
 
 def test_check_rows_in_order_with_formatted_values(servo_model):
     rows = servo_model.checks
-    assert [r.name for r in rows] == ["routh_hurwitz", "lyapunov", "overshoot", "robust_stability"]
-    assert [r.status for r in rows] == ["PASS"] * 4
+    assert [r.name for r in rows] == ["routh_hurwitz", "lyapunov", "overshoot", "robust_stability", "loop_margins"]
+    assert [r.status for r in rows] == ["PASS"] * 5
     over = rows[2]
     assert (over.target, over.achieved, over.margin, over.unit) == ("<= 10 %", "4.2", "+5.8", "%")
     assert over.certificate == ()

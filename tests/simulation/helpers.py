@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families import synthesize
 from designkit.models.link import LinkPlant
 from designkit.spec.schema import Spec
 from designkit.synthesis.design import Design
-from designkit.synthesis.registry import synthesize
 
 # Scaled error (x - ref) / (1 + |ref|) bounds.
 TOL = {

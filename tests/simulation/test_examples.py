@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from designkit.families import synthesize
 from designkit.simulation.run import simulate
 from designkit.spec.loader import load_spec
-from designkit.synthesis.registry import synthesize
 
 SPECS = sorted((Path(__file__).resolve().parents[2] / "specs").glob("*.yaml"))
-MODULES = ["integrate", "laws", "linear", "nonlinear", "reference", "run", "timing"]
+MODULES = ["integrate", "linear", "nonlinear", "reference", "run", "timing"]
 
 
 @pytest.mark.parametrize("path", SPECS, ids=lambda p: p.stem)

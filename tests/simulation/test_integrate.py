@@ -5,8 +5,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from designkit.models.link import LinkPlant
-from designkit.simulation.integrate import link_ode, plant_step, rk4, run_steps
+from designkit.models.link import LinkPlant, link_ode
+from designkit.simulation.integrate import plant_step, rk4, run_steps
 from tests.simulation.helpers import scaled_error
 
 
@@ -16,7 +16,7 @@ def test_free_plant_speed_decays_as_exp_minus_t_over_tau():
     x = np.array([0.0, 1.0])
     speeds, positions = [x[1]], [x[0]]
     for _ in range(n):
-        x = np.asarray(step(x, 0.0, 0.0)).ravel()
+        x = np.asarray(step(x, [0.0], [0.0])).ravel()
         speeds.append(x[1])
         positions.append(x[0])
     t = dt * np.arange(n + 1)
@@ -32,7 +32,7 @@ def test_constant_input_reaches_the_speed_Km_u():
     step = plant_step(plant, 0.01)
     x = np.zeros(2)
     for _ in range(1000):  # 10 s = 20 tau
-        x = np.asarray(step(x, 1.5, 0.5)).ravel()
+        x = np.asarray(step(x, [1.5], [0.5])).ravel()
     assert abs(x[1] - plant.Km * 2.0) < 1e-8
 
 

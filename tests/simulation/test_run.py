@@ -32,7 +32,7 @@ def _servo_error(dt: float) -> tuple[float, float]:
     design = design_of(spec)
     res = simulate(spec, design)
     x1, u = linear_response(design, res.time, res.reference)  # exact for a constant input
-    return scaled_error(res.position, x1), scaled_error(res.u_command, u)
+    return scaled_error(res.position, x1[:, 0]), scaled_error(res.u_command[:, 0], u[:, 0])
 
 
 def test_servo_step_equals_python_control_and_converges_as_dt4():
@@ -64,8 +64,8 @@ def test_mismatched_plant_equals_python_control(controller):
     ref = (step_reference(1.0) if controller is None else quintic(1.0, 1.0)).evaluate(fine)
     x1, u = linear_response(design, fine, ref, plant=OTHER_PLANT)
     assert res.settings["plant"] == {"Km": 2.4, "tau": 0.6}
-    assert scaled_error(res.position, x1[::10]) < TOL["rk4_vs_foh"]
-    assert scaled_error(res.u_command, u[::10]) < 10 * TOL["rk4_vs_foh"]
+    assert scaled_error(res.position, x1[::10, 0]) < TOL["rk4_vs_foh"]
+    assert scaled_error(res.u_command[:, 0], u[::10, 0]) < 10 * TOL["rk4_vs_foh"]
 
 
 # ----------------------------------------------------------------------------- saturation
@@ -104,9 +104,9 @@ def test_zero_order_hold_is_piecewise_constant_on_sampling_intervals():
     # At a sampling instant the command is the servo law on the samples of that instant.
     g = design.gains
     k = np.arange(0, 1000, 10)
-    y1, y2, x3, xD = res.measured[k, 0], res.measured[k, 1], res.controller_state[k, 0], res.reference[k, 0]
+    y1, y2, x3, xD = res.measured[k, 0], res.measured[k, 1], res.controller_state[k, 0], res.desired[k, 0]
     law = -g["K1"] * (y1 - xD) - g["K2"] * y2 - g["K3"] * x3 + g["K3"] * g["K4"] * xD
-    np.testing.assert_allclose(res.u_command[k], law, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.u_command[k, 0], law, rtol=1e-12, atol=1e-12)
     # The digital integral is rectangular: x3 grows by Ts * (y1 - xD) of the last sampling instant.
     np.testing.assert_allclose(np.diff(x3), 0.01 * (y1 - xD)[:-1], rtol=1e-9, atol=1e-12)
 
@@ -126,7 +126,7 @@ def test_servo_rejects_a_constant_perturbation():
     res = simulate(spec, design_of(spec))
     assert np.max(np.abs(res.tracking_error)) > 0.1  # it did disturb the response
     assert abs(res.tracking_error[-1]) < TOL["settled"]
-    assert abs(res.u_command[-1] - 5.0) < 1e-3  # the integral supplies -xi
+    assert abs(res.u_command[-1, 0] - 5.0) < 1e-3  # the integral supplies -xi
 
 
 def test_servo_perturbation_step_matches_python_control():
@@ -135,10 +135,10 @@ def test_servo_perturbation_step_matches_python_control():
     res = simulate(spec, design)
     assert res.settings["perturbation"]["time_applied"] == pytest.approx(1.5)
     # Superposition of two exact linear responses (constant inputs): the step, and xi from 1.5 s.
-    expected, _ = linear_response(design, res.time, res.reference)
+    expected = linear_response(design, res.time, res.reference)[0][:, 0]
     after = res.time >= 1.5 - 1e-12
     t_after = res.time[after] - res.time[after][0]
-    x_xi, _ = linear_response(design, t_after, np.zeros((t_after.size, 3)), np.full(t_after.size, 3.0))
+    x_xi = linear_response(design, t_after, np.zeros((t_after.size, 3)), np.full(t_after.size, 3.0))[0][:, 0]
     expected[after] += x_xi
     assert np.max(np.abs(x_xi)) > 1e-2
     assert scaled_error(res.position, expected) < TOL["rk4_vs_exact"]
@@ -225,9 +225,9 @@ def test_result_is_complete_and_settings_are_json():
                      noise={"std": 1e-4, "seed": 2}, delay=0.004, sampling_period=0.002)
     res = simulate(spec, design_of(spec))
     n = res.time.size
-    assert res.kind == "trajectory" and res.reference.shape == (n, 3) and res.state.shape == (n, 2)
+    assert res.kind == "trajectory" and res.reference.shape == (n, 1, 3) and res.state.shape == (n, 2)
     assert res.controller_state.shape == (n, 1) and res.measured.shape == (n, 2)
-    assert res.u_command.shape == res.u_applied.shape == res.perturbation.shape == (n,)
+    assert res.u_command.shape == res.u_applied.shape == res.perturbation.shape == (n, 1)
     settings = json.loads(json.dumps(res.settings))
     assert settings["steps_per_sample"] * settings["dt"] == pytest.approx(0.002)
     assert settings["delay_steps"] * settings["dt"] == pytest.approx(0.004)

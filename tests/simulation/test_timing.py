@@ -6,14 +6,15 @@ import pytest
 
 from designkit.errors import SpecError
 from designkit.simulation.run import simulate
-from designkit.simulation.timing import resolve
+from designkit.simulation.timing import rates_of, resolve
 from designkit.spec.schema import Spec
 from tests.simulation.helpers import TRACKING, design_of, make_spec
 
 
 def _timing(spec, rate=0.0, horizon=0.0):
     design = design_of(spec)
-    return resolve(spec, design, design.plant, rate, horizon)
+    rates = rates_of(design.poles, design.closed_loop.poles, [-1.0 / design.plant.tau], reference_rate=rate)
+    return resolve(spec, rates, horizon)
 
 
 def test_default_dt_from_the_fastest_pole_and_default_duration_from_the_slowest():

@@ -6,10 +6,10 @@ import control
 import numpy as np
 import pytest
 
+from designkit.families import synthesize
 from designkit.models.link import LinkPlant
 from designkit.spec import parse_spec
 from designkit.synthesis import pid
-from designkit.synthesis.registry import synthesize
 from tests.problems import COMPLEX_YAML, POSSPEED_GAINS, POSSPEED_YAML, TRACKING_GAINS, TRACKING_YAML
 
 REL = 1e-9

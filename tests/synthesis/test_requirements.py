@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from designkit.families import synthesize
 from designkit.spec import parse_spec
-from designkit.synthesis.registry import synthesize
 from designkit.synthesis.requirements import damping_from_overshoot, dominant_poles
 
 

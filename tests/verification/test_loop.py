@@ -6,9 +6,9 @@ import control
 import numpy as np
 import pytest
 
-from designkit.report import loop
+from designkit.families import synthesize
 from designkit.spec.loader import parse_spec
-from designkit.synthesis.registry import synthesize
+from designkit.verification import loop
 from tests.problems import COMPLEX_YAML, POSSPEED_YAML, TRACKING_YAML
 
 

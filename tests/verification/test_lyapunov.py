@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from designkit.families import pid_servo
 from designkit.models.link import LinkPlant
-from designkit.synthesis import pid
 from designkit.verification import lyapunov
 from designkit.verification.lmi import solve_kyp
 from designkit.verification.lyapunov import (
@@ -36,7 +36,7 @@ def _random_stable(seed: int, n: int, decay: float) -> np.ndarray:
 @settings(max_examples=40, deadline=None)
 @given(plant=plants, poles=pole_sets())
 def test_cvxpy_and_scipy_certificates_agree_on_synthesised_loops(plant, poles):
-    A = pid.design_servo(plant, poles, None).closed_loop.A
+    A = pid_servo.design(plant, poles, None).closed_loop.A
     x = cross_check(A)
     assert x.status == "optimal"
     assert x.lmi is not None and x.lmi.ok, x.lmi
@@ -113,7 +113,7 @@ def test_optimal_status_with_a_bad_P_is_undecided(monkeypatch):
 
 
 def test_common_lyapunov_exists_for_scaled_copies():
-    A = pid.design_servo(PLANT, [-4, -5, -20], -3.0).closed_loop.A
+    A = pid_servo.design(PLANT, [-4, -5, -20], -3.0).closed_loop.A
     c = common_lyapunov([A, 2.0 * A, 0.5 * A])
     assert c.passed is True
     P = np.array(c.certificate["P"])
@@ -176,8 +176,10 @@ def test_recheck_and_lyapunov_certificate_are_one_test(seed, n):
 
 def test_kyp_certificate_is_also_a_lyapunov_certificate():
     """The KYP solve runs through the same LMI core: its P passes the Lyapunov re-check of A."""
-    A = pid.design_servo(PLANT, [-4, -5, -20], -3.0).closed_loop.A
-    B = np.eye(3)[:, [2]]
+    coeffs = np.poly([-4.0, -5.0, -20.0, -100.0])  # badly scaled companion matrix (entries 1 to 4e4)
+    A = np.diag(np.ones(3), 1)
+    A[-1] = -coeffs[:0:-1]
+    B = np.eye(4)[:, [3]]
     P0 = lyapunov_equation(A)
     sol = solve_kyp(A, B, B.T @ P0)
     assert sol.status == "optimal"

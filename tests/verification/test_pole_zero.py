@@ -10,12 +10,14 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from designkit.families import pid_servo, pid_tracking
+from designkit.models.linear_system import LinearSystem
 from designkit.models.link import LinkPlant
 from designkit.synthesis import pid
-from designkit.models.linear_system import LinearSystem
 from designkit.synthesis.requirements import dominant_poles
 from designkit.verification.pole_zero import coefficient_error, finite_zeros, match_roots, pole_placement
 from designkit.verification.tolerances import POLE_REL
+from tests import oracles
 from tests.verification.helpers import plants, pole_sets, real_pole, same_multiset, well_separated
 
 PLANT = LinkPlant(Km=2.0, tau=0.5)
@@ -32,7 +34,7 @@ def _siso(design, inp):
 def test_servo_gains_place_exactly_the_requested_poles_and_zero(plant, poles, zero):
     assume(well_separated([*poles, zero]))
     gains = pid.servo_gains(plant, poles, zero)
-    design = pid.design_servo(plant, poles, zero)
+    design = pid_servo.design(plant, poles, zero)
     assert design.gains == gains
     sys = design.closed_loop.to_control()
     assert same_multiset(control.poles(sys), poles)
@@ -49,7 +51,7 @@ def test_servo_gains_place_exactly_the_requested_poles_and_zero(plant, poles, ze
 @given(plant=plants, poles=pole_sets())
 def test_tracking_gains_place_exactly_the_requested_poles(plant, poles):
     assume(well_separated(poles))
-    design = pid.design_tracking(plant, poles)
+    design = pid_tracking.design(plant, poles)
     assert same_multiset(control.poles(design.closed_loop.to_control()), poles)
     z, _ = finite_zeros(_siso(design, "xi"))
     assert np.allclose(z, [0.0], atol=1e-9 * np.max(np.abs(poles)))
@@ -62,10 +64,10 @@ def test_tracking_gains_place_exactly_the_requested_poles(plant, poles):
 def test_notes_misprinted_K2_does_not_place_the_poles(plant, poles, zero):
     """Notes 3.2 print K2 = -[(p1+p2+p3) tau - 1]/Km; our derivation has +1.  Only ours works."""
     s1 = sum(poles).real
-    good = pid.design_servo(plant, poles, zero)
+    good = pid_servo.design(plant, poles, zero)
     gains = dict(good.gains)
     gains["K2"] = -(s1 * plant.tau - 1.0) / plant.Km
-    bad = dataclasses.replace(good, gains=gains, closed_loop=pid.servo_closed_loop(gains, plant))
+    bad = dataclasses.replace(good, gains=gains, closed_loop=oracles.servo_closed_loop(gains, plant))
     assert not same_multiset(control.poles(bad.closed_loop.to_control()), poles, rel=1e-6)
     check = pole_placement(bad)
     assert check.passed is False
@@ -73,7 +75,7 @@ def test_notes_misprinted_K2_does_not_place_the_poles(plant, poles, zero):
 
 
 def test_zero_cancelling_a_pole_is_matched():
-    design = pid.design_servo(PLANT, [-4, -5, -20], -20.0)
+    design = pid_servo.design(PLANT, [-4, -5, -20], -20.0)
     check = pole_placement(design)
     assert check.passed is True
     assert np.allclose(check.certificate["zeros"], [[-20.0, 0.0]], rtol=1e-9)
@@ -81,14 +83,14 @@ def test_zero_cancelling_a_pole_is_matched():
 
 def test_double_pole_from_zero_overshoot_passes_with_cluster_tolerance():
     poles = dominant_poles(0.0, 1.0).poles  # zeta = 1: double real pole
-    check = pole_placement(pid.design_servo(PLANT, poles, poles[2].real))
+    check = pole_placement(pid_servo.design(PLANT, poles, poles[2].real))
     assert check.passed is True
     clusters = {row["cluster"] for row in check.certificate["pole_matching"]}
     assert clusters == {1, 2}
 
 
 def test_wrong_zero_fails():
-    design = pid.design_servo(PLANT, [-4, -5, -20], -3.0)
+    design = pid_servo.design(PLANT, [-4, -5, -20], -3.0)
     claimed = dataclasses.replace(design, zeros=(complex(-4.0),))
     check = pole_placement(claimed)
     assert check.passed is False
@@ -96,7 +98,7 @@ def test_wrong_zero_fails():
 
 
 def test_dc_gain_not_one_fails():
-    design = pid.design_servo(PLANT, [-4, -5, -20], -3.0)
+    design = pid_servo.design(PLANT, [-4, -5, -20], -3.0)
     cl = design.closed_loop
     B, D = np.array(cl.B), np.array(cl.D)
     B[:, 0] *= 1.1
@@ -109,8 +111,8 @@ def test_dc_gain_not_one_fails():
 
 
 def test_tracker_with_wrong_feedforward_is_not_perfect_tracking():
-    design = pid.design_tracking(PLANT, [-10, -12, -15])
-    wrong = pid.tracking_closed_loop(dict(design.gains), PLANT, LinkPlant(Km=2.0, tau=0.6))
+    design = pid_tracking.design(PLANT, [-10, -12, -15])
+    wrong = oracles.tracking_closed_loop(dict(design.gains), PLANT, LinkPlant(Km=2.0, tau=0.6))
     # same Km0, so same feedback and poles; only the xD'' feed-forward tau0/Km0 is wrong
     check = pole_placement(dataclasses.replace(design, closed_loop=wrong))
     assert check.passed is False
@@ -121,7 +123,7 @@ def test_infinite_zeros_are_discarded():
     # x1/xD with K1 + K3 K4 = 0 has no finite zero: the numerator is the constant Km K3
     g = pid.servo_gains(PLANT, [-4, -5, -20], -3.0)
     g["K4"] = -g["K1"] / g["K3"]
-    cl = pid.servo_closed_loop(g, PLANT).to_control()
+    cl = oracles.servo_closed_loop(g, PLANT).to_control()
     sub = control.ss(cl.A, cl.B[:, 0:1], cl.C[0:1, :], cl.D[0:1, 0:1])
     z, discarded = finite_zeros(sub)
     assert z.size == 0
@@ -140,7 +142,7 @@ def test_match_and_coefficients_helpers():
 @given(poles=pole_sets(), shift=st.floats(min_value=1e-6, max_value=0.1))
 def test_pole_placement_detects_a_perturbed_pole(poles, shift):
     """A design that claims poles it does not have fails (the check can fail)."""
-    design = pid.design_servo(PLANT, poles, None)
+    design = pid_servo.design(PLANT, poles, None)
     R = max(abs(p) for p in poles)
     if poles[0].imag == 0:
         moved = (poles[0] + shift * R, poles[1], poles[2])

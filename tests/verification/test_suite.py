@@ -1,4 +1,4 @@
-"""run_checks: order, conditional groups, and independence from the simulation engine."""
+"""run_checks: checks chosen by what a design exposes, their order, and independence from the simulation engine."""
 
 from __future__ import annotations
 
@@ -8,14 +8,16 @@ import json
 import control
 import numpy as np
 
+from designkit.families import family, pid_servo, synthesize
 from designkit.spec import parse_spec
-from designkit.synthesis.registry import family
-from designkit.verification.suite import run_checks
+from designkit.synthesis.closed_loop import with_closed_loop
+from designkit.verification.suite import CHECKS, applicable, run_checks
 from tests.problems import POSSPEED_YAML, TRACKING_YAML
 from tests.verification.helpers import step_result
 
 CORE = ["pole_placement", "routh_hurwitz", "lyapunov"]
-ROBUST = ["robust_vertices", "robust_grid", "common_lyapunov"]
+ROBUST = ["robust_box", "robust_vertices", "robust_grid", "common_lyapunov"]
+MARGINS = ["loop_margins"]
 
 SERVO_FULL = """\
 name: servo-full
@@ -28,34 +30,34 @@ requirements: {overshoot: 10, settling_time: 2.0, rise_time: 1.0, steady_state_e
 def _setup(text):
     spec = parse_spec(text).spec
     fam = family(spec.controller.kind)
-    return spec, fam, fam.synthesize(spec)
+    return spec, fam, synthesize(spec)
 
 
 def _linear_sim(design, duration=5.0, n=5001):
     T = np.linspace(0.0, duration, n)
     resp = control.step_response(design.closed_loop.to_control(), T=T, input=0)
-    y = np.asarray(resp.outputs).reshape(2, -1)
+    y = np.asarray(resp.outputs).reshape(2, -1)  # outputs (x1, u) for the reference xD
     return step_result(T, y[0], y[1])
 
 
 def test_core_checks_only_without_uncertainty_or_simulation():
     spec, fam, design = _setup(POSSPEED_YAML)
-    checks = run_checks(spec, design, fam, None)
-    assert [c.name for c in checks] == CORE
+    checks = run_checks(spec, design, None)
+    assert [c.name for c in checks] == CORE + MARGINS
     assert all(c.passed is True for c in checks), [c.detail for c in checks]
 
 
 def test_tracking_core_checks_pass():
     spec, fam, design = _setup(TRACKING_YAML)
-    checks = run_checks(spec, design, fam, None)
-    assert [c.name for c in checks] == CORE
+    checks = run_checks(spec, design, None)
+    assert [c.name for c in checks] == CORE + MARGINS
     assert all(c.passed is True for c in checks), [c.detail for c in checks]
 
 
 def test_full_order_and_json():
     spec, fam, design = _setup(SERVO_FULL)
-    checks = run_checks(spec, design, fam, _linear_sim(design))
-    assert [c.name for c in checks] == CORE + ROBUST + [
+    checks = run_checks(spec, design, _linear_sim(design))
+    assert [c.name for c in checks] == CORE + ROBUST + MARGINS + [
         "overshoot", "settling_time", "rise_time", "steady_state_error", "max_control",
     ]
     assert all(c.passed is True for c in checks), [(c.name, c.detail) for c in checks if not c.passed]
@@ -64,7 +66,7 @@ def test_full_order_and_json():
 
 def test_requirements_without_simulation_give_no_time_domain_checks():
     spec, fam, design = _setup(SERVO_FULL)
-    assert [c.name for c in run_checks(spec, design, fam, None)] == CORE + ROBUST
+    assert [c.name for c in run_checks(spec, design, None)] == CORE + ROBUST + MARGINS
 
 
 def test_time_domain_checks_use_only_the_result_fields():
@@ -75,17 +77,34 @@ def test_time_domain_checks_use_only_the_result_fields():
         sim, controller_state=np.full((len(sim.time), 4), np.nan), measured=np.zeros_like(sim.measured),
         settings={"integrator": "something else"},
     )
-    a = [c.to_dict() for c in run_checks(spec, design, fam, sim)]
-    b = [c.to_dict() for c in run_checks(spec, design, fam, other)]
+    a = [c.to_dict() for c in run_checks(spec, design, sim)]
+    b = [c.to_dict() for c in run_checks(spec, design, other)]
     assert a == b
 
 
 def test_a_design_with_wrong_gains_fails_the_core_checks():
     spec, fam, design = _setup(POSSPEED_YAML)
-    gains = {**design.gains, "K1": 1.0}  # violates K1 > tau K3/(1 + Km K2)
-    bad = dataclasses.replace(design, gains=gains, closed_loop=fam.closed_loop(dataclasses.replace(design, gains=gains),
-                                                                              design.plant))
-    checks = {c.name: c for c in run_checks(spec, bad, fam, None)}
+    wrong = dataclasses.replace(design, gains=design.gains.replace(K1=1.0))  # violates K1 > tau K3/(1 + Km K2)
+    bad = with_closed_loop(wrong, pid_servo.law(wrong), [0.0, 0.0, 0.0])
+    checks = {c.name: c for c in run_checks(spec, bad, None)}
     assert checks["pole_placement"].passed is False
     assert checks["routh_hurwitz"].passed is False
     assert checks["lyapunov"].passed is False
+
+
+def test_checks_follow_what_the_design_exposes():
+    """A design without a characteristic gets no Routh check; without requested poles, no pole placement."""
+    spec, fam, design = _setup(SERVO_FULL)
+    assert "routh_hurwitz" in applicable(design, spec) and "robust_box" in applicable(design, spec)
+    bare = dataclasses.replace(design, characteristic=None, poles=())
+    names = applicable(bare, spec)
+    assert "routh_hurwitz" not in names and "robust_box" not in names and "pole_placement" not in names
+    assert "lyapunov" in names and "robust_vertices" not in names  # robustness is one group, named by its rule
+    assert "robustness" in names
+
+
+def test_every_check_rule_is_offered_by_some_family():
+    from designkit.families import FAMILIES
+
+    offered = {c for f in FAMILIES.values() for c in f.checks}
+    assert offered == set(CHECKS)

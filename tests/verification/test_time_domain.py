@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 
+from designkit.families import pid_servo
 from designkit.models.link import LinkPlant
 from designkit.spec.schema import Requirements
-from designkit.synthesis import pid
 from designkit.verification.time_domain import response_metrics, time_domain_checks
 from tests.verification.helpers import pole_sets, real_pole, step_result
 
@@ -30,7 +30,7 @@ def _linear_step(design, amplitude=1.0, n=6001):
 @settings(max_examples=25, deadline=None)
 @given(poles=pole_sets(), zero=real_pole)
 def test_step_metrics_match_step_info(poles, zero):
-    design = pid.design_servo(PLANT, poles, zero)
+    design = pid_servo.design(PLANT, poles, zero)
     sys, T, sim = _linear_step(design)
     info = control.step_info(sys[0, 0], T=T)
     m = response_metrics(sim)
@@ -50,7 +50,7 @@ def test_step_metrics_match_step_info(poles, zero):
 
 @pytest.mark.parametrize("amplitude", [1.0, -0.5, 3.0])
 def test_metrics_are_relative_to_the_commanded_step(amplitude):
-    design = pid.design_servo(PLANT, [-2 + 3j, -2 - 3j, -10], -10.0)
+    design = pid_servo.design(PLANT, [-2 + 3j, -2 - 3j, -10], -10.0)
     _, _, sim1 = _linear_step(design, 1.0)
     _, _, sima = _linear_step(design, amplitude)
     m1, ma = response_metrics(sim1), response_metrics(sima)
@@ -61,7 +61,7 @@ def test_metrics_are_relative_to_the_commanded_step(amplitude):
 
 
 def test_checks_have_targets_margins_and_fail_when_violated():
-    design = pid.design_servo(PLANT, [-2 + 3j, -2 - 3j, -10], -10.0)  # zeta = 0.55: ~12.6 % overshoot
+    design = pid_servo.design(PLANT, [-2 + 3j, -2 - 3j, -10], -10.0)  # zeta = 0.55: ~12.6 % overshoot
     _, _, sim = _linear_step(design)
     m = response_metrics(sim)
     req = Requirements(overshoot=10, settling_time=5.0, rise_time=1.0, steady_state_error=1e-3,

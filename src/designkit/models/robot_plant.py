@@ -168,7 +168,8 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
     overrides = dict(overrides or {})
     for key in overrides:
         if key not in module.DEFAULTS:
-            raise ModelError(f"parameters.{key}", f"{name} has no parameter {key!r}; choose from {sorted(module.DEFAULTS)}")
+            raise ModelError(f"parameters.{key}",
+                             f"{name} has no parameter {key!r}; choose from {sorted(module.DEFAULTS)}")
     robot = ROBOTS[name](symbolic=True, friction=friction, motor_inertia=motor_inertia)
     params = tuple(_parameter(k, overrides.get(k, v), *module.UNITS[k]) for k, v in module.DEFAULTS.items())
     plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}")

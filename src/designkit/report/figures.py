@@ -17,7 +17,7 @@ byte-for-byte reproducible SVG, decimation) lives in :mod:`designkit.report.svg`
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -426,17 +426,22 @@ DESIGN_FIGURES: tuple[Callable[[Any], Figure | None], ...] = (pole_zero_figure, 
 
 CHECK_FIGURES: dict[str, Callable[[Any, Any], Figure | None]] = {
     "loop_margins": bode_figure,
-    "robust_grid": robustness_figure,
     "coupling": coupling_figure,
 }
 """Check name -> figure drawn from that check's certificate and data."""
 
 
 def design_figures(result: Any) -> tuple[Figure, ...]:
-    """Every figure of a report, in report order (figures without data are left out)."""
+    """Every figure of a report, in report order (figures without data are left out).
+
+    A check gets the figure :data:`CHECK_FIGURES` names for it, or, when its certificate holds a
+    parameter lattice (``"grid"``), the robustness figure.
+    """
     out = [f for draw in DESIGN_FIGURES if (f := draw(result)) is not None]
     for check in result.checks:
         draw = CHECK_FIGURES.get(check.name)
+        if draw is None and isinstance(check.certificate, dict | Mapping) and "grid" in check.certificate:
+            draw = robustness_figure
         if draw is not None and (f := draw(result, check)) is not None:
             out.append(f)
     return tuple(out)

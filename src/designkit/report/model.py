@@ -165,8 +165,8 @@ def _verdict_summary(checks: Sequence[Any]) -> str:
 
 
 def _plant_rows(plant: Any, spec: Any) -> tuple[ParameterRow, ...]:
-    rows = [ParameterRow(_SYMBOLS.get(p.name, p.name), fmt_number(p.value, 6), unit(p.unit), f"nominal {p.meaning}".strip())
-            for p in plant.parameters]
+    rows = [ParameterRow(_SYMBOLS.get(p.name, p.name), fmt_number(p.value, 6), unit(p.unit),
+                         f"nominal {p.meaning}".strip()) for p in plant.parameters]
     unc = getattr(spec.plant, "uncertainty", None)
     if unc is not None:
         for name, (lo, hi) in unc.intervals.items():
@@ -248,8 +248,9 @@ def _loop_rows(checks: Sequence[Any]) -> tuple[ParameterRow, ...]:
         wgc, wpc, gm = r["gain_crossover_rad_s"], r["phase_crossover_rad_s"], r["gain_margin"]
         pm_note = f"at gain crossover ω = {fmt_number(wgc)} rad/s" if wgc is not None else "no gain crossover"
         if wpc is not None and gm is not None:
-            gm_note = (f"below 1: conditionally stable, the loop gain may only be reduced by this factor; "
-                       if gm < 1 else "factor by which the loop gain may grow; ") + f"phase crossover ω = {fmt_number(wpc)} rad/s"
+            gm_note = ("below 1: conditionally stable, the loop gain may only be reduced by this factor; "
+                       if gm < 1 else "factor by which the loop gain may grow; ")
+            gm_note += f"phase crossover ω = {fmt_number(wpc)} rad/s"
             gm_text = fmt_number(gm, 4) + (f" ({20 * math.log10(gm):+.3g} dB)" if gm > 0 else "")
         else:
             gm_note, gm_text = "no phase crossover: the phase never reaches -180° at a finite frequency", "∞"

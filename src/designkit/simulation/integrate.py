@@ -22,7 +22,6 @@ import casadi as ca
 import numpy as np
 
 
-
 def rk4(rhs: Callable[[Any, Any], Any], s: Any, dt: float, stages: Sequence[Any]) -> Any:
     """One classical Runge-Kutta 4 step of ``s' = rhs(s, a)``.
 

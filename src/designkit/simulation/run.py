@@ -31,6 +31,7 @@ variable-step BDF inside every step, for stiff plants).  Either way the steps ar
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -96,10 +97,7 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
     h = ca.SX.sym("h", sum(h_sizes))
     noise, dist, uff, m, e, gate, u_held, d_held = _split(h, h_sizes)
     x, xc = s[:L.nx], s[L.nx:]
-    if per_step:
-        u_in = u_held
-    else:
-        u_in = element.function(law.command(x + noise, xc, m, a) + uff, e)[0]
+    u_in = u_held if per_step else element.function(law.command(x + noise, xc, m, a) + uff, e)[0]
     xc_dot = d_held if sampled else law.derivative(x + noise, xc, m, a, gate)
     rhs = ca.Function("loop_rhs", [s, a, h], [ca.vertcat(ode(x, u_in, dist, p_true), xc_dot)], ["s", "a", "h"],
                       ["s_dot"])
@@ -174,10 +172,8 @@ def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]
         out.append(design.closed_loop.poles)
     op = design.operating_point
     if plant is not design.plant and op:
-        try:
+        with contextlib.suppress(ValueError):  # no equilibrium on the true plant: the nominal rates stand
             out.append(linearize(plant, law, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
-        except ValueError:
-            pass  # no equilibrium on the true plant: the nominal rates stand
     if op:
         out.append(np.linalg.eigvals(plant.linearize(op["x"], np.zeros(len(plant.inputs))).A))
     return out

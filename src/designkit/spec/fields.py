@@ -14,8 +14,8 @@ from typing import Annotated
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
 
 __all__ = [
-    "Finite", "NonNegativeFinite", "PerJoint", "Pole", "parse_pole", "PositiveFinite", "Section", "check_conjugates", "fmt_pole",
-    "per_joint",
+    "Finite", "NonNegativeFinite", "PerJoint", "Pole", "PositiveFinite", "Section", "check_conjugates", "fmt_pole",
+    "parse_pole", "per_joint",
 ]
 
 

@@ -18,7 +18,6 @@ from designkit.errors import SpecError
 from designkit.spec.schema import Spec
 
 
-
 def _union_tags() -> frozenset[str]:
     """Tags pydantic inserts in error locations of the spec's discriminated unions (derived, not listed)."""
     from designkit.families import FAMILIES
@@ -112,6 +111,8 @@ def parse_spec(text: str, *, path: str = "<string>") -> LoadedSpec:
     except ValidationError as exc:
         err = exc.errors()[0]
         key = _key_path(tuple(err.get("loc", ())))
+        if err.get("type") in ("union_tag_invalid", "union_tag_not_found"):
+            key = f"{key}.kind" if key else "kind"
         msg = _message(err)
         m = re.match(r"^(\[[\w.\[\]]*|[A-Za-z_][\w.\[\]]*): (.*)$", msg)
         if m:

@@ -148,7 +148,8 @@ def equilibria(fns: LoopFunctions, z0: np.ndarray, r0: np.ndarray, P: np.ndarray
     residual = np.full(N, np.inf)
     active = np.ones(N, dtype=bool)
     it = 0
-    for it in range(1, NEWTON_ITERATIONS + 1):  # iterations, not plants
+    for step_count in range(1, NEWTON_ITERATIONS + 1):  # iterations, not plants
+        it = step_count
         out = jac(z.T, r0, d0, P.T)
         f = np.asarray(out[0], dtype=float).reshape(nz, N).T
         J = _reshape(out[1], nz, nz, N)

@@ -13,20 +13,32 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
 from designkit.models.linear_system import LinearSystem
 
-__all__ = ["Characteristic", "Design", "Gain", "Gains", "LinearCondition", "freeze"]
+__all__ = ["Characteristic", "Design", "FrozenDict", "Gain", "Gains", "LinearCondition", "freeze", "thaw"]
+
+
+class FrozenDict(dict):
+    """A ``dict`` that refuses every change (still JSON-serialisable, as a ``dict``)."""
+
+    def _refuse(self, *args: Any, **kwargs: Any) -> None:
+        raise TypeError("this mapping is frozen")
+
+    __setitem__ = __delitem__ = clear = pop = popitem = setdefault = update = _refuse  # type: ignore[assignment]
+    __ior__ = _refuse  # type: ignore[assignment]
+
+    def __hash__(self) -> int:  # type: ignore[override]
+        return hash(tuple(sorted((str(k), repr(v)) for k, v in self.items())))
 
 
 def freeze(value: Any) -> Any:
-    """A deeply immutable copy: mappings -> ``MappingProxyType``, lists -> tuples, arrays read-only."""
+    """A deeply immutable copy: mappings -> :class:`FrozenDict`, lists -> tuples, arrays read-only."""
     if isinstance(value, Mapping):
-        return MappingProxyType({k: freeze(v) for k, v in value.items()})
+        return FrozenDict({k: freeze(v) for k, v in value.items()})
     if isinstance(value, list | tuple):
         return tuple(freeze(v) for v in value)
     if isinstance(value, np.ndarray):

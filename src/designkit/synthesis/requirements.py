@@ -94,7 +94,8 @@ def dominant_poles(
     return DominantPoles(zeta=zeta, wn=wn, poles=(p1, p2, p3))
 
 
-def poles_from_spec(controller: Any, requirements: Any) -> tuple[tuple[complex, ...], tuple[str, ...], dict[str, float]]:
+def poles_from_spec(controller: Any, requirements: Any) -> tuple[tuple[complex, ...], tuple[str, ...],
+                                                                 dict[str, float]]:
     """The three poles of a pole-placed controller section, given or derived from requirements.
 
     Parameters

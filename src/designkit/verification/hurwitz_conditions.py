@@ -23,6 +23,7 @@ import numpy as np
 from designkit.verification.check import Check
 from designkit.verification.routh import routh_hurwitz
 
+
 @dataclass(frozen=True)
 class Condition:
     """One stability inequality ``value > threshold`` with its margin ``value - threshold``.

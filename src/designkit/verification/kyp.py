@@ -61,10 +61,13 @@ from designkit.verification.tolerances import (
     SPR_FREQ_TOL,
 )
 
-__all__ = ["SprSweep", "positive_real", "spr_frequency_sweep"]
+__all__ = ["SprSweep", "default_frequencies", "positive_real", "spr_frequency_sweep"]
 
 _POINTS_PER_DECADE = 40
 """Density of the default frequency grid (log-spaced)."""
+
+_U = float(np.finfo(float).eps) / 2.0
+"""Unit roundoff of float64."""
 
 
 def _realisation(A: Any, B: Any, C: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -95,6 +98,8 @@ class SprSweep:
     scale : ndarray
         ``||C||_2 ||(jwI - A)^-1 B||_2`` at each ``w`` (balanced coordinates; unit of ``H``): the
         size rounding errors are measured against.
+    cond : ndarray
+        2-norm condition number of ``jwI - A`` (balanced) at each ``w``.
     cb : ndarray
         ``C B``, the first Markov parameter (``lim s H(s)``).
     cb_asymmetry : float
@@ -109,6 +114,7 @@ class SprSweep:
     w: np.ndarray
     min_eig: np.ndarray
     scale: np.ndarray
+    cond: np.ndarray
     cb: np.ndarray
     cb_asymmetry: float
     cb_eig: np.ndarray
@@ -124,10 +130,17 @@ class SprSweep:
         """Index of the grid point with the smallest relative Hermitian eigenvalue."""
         return int(np.argmin(self.relative))
 
+    def threshold(self, tol: float = SPR_FREQ_TOL) -> np.ndarray:
+        """Relative size below which a negative ``min_eig`` is evidence, per frequency:
+        ``max(tol, 1e3 u cond(jwI - A))`` (``u`` the unit roundoff), so that a badly conditioned
+        solve can never produce the evidence."""
+        return np.maximum(tol, 1e3 * _U * self.cond)
+
     def violation(self, tol: float = SPR_FREQ_TOL) -> int | None:
-        """Index of the worst grid point if it is negative beyond ``tol`` (evidence), else None."""
-        k = self.worst
-        return k if self.relative[k] < -tol else None
+        """Index of the most negative relative ``min_eig`` among the points where it is below
+        ``-threshold`` (evidence that ``H`` is not positive real), else None."""
+        bad = np.flatnonzero(self.relative < -self.threshold(tol))
+        return int(bad[np.argmin(self.relative[bad])]) if bad.size else None
 
     @property
     def positive(self) -> bool:
@@ -204,6 +217,7 @@ def spr_frequency_sweep(A: Any, B: Any, C: Any, w: Any = None) -> SprSweep:
     herm = H + np.conj(np.swapaxes(H, 1, 2))
     min_eig = np.linalg.eigvalsh(herm)[:, 0]
     scale = float(np.linalg.norm(Cb, 2)) * np.linalg.norm(X, ord=2, axis=(1, 2))
+    cond = np.linalg.cond(M)
     cb = C @ B
     size = float(np.linalg.norm(np.abs(C) @ np.abs(B), 2))
     size = size if size > 0 else 1.0
@@ -212,6 +226,7 @@ def spr_frequency_sweep(A: Any, B: Any, C: Any, w: Any = None) -> SprSweep:
         w=w,
         min_eig=min_eig,
         scale=scale,
+        cond=cond,
         cb=cb,
         cb_asymmetry=float(np.linalg.norm(cb - cb.T, 2)) / size,
         cb_eig=np.linalg.eigvalsh(symmetrise(cb)) / size,

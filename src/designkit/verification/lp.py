@@ -498,7 +498,7 @@ def _assess(cond: LinearCondition, poly: Polytope, eps: float, solver: str) -> d
     entry.update(solver_status=sol.status, solver_value=sol.value)
     candidates: list[tuple[float, str, np.ndarray]] = []
     if sol.x is not None and np.all(np.isfinite(sol.x)):
-        theta = np.clip(sol.x, lo, hi) if poly.is_box else _pull_inside(poly, sol.x, solver)
+        theta = _pull_inside(poly, np.clip(sol.x, lo, hi), solver)  # clipping is exact for a box
         if theta is not None:
             v = cond.value(theta, names)
             entry.update(worst_theta=_named(names, theta), value_at_worst=v)
@@ -516,7 +516,7 @@ def _assess(cond: LinearCondition, poly: Polytope, eps: float, solver: str) -> d
             entry.update(
                 passed=False,
                 margin=v,
-                relative_margin=v / scale if scale > 0 else -np.inf,
+                relative_margin=v / scale if 0 < scale < np.inf else v,
                 evidence={"theta": _named(names, theta), "value": v, "source": source},
                 detail=f"{cond.label}: value {v:.6g}{unit} <= 0 at the {source} {_named(names, theta)}",
             )
@@ -662,21 +662,34 @@ class LinearFeasibility:
                      margin=margin, unit="units of x", detail=self.detail, certificate=cert, required=required)
 
 
-def _polish_farkas(G: np.ndarray, y: np.ndarray, rounds: int = 3) -> np.ndarray:
-    """Reduce ``G'y`` of the solver's dual: alternately project onto ``null(G')`` (least squares)
-    and clip at zero; keep the best iterate.  Only a proposal: the re-check decides."""
+def _polish_farkas(G: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Reduce ``G'y`` of the solver's dual in NumPy; only a proposal, the re-check decides.
+
+    Candidates: on the support ``{i : y_i > delta max y}`` (``delta`` = 1e-6, 1e-3; the rest set
+    to zero), ``y`` projected onto ``null(G_S')`` by least squares; and alternate projections onto
+    ``null(G')`` and clipping at zero.  The candidate with the smallest ``||G'y|| / sum y_i ||G_i||``
+    among those that stay ``>= 0`` is returned (``y`` itself if none is better).
+    """
     norms = _row_norms(G)
 
     def residual(v: np.ndarray) -> float:
         weight = float(v @ norms)
-        return float(np.linalg.norm(G.T @ v)) / weight if weight > 0 else np.inf
+        return float(np.linalg.norm(G.T @ v)) / weight if weight > 0 and np.all(v >= 0) else np.inf
 
-    best, v = y, y
-    for _ in range(rounds):
+    candidates = [y]
+    top = float(np.max(y)) if y.size else 0.0
+    for delta in (1e-6, 1e-3):
+        support = y > delta * top
+        if np.any(support):
+            v = np.zeros_like(y)
+            ys, Gs = y[support], G[support]
+            v[support] = ys - Gs @ np.linalg.lstsq(Gs, ys, rcond=None)[0]
+            candidates.append(v)
+    v = y
+    for _ in range(3):
         v = np.maximum(v - G @ np.linalg.lstsq(G, v, rcond=None)[0], 0.0)
-        if residual(v) < residual(best):
-            best = v
-    return best
+        candidates.append(v)
+    return min(candidates, key=residual)
 
 
 def linear_feasibility(

@@ -361,7 +361,8 @@ def lyapunov_vertex_check(design: Any, box: Box, sweeper: Sweeper | None = None,
         if covers else "not claimed: A is not known to be affine in these parameters; the common P proves "
         "quadratic stability of the hull of the corner loops only")
     meaning = {
-        True: " -> quadratic stability over the whole box" if covers else " -> quadratic stability of the corners' hull",
+        True: (" -> quadratic stability over the whole box" if covers
+               else " -> quadratic stability of the corners' hull"),
         False: "",
         None: " (corners stable; robust stability rests on the lattice check, not proven for the continuum)",
     }[c.passed]
