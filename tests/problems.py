@@ -25,3 +25,44 @@ name: complex-poles
 plant: {kind: link, Km: 1.3, tau: 0.8}
 controller: {kind: pid_servo, poles: ['-3+4j', '-3-4j', -12], zero: -2}
 """
+
+# ----------------------------------------------------------------------------- canonical problems
+
+PLANTS = {
+    "link": "{kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.6, 2.4], tau: [0.4, 0.6], grid: 5}}",
+    "two_link": "{kind: robot, robot: planar2r, uncertainty: {m2: [2.5, 3.5], grid: 3}}",
+    "puma560": "{kind: robot, robot: puma560}",
+    "elastic_joint": "{kind: elastic_joint}",
+}
+"""The canonical plants every layer's tests reuse (the SIMNOG arm is designkit's planar2r)."""
+
+CASES = {
+    "pid_servo": {
+        "link": ("{kind: pid_servo, poles: [-4, -5, -20], zero: -3}", "{duration: 3.0}"),
+    },
+    "pid_tracking": {
+        "link": ("{kind: pid_tracking, poles: [-10, -12, -15]}",
+                 "{duration: 2.0, trajectory: {kind: quintic, amplitude: 1.0, duration: 1.0}}"),
+    },
+    "decentralized_pid": {
+        "two_link": ("{kind: decentralized_pid, poles: [-4, -5, -20], zero: -3}",
+                     "{duration: 3.0, step: [1.0, -0.5]}"),
+        # the PUMA's Coulomb friction (up to 25 N*m at the joints) makes the wrist creep to its target long
+        # after the linear modes have decayed: only a loose steady-state bound is asked of it here
+        "puma560": ("{kind: decentralized_pid, poles: [-4, -5, -20], zero: -3}",
+                    "{duration: 3.0, step: 0.1, initial_position: [0, 0.785, 3.14, 0, 0.785, 0]}",
+                    "{steady_state_error: 0.1}"),
+    },
+}
+"""Family -> canonical plant -> (controller section, simulation section[, requirements]): the conformance suite
+runs each."""
+
+REQUIREMENTS = "{overshoot: 50, settling_time: 10.0, steady_state_error: 0.05}"
+
+
+def case_yaml(kind: str, plant: str) -> str:
+    """The spec of one conformance case."""
+    controller, simulation, *rest = CASES[kind][plant]
+    requirements = rest[0] if rest else REQUIREMENTS
+    return (f"name: conformance-{kind}-{plant}\nplant: {PLANTS[plant]}\ncontroller: {controller}\n"
+            f"requirements: {requirements}\nsimulation: {simulation}\n")

@@ -26,6 +26,7 @@ EXPECTED_EXIT = {
     "tracking-pid": 0,
     "requirements-driven": 0,
     "infeasible-requirements": 1,
+    "simnog-decentralized-pid": 0,
 }
 
 

@@ -103,7 +103,7 @@ def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, n
     >>> d = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0)
     >>> [round(float(d.gains[k]), 6) for k in ("K1", "K2", "K3", "K4")]
     [50.0, 6.75, 100.0, -0.166667]
-    >>> sorted(round(p.real, 6) for p in d.closed_loop.poles)
+    >>> sorted(round(float(p.real), 6) for p in d.closed_loop.poles)
     [-20.0, -5.0, -4.0]
     """
     g = gains(plant, poles, zero)

@@ -213,8 +213,10 @@ class ElasticJointPlant(PlantBase):
 
     def rest_state(self, q: Any) -> np.ndarray:
         """At rest with the link at ``q`` (spring-side rad) and the spring unstretched (``x1 = x3 = q``)."""
-        q = float(np.asarray(q, dtype=float).reshape(-1)[0])
-        return np.array([q, 0.0, q, 0.0])
+        arr = np.asarray(q, dtype=float).reshape(-1)
+        if arr.size != 1:
+            raise ModelError("q", f"needs 1 entry, got {arr.size}")
+        return np.array([arr[0], 0.0, arr[0], 0.0])
 
     def equations(self) -> tuple[str, ...]:
         """The model in plain text."""

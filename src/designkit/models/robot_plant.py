@@ -173,8 +173,10 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
     robot = ROBOTS[name](symbolic=True, friction=friction, motor_inertia=motor_inertia)
     params = tuple(_parameter(k, overrides.get(k, v), *module.UNITS[k]) for k, v in module.DEFAULTS.items())
     plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}")
-    # validate the values through the same rule as with_params
-    return plant.with_params(**overrides) if overrides else plant
+    try:  # validate the values through the same rule as with_params
+        return plant.with_params(**overrides) if overrides else plant
+    except ModelError as exc:
+        raise ModelError(f"parameters.{exc.field}", exc.message) from None
 
 
 def chain_plant(description: ChainDescription, *, friction: bool = True, motor_inertia: bool = False,

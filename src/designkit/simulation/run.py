@@ -166,7 +166,14 @@ def _perturbation(spec: Spec, t: np.ndarray, dt: float, nd: int) -> tuple[np.nda
 
 
 def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]:
-    """Poles that set the time scales: the nominal and true closed loops and the open-loop plant."""
+    """Poles that set the time scales: the nominal closed loop and the closed loop on the true plant.
+
+    The open-loop plant's poles are left out on purpose: a stiff open-loop mode that the loop
+    moves (the PUMA's wrist, ``tau6 = 0.2 ms``, slowed down by its PID) would make the step
+    thousands of times smaller than the simulated closed loop needs.  A design without a linear
+    closed loop falls back to the requested poles (and a user ``dt`` or ``numerics.integrator:
+    cvodes`` for stiff cases).
+    """
     out = []
     if design.closed_loop is not None:
         out.append(design.closed_loop.poles)
@@ -174,8 +181,6 @@ def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]
     if plant is not design.plant and op:
         with contextlib.suppress(ValueError):  # no equilibrium on the true plant: the nominal rates stand
             out.append(linearize(plant, law, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
-    if op:
-        out.append(np.linalg.eigvals(plant.linearize(op["x"], np.zeros(len(plant.inputs))).A))
     return out
 
 
@@ -242,7 +247,7 @@ class Simulator:
         )
 
 
-def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
+def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = None) -> Simulator:
     """Build the simulation of ``design`` in the scenario ``spec.simulation`` on ``plant``.
 
     Parameters
@@ -254,6 +259,9 @@ def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
         The controller; ``design.plant`` is the nominal plant its model terms use.
     plant : Plant, optional
         The true plant (default: ``design.plant``), e.g. with other parameter values.
+    law : Law, optional
+        The controller (default: the design's family's law with the spec's anti-windup); any
+        :class:`~designkit.synthesis.law.Law`, e.g. one with a discrete memory.
 
     Raises
     ------
@@ -262,10 +270,10 @@ def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
         sampling period, the delay or the poles.
     """
     true_plant = design.plant if plant is None else plant
-    sim, fam = spec.simulation, family(design.kind)
+    sim, kind = spec.simulation, design.reference
     n = len(true_plant.positions)
-    ref: Reference = reference_for(fam.reference, sim, n)
-    law = fam.law(design, sim.anti_windup)
+    ref: Reference = reference_for(kind, sim, n)
+    law = family(design.kind).law(design, sim.anti_windup) if law is None else law
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant, law), reference_rate=ref.rate)
     timing = resolve(spec, rates, ref.horizon)
@@ -288,7 +296,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
     step = _step_function(true_plant, law, element, timing, spec.numerics)
 
     unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
-              "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[fam.reference]
+              "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[kind]
     ignored = [f"simulation.{unused[0]} ({unused[1]})"] if unused[0] in sim.model_fields_set else []
     numerics = spec.numerics
     integrator = ("rk4 (classical, fixed step)" if numerics.integrator == "rk4" else
@@ -301,7 +309,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
         else "controller output, nonlinear element and delay once per step, held over the step",
         "plant": {q.name: q.value for q in true_plant.parameters},
         "nominal_plant": {q.name: q.value for q in design.plant.parameters},
-        "controller": {"kind": design.kind, **law.settings},
+        "controller": {"kind": law.kind, **law.settings},
         "reference": dict(ref.settings),
         "nonlinearity": element.settings,
         "delay": float(sim.delay),
@@ -312,7 +320,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None) -> Simulator:
                           **dict.fromkeys(law.state_names, 0.0)},
         "ignored": ignored,
     }
-    return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=fam.reference,
+    return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings))
 
 

@@ -134,12 +134,12 @@ class RobotPlantSpec(Section):
             raise ValueError(f"give exactly one of robot (a built-in name), dh (a table) or urdf (a file), got {what}")
         if self.parameters and self.robot is None:
             raise ValueError("parameters: only a built-in robot has named parameters to override")
-        fields = self.model_fields_set
-        if self.dh is None and "convention" in fields:
+        # judged on values (not on which keys were written) so that a full dump of a spec validates again
+        if self.dh is None and self.convention != "standard":
             raise ValueError("convention: only applies to a dh table")
-        if self.urdf is None and ({"base_link", "tip_link"} & fields):
+        if self.urdf is None and (self.base_link is not None or self.tip_link is not None):
             raise ValueError("base_link: only applies to a urdf file")
-        if self.robot is not None and "gravity" in fields:
+        if self.robot is not None and tuple(self.gravity) != (0.0, 0.0, -9.81):
             raise ValueError("gravity: a built-in robot sets its gravity with parameters.g")
         return self
 

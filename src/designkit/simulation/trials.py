@@ -1,0 +1,87 @@
+"""Repeated trials of one experiment: what a learning controller learns between runs.
+
+A trial is one run of a built :class:`~designkit.simulation.run.Simulator` from the same
+initial state; between trials a learning rule maps the trial's record (and the feedforward it
+was run with) to the next feedforward, a sequence of plant inputs ``(N, nu)`` added to the
+controller's command at every step (the notes' iterative learning control, section 6).  The
+steps of a trial are rolled by CasADi (no Python loop per step); the runner loops over trials.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from designkit.simulation.result import SimulationResult
+
+__all__ = ["LearningRule", "TrialsResult", "run_trials"]
+
+LearningRule = Callable[[SimulationResult, np.ndarray], np.ndarray]
+"""``(result of trial k, feedforward of trial k) -> feedforward of trial k + 1``, arrays ``(N, nu)`` (N*m)."""
+
+
+@dataclass(frozen=True, eq=False)
+class TrialsResult:
+    """Every trial of an experiment.
+
+    Parameters
+    ----------
+    results : tuple of SimulationResult
+        Trial ``k``'s record.
+    feedforward : tuple of ndarray
+        The feedforward ``(N, nu)`` trial ``k`` ran with (N*m).
+    """
+
+    results: tuple[SimulationResult, ...]
+    feedforward: tuple[np.ndarray, ...]
+
+    @property
+    def max_tracking_errors(self) -> np.ndarray:
+        """``max_t max_j |q_j - qD_j|`` of each trial (rad)."""
+        return np.array([float(np.max(np.abs(r.tracking_errors))) for r in self.results])
+
+    @property
+    def rms_tracking_errors(self) -> np.ndarray:
+        """Root-mean-square tracking error of each trial over time and joints (rad)."""
+        return np.array([float(np.sqrt(np.mean(r.tracking_errors**2))) for r in self.results])
+
+
+def run_trials(simulator: object, trials: int, learn: LearningRule,
+               feedforward: np.ndarray | None = None) -> TrialsResult:
+    """Run ``trials`` repetitions of ``simulator``, updating the feedforward with ``learn`` after each.
+
+    Parameters
+    ----------
+    simulator : Simulator
+        The built experiment (:func:`designkit.simulation.run.build`).
+    trials : int
+        Number of trials (at least 1).
+    learn : LearningRule
+        The update between trials.
+    feedforward : ndarray, optional
+        Feedforward of the first trial (default zero).
+
+    Raises
+    ------
+    ValueError
+        When ``trials < 1`` or the learning rule returns an array of the wrong shape.
+    """
+    if trials < 1:
+        raise ValueError(f"trials must be at least 1, got {trials}")
+    shape = (simulator.time.size, simulator.n_inputs)
+    ff = np.zeros(shape) if feedforward is None else np.asarray(feedforward, dtype=float).reshape(shape)
+    results, used = [], []
+    for k in range(trials):
+        res = simulator.run(feedforward=ff)
+        results.append(res)
+        frozen = ff.copy()
+        frozen.setflags(write=False)
+        used.append(frozen)
+        if k + 1 < trials:
+            nxt = np.asarray(learn(res, frozen), dtype=float)
+            if nxt.shape != shape:
+                raise ValueError(f"the learning rule returned shape {nxt.shape}, expected {shape}")
+            ff = nxt
+    return TrialsResult(results=tuple(results), feedforward=tuple(used))
