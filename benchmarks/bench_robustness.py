@@ -26,9 +26,11 @@ Writes benchmarks/results/robustness.json.
 
 from __future__ import annotations
 
+import cProfile
 import json
 import os
 import platform
+import pstats
 import statistics
 import time
 from importlib import metadata
@@ -54,6 +56,35 @@ def closed_loop_matrix(gains: dict[str, float], Km0: float, Km: float, tau: floa
     return np.array([[0.0, 1.0, 0.0],
                      [-Km * K1 / tau, (Km / Km0 - 1.0 - Km * K2) / tau, -Km * K3 / tau],
                      [1.0, 0.0, 0.0]])
+
+
+PROFILED = {  # cProfile entry (file fragment, function) -> label
+    ("closed_loop.py", "equilibria"): "equilibria (batched Newton, incl. its Function.map construction)",
+    ("closed_loop.py", "state_matrices"): "state_matrices (incl. its Function.map construction)",
+    ("~", "<built-in method casadi._casadi.Function_map>"): "Function.map(N) construction (both)",
+    ("~", "<built-in method casadi._casadi.Function_call>"): "CasADi evaluation (Function.call)",
+    ("casadi.py", "toarray"): "CasADi DM -> NumPy conversion",
+    ("_linalg.py", "eigvals"): "numpy.linalg.eigvals",
+    ("_linalg.py", "norm"): "numpy.linalg.norm(A, 2) (batched SVD, for the Routh scaling)",
+    ("robustness.py", "characteristic_coefficients"): "characteristic_coefficients (Faddeev-LeVerrier)",
+    ("routh.py", "routh_batch"): "routh_batch",
+}
+
+
+def profile(design, samples: dict[str, np.ndarray]) -> dict[str, object]:
+    """Where one ``stable_fraction`` call spends its time (cProfile cumulative seconds; profiling inflates them)."""
+    prof = cProfile.Profile()
+    prof.enable()
+    stable_fraction(design, samples)
+    prof.disable()
+    stats = pstats.Stats(prof).stats  # (file, line, name) -> (cc, nc, tottime, cumtime, callers)
+    total = max(v[3] for v in stats.values())
+    out: dict[str, float] = {}
+    for (file, _line, name), (_cc, _nc, _tt, cum, _callers) in stats.items():
+        for (frag, fn), label in PROFILED.items():
+            if name == fn and (frag == "~" or file.endswith(frag)):
+                out[label] = out.get(label, 0.0) + cum
+    return {"total_s_under_cprofile": total, "cumulative_s": out}
 
 
 def main() -> None:
@@ -97,6 +128,8 @@ def main() -> None:
     slow, decidable = np.array(slow), np.array(decidable)
     agree = bool(np.array_equal(fast[:N_BASE][decidable], slow[decidable]))
 
+    where = profile(design, samples)
+
     t0 = time.perf_counter()
     for k, t in zip(Km[:N_GENERIC], tau[:N_GENERIC], strict=True):
         np.linalg.eigvals(linearize(nominal.with_params(Km=float(k), tau=float(t)), law, [0.0, 0.0, 0.0])[0].A)
@@ -124,6 +157,7 @@ def main() -> None:
             "seconds_extrapolated_to_plants": t_generic_extrapolated,
             "ratio_to_stable_fraction": t_generic_extrapolated / t_fast,
         },
+        "profile_of_stable_fraction": where,
         "goal_seconds": 5.0,
         "goal_met": t_fast < 5.0,
         "cpu_count": os.cpu_count(),

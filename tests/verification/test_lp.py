@@ -248,4 +248,4 @@ def test_polytope_helpers():
     assert hi[0] - 1.0 / 3.0 < 1e-15
     with pytest.raises(ValueError):
         LinearCondition("x", 1.0, {"nope": 1.0}).vector(["a"])
-    assert LinearCondition("x", 1.0, [2.0, 3.0]).value(np.array([1.0, 1.0]), ["a", "b"]) == 6.0
+    assert LinearCondition("x", 1.0, {"a": 2.0, "b": 3.0}).at(np.array([1.0, 1.0]), ["a", "b"]) == 6.0

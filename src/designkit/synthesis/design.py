@@ -176,11 +176,23 @@ class LinearCondition:
         object.__setattr__(self, "coefficients", freeze({k: float(v) for k, v in self.coefficients.items()}))
 
     def value(self, **theta: Any) -> Any:
-        """The left-hand side at parameters ``theta`` (arrays broadcast)."""
+        """The left-hand side at parameters ``theta`` given by name (arrays broadcast)."""
         out = self.constant
         for name, c in self.coefficients.items():
             out = out + c * np.asarray(theta[name], dtype=float)
         return out
+
+    def vector(self, names: Any) -> np.ndarray:
+        """The coefficients aligned with ``names`` (``ValueError`` for a coefficient on another parameter)."""
+        names = list(names)
+        unknown = set(self.coefficients) - set(names)
+        if unknown:
+            raise ValueError(f"condition {self.label!r}: unknown parameters {sorted(unknown)}")
+        return np.array([float(self.coefficients.get(n, 0.0)) for n in names])
+
+    def at(self, theta: Any, names: Any) -> float:
+        """The left-hand side at the vector ``theta`` whose entries are the parameters ``names``."""
+        return float(self.constant + self.vector(names) @ np.asarray(theta, dtype=float))
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from designkit.synthesis.design import LinearCondition
 from designkit.verification.certificate import Recheck, array_from_json, to_json
 from designkit.verification.check import Check
 from designkit.verification.tolerances import FARKAS_TOL, LP_EPS, LP_SOLVER_OK
@@ -160,45 +161,6 @@ class Polytope:
     def contains(self, theta: np.ndarray) -> bool:
         """``A theta <= b`` evaluated in NumPy."""
         return bool(np.all(self.A @ np.asarray(theta, dtype=float) <= self.b))
-
-
-@dataclass(frozen=True)
-class LinearCondition:
-    """The condition ``constant + coefficients . theta > 0``.
-
-    Parameters
-    ----------
-    label : str
-        Name shown in reports, e.g. ``"K1 > tau K3 / (1 + Km K2)"``.
-    constant : float
-        ``c0`` (in ``unit``).
-    coefficients : Mapping[str, float] or array_like
-        ``c_j`` by parameter name (missing names are zero), or an array aligned with the
-        polytope's names (``unit`` per unit of each parameter).
-    unit : str
-        Unit of the condition's value.
-    """
-
-    label: str
-    constant: float
-    coefficients: Mapping[str, float] | Sequence[float] | np.ndarray
-    unit: str = ""
-
-    def vector(self, names: Sequence[str]) -> np.ndarray:
-        """Coefficients as an array aligned with ``names``."""
-        if isinstance(self.coefficients, Mapping):
-            unknown = set(self.coefficients) - set(names)
-            if unknown:
-                raise ValueError(f"condition {self.label!r}: unknown parameters {sorted(unknown)}")
-            return np.array([float(self.coefficients.get(n, 0.0)) for n in names])
-        c = np.asarray(self.coefficients, dtype=float)
-        if c.shape != (len(names),):
-            raise ValueError(f"condition {self.label!r}: {c.shape[0] if c.ndim else 0} coefficients for {len(names)}")
-        return c
-
-    def value(self, theta: np.ndarray, names: Sequence[str]) -> float:
-        """``constant + c . theta`` (NumPy)."""
-        return float(self.constant + self.vector(names) @ np.asarray(theta, dtype=float))
 
 
 # ----------------------------------------------------------------------------- the solve
@@ -500,7 +462,7 @@ def _assess(cond: LinearCondition, poly: Polytope, eps: float, solver: str) -> d
     if sol.x is not None and np.all(np.isfinite(sol.x)):
         theta = _pull_inside(poly, np.clip(sol.x, lo, hi), solver)  # clipping is exact for a box
         if theta is not None:
-            v = cond.value(theta, names)
+            v = cond.at(theta, names)
             entry.update(worst_theta=_named(names, theta), value_at_worst=v)
             candidates.append((v, "LP minimiser", theta))
     if poly.is_box and len(names) <= _MAX_VERTEX_DIM and np.all(lo <= hi):

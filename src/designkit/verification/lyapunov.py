@@ -136,13 +136,12 @@ def _common_check(name: str, As: Sequence[np.ndarray], eps: float, solver: str, 
     sol = solve_lmi(As, solver=solver)
     rc = recheck(As, sol.P, eps=eps) if sol.P is not None else None
     cert = _certificate(sol, rc, As, eps)
-    if sol.status not in LMI_SOLVER_OK:
+    if sol.status not in LMI_SOLVER_OK or rc is None:
         return Check(
             name=name, passed=None, target=target, achieved=sol.t, margin=None, unit="1 (normalised)",
             detail=f"undecided: solver status {sol.status!r} (no {what} certified; not a proof that none exists)",
             certificate=cert,
         )
-    assert rc is not None
     if not rc.ok and sol.t is not None and sol.t < eps:
         return Check(
             name=name, passed=None, target=target, achieved=sol.t, margin=sol.t - eps, unit="1 (normalised)",

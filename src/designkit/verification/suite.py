@@ -91,14 +91,13 @@ def _box_applies(design: Any, ctx: Context) -> bool:
 
 
 def _robust_box(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.lp import LinearCondition, Polytope, robust_linear_conditions
+    from designkit.verification.lp import Polytope, robust_linear_conditions
 
     intervals = _uncertainty(ctx).intervals
     names = tuple(design.characteristic.parameters)
     lo = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[0] for n in names]
     hi = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[1] for n in names]
-    conditions = [LinearCondition(c.label, c.constant, dict(c.coefficients), c.unit)
-                  for c in design.characteristic.linear_conditions(design.gains)]
+    conditions = design.characteristic.linear_conditions(design.gains)
     check = robust_linear_conditions("robust_box", conditions, Polytope.box(names, lo, hi), solver=ctx.solver)
     what = ("the closed-loop Hurwitz conditions, affine in " + ", ".join(names) + " for fixed gains, hold on the "
             "whole box (every plant in it, not a sample)")
