@@ -10,6 +10,10 @@ commanded and applied controls, columns of the 2-D ``u_command``/``u_applied`` o
 end to end (building the CasADi Functions included), and ``Simulator.run()`` alone (``build``
 once, then run: what a repeated simulation costs), for several durations.
 
+designkit runs with a private, initially empty code-generation cache (``DESIGNKIT_CACHE_DIR``), so
+that the figures do not depend on which compiled steps happen to be cached on the machine; the
+evaluation designkit chose (interpreted or compiled, and why) is recorded per row.
+
 Run: ``python benchmarks/bench_simulation.py``; writes ``benchmarks/results/simulation.json``.
 """
 
@@ -18,7 +22,9 @@ from __future__ import annotations
 import json
 import os
 import platform
+import shutil
 import statistics
+import tempfile
 import time
 from pathlib import Path
 
@@ -110,7 +116,28 @@ def best_of(fn, repeat: int) -> tuple[float, float, object]:
     return min(times), statistics.median(times), value
 
 
+def evaluation_of(sim) -> object:
+    """How designkit evaluates the steps (interpreted or compiled, and why), when it says so."""
+    info = getattr(sim, "compiled", None) or sim.settings.get("compiled")
+    return json.loads(json.dumps(info, default=str)) if info else None
+
+
 def main() -> None:
+    # a private, empty code-generation cache: what designkit runs may depend on what is cached
+    cache = tempfile.mkdtemp(prefix="bench-simulation-cache-")
+    previous = os.environ.get("DESIGNKIT_CACHE_DIR")
+    os.environ["DESIGNKIT_CACHE_DIR"] = cache
+    try:
+        measure()
+    finally:
+        if previous is None:
+            os.environ.pop("DESIGNKIT_CACHE_DIR", None)
+        else:
+            os.environ["DESIGNKIT_CACHE_DIR"] = previous
+        shutil.rmtree(cache, ignore_errors=True)
+
+
+def measure() -> None:
     rows = []
     for duration in DURATIONS:
         spec = posspeed_spec(duration)
@@ -137,7 +164,7 @@ def main() -> None:
         du_app = float(np.max(np.abs(res.u_applied[:, 0] - np.clip(u_py, -LIMIT, LIMIT))))
         assert max(du_cmd, du_app) < 1e-6, f"the controls disagree by {max(du_cmd, du_app):g} N*m"
         rows.append({
-            "duration_s": duration, "dt_s": dt, "steps": n - 1,
+            "duration_s": duration, "dt_s": dt, "steps": n - 1, "evaluation": evaluation_of(sim),
             "simulate_best_s": t_sim, "simulate_median_s": med_sim,
             "run_best_s": t_run, "run_median_s": med_run,
             "python_loop_best_s": t_py, "python_loop_median_s": med_py,

@@ -147,3 +147,26 @@ def test_learning_between_trials_reduces_the_tracking_error():
     np.testing.assert_array_equal(out.results[0].state, simulator.run().state)  # trial 0 is the plain run
     with pytest.raises(ValueError, match="shape"):
         run_trials(simulator, 2, lambda res, ff: ff[:-1])
+
+
+# ----------------------------------------------------------------------------- compiled evaluation
+
+
+def test_compiled_step_gives_the_interpreted_numbers(tmp_path, monkeypatch):
+    from designkit.models.codegen import find_compiler
+
+    if find_compiler() is None:
+        pytest.skip("no C compiler on PATH: the compiled path cannot be exercised here")
+    monkeypatch.setenv("DESIGNKIT_CACHE_DIR", str(tmp_path))
+    # long enough (20,000 steps) for auto to look the library up
+    base = {"duration": 20.0, "dt": 0.001, "nonlinearity": {"kind": "saturation", "limit": 20.0}}
+    never = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "never"}})
+    always = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "always"}})
+    design = design_of(never)
+    a, b = build(never, design), build(always, design)
+    assert a.compiled["compiled"] is False and b.compiled["compiled"] is True
+    np.testing.assert_array_equal(a.run().state, b.run().state)  # -O1, no FMA: bit for bit
+    auto = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "auto"}})
+    assert build(auto, design).compiled["why"] == "cached library"  # the library is reused
+    short = Spec.model_validate({**make_spec(duration=0.5).model_dump(), "numerics": {"compile": "auto"}})
+    assert build(short, design).compiled["compiled"] is False  # nothing to gain on a short run

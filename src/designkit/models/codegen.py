@@ -14,6 +14,7 @@ original (interpreted) Function instead; ``compiled`` is then ``False`` and
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import shutil
@@ -21,7 +22,7 @@ import subprocess
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import casadi
 import numpy as np
@@ -32,6 +33,11 @@ DEFAULT_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-fPIC", "-shared")
 """Compiler flags; ``-march=native`` is safe because the cache is per machine."""
 
 COMPILER_CANDIDATES: tuple[str, ...] = ("cc", "gcc", "clang")
+
+MAX_CACHED_LIBRARIES = 256
+"""The cache keeps at most this many shared libraries (the least recently built are removed): libraries are
+keyed by content, and a simulation's content includes its gains, so the cache would otherwise grow without
+bound."""
 
 
 def default_cache_dir() -> Path:
@@ -177,6 +183,33 @@ def _generate_source(f: casadi.Function) -> str:
     return gen.dump()
 
 
+def _prune(cache: Path) -> None:
+    """Remove the oldest libraries (and their sources) beyond :data:`MAX_CACHED_LIBRARIES`."""
+    libraries = sorted(cache.glob("*.so"), key=lambda p: p.stat().st_mtime)
+    for old in libraries[: max(0, len(libraries) - MAX_CACHED_LIBRARIES)]:
+        for path in (old, old.with_suffix(".c")):
+            with contextlib.suppress(OSError):
+                path.unlink()
+
+
+def _library_path(f: casadi.Function, cc: str, flags: tuple[str, ...], directory: Any) -> tuple[str, Path, Path]:
+    source = _generate_source(f)
+    digest = hashlib.sha256("\0".join([source, cc, *flags, casadi.__version__]).encode()).hexdigest()[:16]
+    cache = Path(directory) if directory is not None else default_cache_dir()
+    stem = f"{f.name()}_{digest}"
+    return source, cache / f"{stem}.so", cache / f"{stem}.c"
+
+
+def cached_library(f: casadi.Function, *, directory: str | os.PathLike[str] | None = None,
+                   flags: tuple[str, ...] = DEFAULT_FLAGS, compiler: str | None = None) -> Path | None:
+    """The shared library :func:`compile_function` would load for ``f`` if it is already built, else None."""
+    cc = shutil.which(compiler) if compiler else find_compiler()
+    if cc is None:
+        return None
+    _, library, _ = _library_path(f, cc, flags, directory)
+    return library if library.exists() else None
+
+
 def compile_function(
     f: casadi.Function,
     *,
@@ -208,12 +241,8 @@ def compile_function(
     if cc is None:
         wanted = compiler or " / ".join(COMPILER_CANDIDATES)
         return CompiledFunction(f, f, False, f"no C compiler found on PATH ({wanted}); using interpreted")
-    source = _generate_source(f)
-    digest = hashlib.sha256("\0".join([source, cc, *flags, casadi.__version__]).encode()).hexdigest()[:16]
-    cache = Path(directory) if directory is not None else default_cache_dir()
-    stem = f"{f.name()}_{digest}"
-    library = cache / f"{stem}.so"
-    c_file = cache / f"{stem}.c"
+    source, library, c_file = _library_path(f, cc, flags, directory)
+    cache = library.parent
     if not library.exists():
         try:
             cache.mkdir(parents=True, exist_ok=True)
@@ -227,6 +256,7 @@ def compile_function(
                 first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
                 return CompiledFunction(f, f, False, f"compilation failed ({cc}): {first}")
             os.replace(tmp, library)
+            _prune(cache)
         except OSError as exc:
             return CompiledFunction(f, f, False, f"cannot write to cache directory {cache}: {exc}")
     loaded = casadi.external(f.name(), str(library))

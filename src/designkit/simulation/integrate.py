@@ -91,7 +91,8 @@ def variable_step(rhs: ca.Function, s: ca.SX, dt: float, stages: Sequence[ca.SX]
     return integrator(x0=s, p=ca.vertcat(a0, am, a1, held))["xf"]
 
 
-def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: int = 200) -> np.ndarray:
+def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: int = 200,
+              accumulated: ca.Function | None = None) -> np.ndarray:
     """Run ``step: (z, w) -> (z_next, record)`` over the columns of ``inputs``.
 
     ``step.mapaccum(chunk)`` is built once and evaluated chunk after chunk through CasADi's
@@ -111,6 +112,8 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
         Per-step inputs, one column per step.
     chunk : int
         Steps per ``mapaccum`` evaluation.
+    accumulated : casadi.Function, optional
+        A ready ``mapaccum`` of ``step`` (e.g. compiled to C); its number of steps replaces ``chunk``.
 
     Returns
     -------
@@ -119,13 +122,13 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
     """
     nw, n = inputs.shape
     nz, nrec = step.size1_in(0), step.size1_out(1)
-    m = max(1, min(chunk, n))
+    m = accumulated.size2_in(1) if accumulated is not None else max(1, min(chunk, n))
     n_chunks = -(-n // m)
     # Pad to whole chunks by repeating the last input column; the extra steps are discarded.
     padded = np.concatenate([inputs, np.repeat(inputs[:, -1:], n_chunks * m - n, axis=1)], axis=1)
     w_flat = np.ascontiguousarray(padded.T).ravel()  # column-major: each chunk is contiguous
     records = np.empty((n_chunks, m * nrec))
-    acc = step.mapaccum(f"{step.name()}_acc", m)
+    acc = accumulated if accumulated is not None else step.mapaccum(f"{step.name()}_acc", m)
     buf, evaluate = acc.buffer()
     z = np.array(z0, dtype=float)
     z_out = np.empty(nz * m)

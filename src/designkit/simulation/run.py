@@ -27,6 +27,14 @@ disturbance is held per step: a step at ``time`` acts from the first ``t_k >= ti
 Integrators (``numerics.integrator``): ``rk4`` (classical, fixed step) or ``cvodes`` (CasADi's
 variable-step BDF inside every step, for stiff plants).  Either way the steps are rolled by
 ``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
+
+Compiled evaluation (``numerics.compile``): the rolled RK4 step can be turned into C by CasADi's
+code generator and the system C compiler (:func:`designkit.models.codegen.compile_function`,
+cached by content hash, ``-O1 -ffp-contract=off`` so the compiled run equals the interpreted one
+to the last bit).  ``auto`` (default) uses the compiled library when it is already cached, and
+compiles when the interpreted run is estimated to cost more than compiling
+(:data:`COMPILE_BREAK_EVEN`); ``always`` and ``never`` force the choice.  Without a compiler, or
+for a CVODES step, the interpreted CasADi virtual machine runs (the settings say which and why).
 """
 
 from __future__ import annotations
@@ -52,7 +60,21 @@ from designkit.synthesis.closed_loop import linearize
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
 
-__all__ = ["Simulator", "build", "simulate"]
+__all__ = ["COMPILE_BREAK_EVEN", "Simulator", "build", "simulate"]
+
+CHUNK = 200
+"""Steps per ``mapaccum`` evaluation (see :func:`~designkit.simulation.integrate.run_steps`)."""
+COMPILE_BREAK_EVEN = 0.25
+"""Compile (``numerics.compile: auto``) when the interpreted run is estimated above this (s): about what
+compiling the rolled two-link step costs with ``cc -O1`` (0.21-0.25 s measured, ``benchmarks/bench_simnog.py``)."""
+CACHE_LOOKUP_FLOOR = 0.01
+"""Below this estimated interpreted cost (s) the compiled cache is not even looked up (generating the C source
+to hash it costs a few milliseconds)."""
+INTERPRETED_SECONDS_PER_INSTRUCTION = 6e-9
+"""Measured cost of one CasADi virtual-machine instruction in a rolled step on a quiet machine (SIMNOG:
+56 ms for 10^4 steps of 882 instructions; -O1 C runs the same steps in 5.5 ms)."""
+COMPILE_FLAGS = ("-O1", "-ffp-contract=off", "-fPIC", "-shared")
+"""No reassociation and no fused multiply-add: the compiled step gives the interpreted step's numbers."""
 
 
 @dataclass(frozen=True)
@@ -220,6 +242,8 @@ class Simulator:
     plant: Any
     law: Law
     settings: Mapping[str, Any] = field(default_factory=dict)
+    accumulated: ca.Function | None = None
+    compiled: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def n_inputs(self) -> int:
@@ -233,7 +257,7 @@ class Simulator:
             ff = np.asarray(feedforward, dtype=float).reshape(self.time.size, self.n_inputs)
             inputs = inputs.copy()
             inputs[-self.n_inputs:] = ff.T
-        rec = run_steps(self.step, self.z0, inputs)
+        rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated)
         p, law = self.plant, self.law
         nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
         cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
@@ -245,6 +269,34 @@ class Simulator:
             input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
             settings=self.settings,
         )
+
+
+def _evaluator(step: ca.Function, n_steps: int, mode: str) -> tuple[ca.Function | None, dict[str, Any]]:
+    """The compiled ``mapaccum`` to run ``step`` with, or None for the interpreted one, and why."""
+    from designkit.models.codegen import cached_library, compile_function, find_compiler
+
+    estimate = n_steps * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
+    info: dict[str, Any] = {"mode": mode, "interpreted_estimate_s": round(estimate, 4)}
+    if mode == "never":
+        return None, {**info, "compiled": False, "why": "numerics.compile: never"}
+    if not step.is_a("SXFunction"):
+        return None, {**info, "compiled": False, "why": "a CVODES step is not compiled"}
+    if find_compiler() is None:
+        return None, {**info, "compiled": False, "why": "no C compiler on PATH"}
+    if mode == "auto" and estimate < CACHE_LOOKUP_FLOOR:
+        return None, {**info, "compiled": False,
+                      "why": f"interpreted run estimated at {estimate:.3g} s: nothing to gain"}
+    acc = step.mapaccum(f"{step.name()}_acc", CHUNK)
+    cached = cached_library(acc, flags=COMPILE_FLAGS) is not None
+    if mode == "auto" and not cached and estimate < COMPILE_BREAK_EVEN:
+        return None, {**info, "compiled": False,
+                      "why": f"interpreted run estimated at {estimate:.3g} s, below the {COMPILE_BREAK_EVEN:g} s "
+                             "it costs to compile"}
+    compiled = compile_function(acc, flags=COMPILE_FLAGS)
+    if not compiled.compiled:
+        return None, {**info, "compiled": False, "why": compiled.reason}
+    return compiled.function, {**info, "compiled": True, "why": "cached library" if cached else "compiled now",
+                               "flags": " ".join(COMPILE_FLAGS)}
 
 
 def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = None) -> Simulator:
@@ -294,6 +346,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = _step_function(true_plant, law, element, timing, spec.numerics)
+    accumulated, compile_info = _evaluator(step, N, spec.numerics.compile)
 
     unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
               "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[kind]
@@ -321,7 +374,8 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
         "ignored": ignored,
     }
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
-                     plant=true_plant, law=law, settings=freeze(settings))
+                     plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
+                     compiled=freeze(compile_info))
 
 
 def simulate(spec: Spec, design: Design, *, plant: Any = None) -> SimulationResult:

@@ -211,11 +211,13 @@ class Numerics(Section):
     """How the numbers are computed (not what is designed).
 
     integrator: ``rk4`` (fixed step, default) or ``cvodes`` (CasADi's variable-step BDF, for
-    stiff plants such as the elastic joint) with tolerances ``rtol``, ``atol``; ``solver``: the
-    cvxpy solver of the LMIs and LPs.
+    stiff plants such as the elastic joint) with tolerances ``rtol``, ``atol``; ``compile``:
+    ``auto`` (compile the simulation step to C when it is cached or pays for itself), ``always``
+    or ``never``; ``solver``: the cvxpy solver of the LMIs and LPs.
     """
 
     integrator: Literal["rk4", "cvodes"] = "rk4"
+    compile: Literal["auto", "always", "never"] = "auto"
     rtol: float = Field(default=1e-8, gt=0, lt=1)
     atol: float = Field(default=1e-10, gt=0, lt=1)
     solver: Literal["CLARABEL", "SCS"] = "CLARABEL"

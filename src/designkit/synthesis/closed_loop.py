@@ -20,7 +20,7 @@ python-control interconnection of the linearized plant with the law, which the t
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -33,6 +33,8 @@ from designkit.synthesis.law import Law
 __all__ = ["Equilibria", "LoopFunctions", "equilibria", "linearize", "loop_functions", "reference_names",
            "with_closed_loop"]
 
+BATCH = 4096
+"""Largest block of plants evaluated by one mapped CasADi call."""
 NEWTON_ITERATIONS = 40
 """Most Newton steps of the equilibrium search."""
 NEWTON_TOL = 1e-12
@@ -65,6 +67,42 @@ class LoopFunctions:
     n_state: int
     n_controller: int
     n_joints: int
+    _maps: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def evaluate(self, z: np.ndarray, r0: np.ndarray, d0: np.ndarray, P: np.ndarray) -> list[np.ndarray]:
+        """``jacobians`` at every row of ``z`` and ``P`` (constant ``r0``, ``d0``), as arrays ``(N, rows, cols)``.
+
+        Evaluated by ``map`` over blocks of at most :data:`BATCH` rows (the mapped function is built once per
+        block size and cached), so the cost of building it does not grow with the batch.
+        """
+        N = P.shape[0]
+        m = min(N, BATCH)
+        if m not in self._maps:
+            fn = self.jacobians if m == 1 else self.jacobians.map(m)
+            self._maps[m] = (fn, *fn.buffer())
+        fn, buf, call = self._maps[m]
+        r0 = np.ascontiguousarray(np.tile(np.asarray(r0, dtype=float).ravel(), m))  # map repeats every input
+        d0 = np.ascontiguousarray(np.tile(np.asarray(d0, dtype=float).ravel(), m))
+        sizes = [self.jacobians.size_out(i) for i in range(self.jacobians.n_out())]
+        out = [np.empty((N, rows, cols)) for rows, cols in sizes]
+        res = [np.empty(rows * cols * m) for rows, cols in sizes]
+        for start in range(0, N, m):
+            zb, Pb = z[start:start + m], P[start:start + m]
+            k = zb.shape[0]
+            if k < m:  # pad the last block
+                zb = np.vstack([zb, np.repeat(zb[-1:], m - k, axis=0)])
+                Pb = np.vstack([Pb, np.repeat(Pb[-1:], m - k, axis=0)])
+            # CasADi is column-major: a (rows, m) input is the (m, rows) C-ordered array
+            zc, Pc = np.ascontiguousarray(zb, dtype=float), np.ascontiguousarray(Pb, dtype=float)
+            for i, arr in enumerate((zc, r0, d0, Pc)):
+                buf.set_arg(i, memoryview(arr))
+            for i, arr in enumerate(res):
+                buf.set_res(i, memoryview(arr))
+            call()
+            for i, (rows, cols) in enumerate(sizes):
+                # output i is (rows, cols * m) column-major: block j's column c is column j * cols + c
+                out[i][start:start + k] = res[i].reshape(m, cols, rows).transpose(0, 2, 1)[:k]
+        return out
 
 
 def loop_functions(plant: Any, law: Law) -> LoopFunctions:
@@ -86,7 +124,8 @@ def loop_functions(plant: Any, law: Law) -> LoopFunctions:
     loop = ca.Function("closed_loop", [z, r, d, p], [z_dot, u], ["z", "r", "d", "p"], ["z_dot", "u"])
     jac = ca.Function(
         "closed_loop_jacobians", [z, r, d, p],
-        [z_dot, ca.jacobian(z_dot, z), ca.jacobian(z_dot, rd), ca.jacobian(u, z), ca.jacobian(u, rd), B_u],
+        [ca.densify(m) for m in (z_dot, ca.jacobian(z_dot, z), ca.jacobian(z_dot, rd), ca.jacobian(u, z),
+                                 ca.jacobian(u, rd), B_u)],  # dense: evaluated through NumPy buffers
         ["z", "r", "d", "p"], ["z_dot", "A", "B", "Cu", "Du", "B_u"],
     )
     return LoopFunctions(loop, jac, nx, nc, n)
@@ -114,10 +153,6 @@ class Equilibria:
     iterations: int
 
 
-def _batched(fn: ca.Function, n: int) -> ca.Function:
-    return fn if n == 1 else fn.map(n)
-
-
 def _reshape(block: np.ndarray, rows: int, cols: int, n: int) -> np.ndarray:
     """``(rows, cols * n)`` as returned by ``Function.map`` -> ``(n, rows, cols)``."""
     return np.asarray(block, dtype=float).reshape(rows, n, cols).transpose(1, 0, 2)
@@ -143,16 +178,14 @@ def equilibria(fns: LoopFunctions, z0: np.ndarray, r0: np.ndarray, P: np.ndarray
     N, nz = P.shape[0], fns.n_state + fns.n_controller
     nd = fns.jacobians.size1_in(2)
     d0 = np.zeros(nd) if d0 is None else np.asarray(d0, dtype=float)
-    jac = _batched(fns.jacobians, N)
     z = np.tile(np.asarray(z0, dtype=float).reshape(1, nz), (N, 1))
     residual = np.full(N, np.inf)
     active = np.ones(N, dtype=bool)
     it = 0
     for step_count in range(1, NEWTON_ITERATIONS + 1):  # iterations, not plants
         it = step_count
-        out = jac(z.T, r0, d0, P.T)
-        f = np.asarray(out[0], dtype=float).reshape(nz, N).T
-        J = _reshape(out[1], nz, nz, N)
+        out = fns.evaluate(z, r0, d0, P)
+        f, J = out[0][:, :, 0], out[1]
         residual = np.max(np.abs(f), axis=1) / (1.0 + np.max(np.abs(z), axis=1))
         active = residual > NEWTON_TOL
         if not np.any(active):
@@ -179,10 +212,8 @@ def _safe_solve(J: np.ndarray, f: np.ndarray) -> np.ndarray:
 def state_matrices(fns: LoopFunctions, z: np.ndarray, r0: np.ndarray, P: np.ndarray) -> np.ndarray:
     """Closed-loop ``A = dz_dot/dz`` at each row of ``z`` and ``P``: shape ``(N, nz, nz)``."""
     P = np.atleast_2d(np.asarray(P, dtype=float))
-    N, nz = P.shape[0], z.shape[1]
     nd = fns.jacobians.size1_in(2)
-    out = _batched(fns.jacobians, N)(np.nan_to_num(z).T, r0, np.zeros(nd), P.T)
-    return _reshape(out[1], nz, nz, N)
+    return fns.evaluate(np.nan_to_num(z), r0, np.zeros(nd), P)[1]
 
 
 def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearSystem, LinearSystem, dict]:

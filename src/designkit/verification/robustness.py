@@ -184,7 +184,7 @@ class Sweeper:
         self.names = tuple(names)
         self.law = family(design.kind).law(design, None)
         plant = design.plant
-        self._index = [plant.parameter_names.index(n) for n in self.names]
+        self._index = [plant.parameter_names.index(plant.parameter(n).name) for n in self.names]  # ModelError
         self._p0 = np.asarray(plant.parameter_vector, dtype=float)
         op = design.operating_point
         self._r0 = np.asarray(op["r"], dtype=float)
@@ -206,13 +206,16 @@ class Sweeper:
         P = self.parameters(theta)
         eq = equilibria(self._functions, self._z0, self._r0, P)
         A = state_matrices(self._functions, eq.z, self._r0, P)
+        usable = eq.converged & np.all(np.isfinite(A), axis=(1, 2))
+        A_safe = np.where(usable[:, None, None], A, 0.0)
         with np.errstate(all="ignore"):
-            eig = np.linalg.eigvals(np.nan_to_num(A))
-        abscissa = np.where(eq.converged, eig.real.max(axis=1), np.nan)
+            eig = np.linalg.eigvals(A_safe)
+        abscissa = np.where(usable, eig.real.max(axis=1), np.nan)
         n = A.shape[1]
         if n <= MAX_ROUTH_ORDER:
-            scale = np.maximum(np.linalg.norm(A, ord=2, axis=(1, 2)), 1e-300)
-            coeffs = characteristic_coefficients(np.nan_to_num(A) / scale[:, None, None])
+            # any positive scale makes the coefficients dimensionless; the largest entry is the cheapest
+            scale = np.maximum(np.max(np.abs(A_safe), axis=(1, 2)), 1e-300)
+            coeffs = characteristic_coefficients(A_safe / scale[:, None, None])
             rb = routh_batch(coeffs)
             status = rb.status.copy()
             margin = rb.margin
@@ -222,7 +225,7 @@ class Sweeper:
         else:
             status = np.where(abscissa < 0, STABLE, UNSTABLE).astype(np.int8)
             margin = np.full(len(status), np.nan)
-        status[~eq.converged] = MARGINAL
+        status[~usable] = MARGINAL
         return SweepResult(theta=theta, status=status, abscissa=abscissa, routh_margin=margin, A=A)
 
 
