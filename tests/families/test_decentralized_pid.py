@@ -20,6 +20,7 @@ from designkit.pipeline import run
 from designkit.simulation.run import simulate
 from designkit.spec.loader import parse_spec
 from tests import oracles
+from tests.tolerances import TOL
 
 P = DEFAULTS
 
@@ -80,7 +81,7 @@ def test_simulation_of_the_coupled_arm_matches_the_printed_simnog_equations():
                     rtol=1e-11, atol=1e-12, method="DOP853")
     ref = sol.y.T
     err = np.max(np.abs(res.state - ref[:, :4]) / (1.0 + np.abs(ref[:, :4])))
-    assert err < 1e-6, err
+    assert err < TOL["rk4_vs_ivp"], err
     np.testing.assert_allclose(res.controller_state, ref[:, 4:], rtol=1e-5, atol=1e-7)
     assert np.max(np.abs(res.tracking_errors[-1])) < 1e-3
 
@@ -91,8 +92,8 @@ def test_per_link_models_use_the_diagonal_inertia_at_the_configuration():
     D = _mass(1.1)
     for i, loop in enumerate(design.loops):
         f = P[f"f{i + 1}"]
-        assert loop.plant.Km == pytest.approx(1.0 / f, rel=1e-12)
-        assert loop.plant.tau == pytest.approx(D[i, i] / f, rel=1e-12)
+        assert loop.plant.Km == pytest.approx(1.0 / f, rel=TOL["algebra"])
+        assert loop.plant.tau == pytest.approx(D[i, i] / f, rel=TOL["algebra"])
     assert tuple(design.extra["configuration"]) == (0.3, 1.1)
 
 
@@ -102,7 +103,7 @@ def test_each_joint_loop_places_its_poles_on_its_simplified_link():
     for loop, requested in zip(design.loops, ([-4, -5, -20], [-3 + 2j, -3 - 2j, -15]), strict=True):
         A = oracles.servo_closed_loop(dict(loop.gains), loop.plant).A  # hand-derived, not the library's loop
         got = np.sort_complex(np.linalg.eigvals(A))
-        np.testing.assert_allclose(got, np.sort_complex(np.array(requested, dtype=complex)), atol=1e-9)
+        np.testing.assert_allclose(got, np.sort_complex(np.array(requested, dtype=complex)), atol=TOL["eigenvalues"])
     assert np.asarray(design.gains["K1"]).shape == (2,)
 
 
@@ -116,7 +117,8 @@ def test_coupled_linearization_equals_finite_differences_of_the_simnog_equations
     h = 1e-6
     J = np.column_stack([(rhs(0.0, z0 + h * e) - rhs(0.0, z0 - h * e)) / (2 * h) for e in np.eye(6)])
     A = design.closed_loop.A
-    np.testing.assert_allclose(A, J, rtol=1e-6, atol=1e-5 * np.max(np.abs(J)))
+    fd = TOL["finite_difference"]
+    np.testing.assert_allclose(A, J, rtol=fd, atol=10 * fd * np.max(np.abs(J)))
 
 
 def test_without_feedforward_the_integrals_carry_the_gravity_load():

@@ -1,4 +1,4 @@
-"""Shared scenarios and the one tolerance table of the simulation tests."""
+"""Shared scenarios of the simulation tests (tolerances: tests/tolerances.py)."""
 
 from __future__ import annotations
 
@@ -10,14 +10,7 @@ from designkit.families import synthesize
 from designkit.models.link import LinkPlant
 from designkit.spec.schema import Spec
 from designkit.synthesis.design import Design
-
-# Scaled error (x - ref) / (1 + |ref|) bounds.
-TOL = {
-    "rk4_vs_exact": 1e-7,  # RK4 at dt |p|max = 0.02..0.05 against an exact linear solution
-    "rk4_vs_foh": 1e-6,  # against python-control with first-order-hold inputs on a fine grid
-    "exact": 0.0,  # same arithmetic, must be bit-identical
-    "settled": 1e-4,  # a transient that has decayed by > 10 time constants
-}
+from tests.tolerances import TOL  # noqa: F401  (re-exported for the simulation tests)
 
 POSSPEED = {"kind": "pid_servo", "poles": [-4, -5, -20], "zero": -3}
 TRACKING = {"kind": "pid_tracking", "poles": [-10, -12, -15]}

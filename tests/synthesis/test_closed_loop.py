@@ -12,6 +12,7 @@ from designkit.models.link import LinkPlant
 from designkit.models.robot_plant import zoo_plant
 from designkit.synthesis.closed_loop import equilibria, linearize, loop_functions, reference_names
 from tests import oracles
+from tests.tolerances import TOL
 from tests.verification.helpers import plants, pole_sets
 
 
@@ -22,7 +23,7 @@ def test_servo_linearization_equals_the_hand_derived_loop(plant, poles):
     ref = oracles.servo_closed_loop(dict(design.gains), plant)
     cl = design.closed_loop
     for name in ("A", "B", "C", "D"):
-        np.testing.assert_allclose(getattr(cl, name), getattr(ref, name), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(getattr(cl, name), getattr(ref, name), rtol=TOL["algebra"], atol=TOL["algebra"])
     assert cl.inputs == oracles.INPUTS and cl.outputs == ("x1", "u")
 
 
@@ -32,8 +33,8 @@ def test_tracker_on_another_plant_equals_the_hand_derived_loop(plant, poles, oth
     design = pid_tracking.design(plant, poles)
     got, _, point = linearize(other, pid_tracking.law(design), [0.0, 0.0, 0.0])
     ref = oracles.tracking_closed_loop(dict(design.gains), other, plant)
-    np.testing.assert_allclose(got.A, ref.A, rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(got.B, ref.B, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(got.A, ref.A, rtol=TOL["algebra"], atol=TOL["algebra"])
+    np.testing.assert_allclose(got.B, ref.B, rtol=TOL["algebra"], atol=TOL["algebra"])
     assert point["residual"] <= 1e-12
 
 
@@ -84,7 +85,7 @@ def test_batched_equilibria_equal_one_by_one_and_hold_the_arm_against_gravity():
     assert np.all(eq.converged)
     for k in range(3):
         one = equilibria(fns, z0, r0, P[k:k + 1])
-        np.testing.assert_allclose(eq.z[k], one.z[0], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(eq.z[k], one.z[0], rtol=TOL["algebra"], atol=TOL["algebra"])
         q = eq.z[k, :2]
         np.testing.assert_allclose(q, r0[:2], atol=1e-10)  # integral action: at rest on the reference
         # the PIDs' torque holds gravity: the plant's acceleration is zero at (q, 0) under that torque
