@@ -36,7 +36,7 @@ from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.law import Law, integral_law
-from designkit.synthesis.requirements import poles_from_spec
+from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
 KIND = "decentralized_pid"
 
@@ -198,14 +198,6 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return with_closed_loop(design, law(design), r0)
 
 
-def validate(spec: Any) -> None:
-    """Poles, or the requirements they are derived from."""
-    req = spec.requirements
-    if spec.controller.poles is None and (req is None or req.overshoot is None or req.settling_time is None):
-        raise ValueError("controller.poles: missing; give three poles (per joint or for all), or "
-                         "requirements.overshoot and requirements.settling_time to derive them")
-
-
 FAMILY = Family(
     kind=KIND,
     spec=DecentralizedPidSpec,
@@ -222,5 +214,5 @@ FAMILY = Family(
         summary="Notes §3.1-3.3 and SIMNOG: each joint servoed by its own PID designed on its simplified link "
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
-    validate=validate,
+    validate=poles_or_requirements,
 )

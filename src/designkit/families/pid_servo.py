@@ -24,7 +24,7 @@ from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.law import Law, integral_law
-from designkit.synthesis.requirements import poles_from_spec
+from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
 KIND = "pid_servo"
 
@@ -131,14 +131,6 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return design(plant, poles, zero, notes=notes, extra=extra)
 
 
-def validate(spec: Any) -> None:
-    """Poles, or the requirements they are derived from."""
-    req = spec.requirements
-    if spec.controller.poles is None and (req is None or req.overshoot is None or req.settling_time is None):
-        raise ValueError("controller.poles: missing; give three poles, or requirements.overshoot and "
-                         "requirements.settling_time to derive them")
-
-
 FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
@@ -155,5 +147,5 @@ FAMILY = Family(
         summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
                 "closed-loop poles and the zero of x1/xD.",
     ),
-    validate=validate,
+    validate=poles_or_requirements,
 )

@@ -15,14 +15,13 @@ from collections.abc import Sequence
 from typing import Any, Literal
 
 from designkit.families.pid_servo import GAIN_INFO
-from designkit.families.pid_servo import validate as _validate_poles
 from designkit.spec.controllers import PoleRequirementsController
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.law import Law, integral_law
-from designkit.synthesis.requirements import poles_from_spec
+from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
 KIND = "pid_tracking"
 
@@ -98,5 +97,5 @@ FAMILY = Family(
         summary="Notes §3.2: one link tracking a trajectory with acceleration and damping feedforward; the "
                 "error dynamics have the requested poles and x1/xD = 1 on the nominal link.",
     ),
-    validate=_validate_poles,
+    validate=poles_or_requirements,
 )

@@ -124,7 +124,10 @@ class RobotPlant(PlantBase):
         """The model in plain text."""
         terms = "M(q) q̈ + C(q, q̇) q̇ + g(q)"
         if self.robot.friction:
-            terms += " + Fv q̇ + Fc sign(q̇)"
+            terms += " + Fv q̇"
+            coulomb = [numeric_value(link.coulomb) for link in self.robot.description.links]
+            if any(c is None or c != 0 for c in coulomb):
+                terms += " + Fc sign(q̇)"
         rotor = " (M includes the reflected rotor inertias)" if self.robot.motor_inertia else ""
         return (f"{terms} = u + d{rotor}", f"{self.robot.n} joints: {self.source or self.robot.name}")
 

@@ -131,3 +131,17 @@ def poles_from_spec(controller: Any, requirements: Any) -> tuple[tuple[complex, 
         f"third pole at {controller.third_pole_factor:g} x Re(p1)."
     )
     return dom.poles, (note,), {"zeta": dom.zeta, "wn": dom.wn}
+
+
+def poles_or_requirements(spec: Any) -> None:
+    """Spec rule of the pole-placed families: ``controller.poles``, or the requirements they are derived from.
+
+    Raises
+    ------
+    ValueError
+        ``"controller.poles: missing; ..."`` (the loader turns it into a SpecError with that key path).
+    """
+    req = spec.requirements
+    if spec.controller.poles is None and (req is None or req.overshoot is None or req.settling_time is None):
+        raise ValueError("controller.poles: missing; give the closed-loop poles, or requirements.overshoot and "
+                         "requirements.settling_time to derive them")
