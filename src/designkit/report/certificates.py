@@ -8,6 +8,7 @@ matrices, lists of records, ``[re, im]`` pairs, robustness grids) into
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -198,12 +199,10 @@ def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
             unit = f" {axis.get('unit', '')}".rstrip()
             parts.append(f"{axis.get('name', '?')} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}]"
                          f"{unit} ({arr.size} points)")
-    try:
+    with contextlib.suppress(TypeError, ValueError):  # values that are not numbers are simply not summarised
         arr = np.asarray(grid.get("values"), dtype=float)
         if arr.size > 1:
             parts.append(f"margin: min {fmt_number(np.nanmin(arr), digits)}, max {fmt_number(np.nanmax(arr), digits)}")
-    except (TypeError, ValueError):
-        pass
     if "label" in grid:
         parts.append(str(grid["label"]))
     return "; ".join(parts) + (" (see the robustness figure)" if figure else "")

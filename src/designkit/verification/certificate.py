@@ -125,11 +125,9 @@ class Certificate(Protocol):
 
     def recheck(self) -> Recheck:
         """Decide the certificate's statement from its data with NumPy only (no solver)."""
-        ...
 
     def to_dict(self) -> dict[str, Any]:
         """The data needed to re-check, JSON-serialisable, with ``"kind"``."""
-        ...
 
 
 def load(data: Mapping[str, Any]) -> Certificate:
