@@ -156,6 +156,26 @@ def cmd_model(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_codegen(args: argparse.Namespace) -> int:
+    """Design the spec's controller and write its control law (with its model terms) as C code."""
+    from designkit.spec import load_spec
+    from designkit.synthesis.codegen import generate_spec_code
+
+    options = {"out_dir": "--out", "name": "--name"}
+    loaded = load_spec(args.spec)
+    try:
+        code = generate_spec_code(loaded, Path(args.out), name=args.name)
+    except SpecError as exc:
+        if exc.path in options:
+            raise SpecError(options[exc.path], exc.message) from None
+        raise
+    print(f"{loaded.spec.name}: {code.kind} law as C, functions "
+          + ", ".join(f.symbol for f in code.functions))
+    for path in code.files:
+        print(f"wrote {path}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -188,6 +208,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("schema", help="print the JSON Schema of the spec format")
     p.set_defaults(func=cmd_schema)
+
+    p = sub.add_parser("codegen", help="write the designed control law (and its model terms) as C code")
+    p.add_argument("spec", help="path of the YAML spec")
+    p.add_argument("--out", default="codegen", help="output directory (default: codegen/); the code goes "
+                   "to OUT/<spec name>/<NAME>.c and <NAME>.h")
+    p.add_argument("--name", help="C prefix of the generated symbols and base name of the files (default: "
+                   "the spec name with - and . replaced by _)")
+    p.set_defaults(func=cmd_codegen)
 
     p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")
     p.add_argument("robot", help="zoo robot name, e.g. planar2r or puma560")

@@ -46,6 +46,9 @@ class PipelineResult:
         The closed-loop simulation (None when not run).
     versions : Mapping
         designkit and dependency versions.
+    plant : Plant or None
+        The true plant the simulation ran on (the design's ``plant`` is the controller's model; the two
+        differ when the spec gives ``controller.model``).  None means the design's.
     """
 
     loaded: LoadedSpec
@@ -53,6 +56,7 @@ class PipelineResult:
     checks: tuple[Check, ...]
     simulation: Any = None
     versions: Mapping[str, str] = field(default_factory=dict)
+    plant: Any = None
 
     @property
     def verified(self) -> bool:
@@ -98,11 +102,12 @@ def plant(loaded: LoadedSpec) -> Any:
     return plant_from_spec(loaded.spec.plant, base_dir(loaded))
 
 
-def design(loaded: LoadedSpec) -> Design:
-    """Synthesise the controller of a spec."""
+def design(loaded: LoadedSpec, true_plant: Any = None) -> Design:
+    """Synthesise the controller of a spec (for its true plant, built from the spec when not given)."""
     from designkit.families import family
 
-    return family(loaded.spec.controller.kind).synthesize(loaded.spec, plant(loaded))
+    true_plant = plant(loaded) if true_plant is None else true_plant
+    return family(loaded.spec.controller.kind).synthesize(loaded.spec, true_plant)
 
 
 def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
@@ -119,7 +124,9 @@ def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
     from designkit.verification.suite import run_checks
 
     spec = loaded.spec
-    dsn = design(loaded)
-    sim = simulate_loop(spec, dsn) if simulate else None
-    checks = run_checks(spec, dsn, sim)
-    return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions())
+    true_plant = plant(loaded)
+    dsn = design(loaded, true_plant)
+    sim = simulate_loop(spec, dsn, plant=true_plant) if simulate else None
+    checks = run_checks(spec, dsn, sim, plant=true_plant)
+    return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions(),
+                          plant=true_plant)

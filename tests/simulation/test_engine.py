@@ -171,3 +171,18 @@ def test_compiled_step_gives_the_interpreted_numbers(tmp_path, monkeypatch):
     assert build(auto, design).compiled["why"] == "cached library"  # the library is reused
     short = Spec.model_validate({**make_spec(duration=0.5).model_dump(), "numerics": {"compile": "auto"}})
     assert build(short, design).compiled["compiled"] is False  # nothing to gain on a short run
+
+
+# ----------------------------------------------------------------------------- parameters as an input
+
+
+def test_run_with_other_parameters_equals_a_simulator_built_on_that_plant():
+    spec = make_spec(duration=1.0, dt=0.001)
+    design = design_of(spec)
+    other = design.plant.with_params(Km=2.6, tau=0.45)
+    swept = build(spec, design).run(parameters={"Km": 2.6, "tau": 0.45})
+    built = simulate(spec, design, plant=other)
+    np.testing.assert_array_equal(swept.state, built.state)
+    assert dict(swept.settings["plant"]) == {"Km": 2.6, "tau": 0.45}
+    with pytest.raises(Exception, match="Km"):
+        build(spec, design).run(parameters={"Km": -1.0})

@@ -192,7 +192,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
                   *pid_servo.pid.SERVO_FORMULAS[2:]),
         notes=notes,
         extra={**extra, "configuration": q_star.tolist(), "links": links,
-               "gravity_feedforward": ctrl.gravity_feedforward},
+               "gravity_feedforward": ctrl.gravity_feedforward,
+               "codegen_terms": [] if ctrl.gravity_feedforward == "none" else ["g_hat"]},
     )
     r0 = np.concatenate([q_star, np.zeros(2 * n)])
     return with_closed_loop(design, law(design), r0)

@@ -70,7 +70,8 @@ def design(plant: Any, poles: Sequence[complex], *, notes: tuple[str, ...] = (),
     g = Gains.of(Gain(k, v, *GAIN_INFO[k]) for k, v in values.items())
     d = Design(
         kind=KIND, plant=plant, gains=g, poles=tuple(poles), zeros=(), reference="trajectory",
-        characteristic=characteristic(plant), formulas=pid.TRACKING_FORMULAS, notes=notes, extra=extra or {},
+        characteristic=characteristic(plant), formulas=pid.TRACKING_FORMULAS, notes=notes,
+        extra={**(extra or {}), "integral_action": True},
     )
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0])
 

@@ -33,6 +33,13 @@ def _elastic(section: ElasticJointPlantSpec, base_dir: Path | None) -> PlantBase
 
 
 def _robot(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
+    plant = _robot_model(section, base_dir)
+    if section.payload is not None:
+        plant = plant.with_payload(section.payload.mass, section.payload.link)
+    return plant
+
+
+def _robot_model(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
     from designkit.models.robot_plant import chain_plant, zoo_plant
 
     options = {"friction": section.friction, "motor_inertia": section.motor_inertia}

@@ -48,6 +48,10 @@ class RobotPlant(PlantBase):
         Named parameters with their values and units.
     source : str
         Where the robot comes from (zoo name, DH table, URDF file), for reports.
+    link_masses : tuple of str or None
+        For each link, the parameter holding its mass (None when it is not a parameter): where a payload goes.
+    payload : (float, int) or None
+        The payload this plant carries, ``(mass kg, link)``, already added to the link's mass.
 
     Examples
     --------
@@ -61,6 +65,8 @@ class RobotPlant(PlantBase):
     robot: Robot
     parameters: tuple[Parameter, ...]
     source: str = ""
+    link_masses: tuple[str | None, ...] = ()
+    payload: tuple[float, int] | None = None
 
     kind = "robot"
 
@@ -134,6 +140,47 @@ class RobotPlant(PlantBase):
     def _replace(self, values: Mapping[str, float]) -> RobotPlant:
         return dataclasses.replace(self, parameters=named(self.parameters, values))
 
+    def with_payload(self, mass: float, link: int | None = None) -> RobotPlant:
+        """The robot carrying a payload of ``mass`` (kg) concentrated at the centre of mass of ``link``
+        (1-based, default the last): the link's mass parameter grows by ``mass``.
+
+        Raises
+        ------
+        ModelError
+            ``link`` out of range (field ``payload.link``) or a link whose mass is not a parameter.
+        """
+        n = self.robot.n
+        link = n if link is None else int(link)
+        if not 1 <= link <= n:
+            raise ModelError("payload.link", f"this robot has links 1..{n}, got {link}")
+        name = self.link_masses[link - 1] if len(self.link_masses) == n else None
+        if name is None:
+            raise ModelError("payload.link", f"link {link}'s mass is not a parameter of this robot")
+        base = self.without_payload()
+        carried = base.with_params(**{name: base.parameter(name).value + float(mass)})
+        return dataclasses.replace(carried, payload=(float(mass), link))
+
+    def without_payload(self) -> RobotPlant:
+        """The same robot without the payload it carries (itself when it carries none)."""
+        if self.payload is None:
+            return self
+        mass, link = self.payload
+        name = self.link_masses[link - 1]
+        return dataclasses.replace(self.with_params(**{name: self.parameter(name).value - mass}), payload=None)
+
+    def with_options(self, *, friction: bool | None = None, motor_inertia: bool | None = None) -> RobotPlant:
+        """The same robot and parameters with friction or rotor inertia switched (the model is rebuilt once)."""
+        options = {k: v for k, v in (("friction", friction), ("motor_inertia", motor_inertia)) if v is not None}
+        if all(getattr(self.robot, k) == v for k, v in options.items()):
+            return self
+        return dataclasses.replace(self, robot=self.robot.replace(**options))
+
+    @property
+    def joint_limits(self) -> tuple[tuple[float, float] | None, ...]:
+        """Each joint's position limits ``qlim`` from the robot data (rad or m), None where absent."""
+        return tuple(tuple(float(v) for v in link.qlim) if link.qlim is not None else None
+                     for link in self.robot.description.links)
+
     def model_parameters(self) -> Any:
         """The ``p`` argument of the robot's functions (``None`` when the robot has no symbols)."""
         return self.parameter_vector if self.parameters else None
@@ -175,7 +222,7 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
                              f"{name} has no parameter {key!r}; choose from {sorted(module.DEFAULTS)}")
     robot = ROBOTS[name](symbolic=True, friction=friction, motor_inertia=motor_inertia)
     params = tuple(_parameter(k, overrides.get(k, v), *module.UNITS[k]) for k, v in module.DEFAULTS.items())
-    plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}")
+    plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}", link_masses=module.LINK_MASSES)
     try:  # validate the values through the same rule as with_params
         return plant.with_params(**overrides) if overrides else plant
     except ModelError as exc:
@@ -207,4 +254,5 @@ def chain_plant(description: ChainDescription, *, friction: bool = True, motor_i
                    (f"f{i}", f, _parameter(f"f{i}", viscous, joint_unit, f"joint {i} viscous friction"))]
     symbolic = dataclasses.replace(description, links=tuple(links), symbols=tuple((n, s) for n, s, _ in params))
     robot = Robot(symbolic, friction=friction, motor_inertia=motor_inertia)
-    return RobotPlant(robot=robot, parameters=tuple(p for _, _, p in params), source=source or description.name)
+    return RobotPlant(robot=robot, parameters=tuple(p for _, _, p in params), source=source or description.name,
+                      link_masses=tuple(f"m{i}" for i in range(1, len(links) + 1)))

@@ -173,7 +173,7 @@ def linear_figure(result: Any) -> Figure | None:
     ref = reference.evaluate(t)
     positions, u = linear_response(design, t, ref)
     req = spec.requirements
-    limit = req.max_control if req is not None else None
+    limit = _common_limit(req.max_control) if req is not None else None
     shown = limit is not None and limit <= 3.0 * float(np.max(np.abs(u)))
     word = "trajectory" if kind == "trajectory" else "step"
     caption = (f"The nominal closed loop linearized at its operating point, driven by the {word} reference (dashed), "
@@ -183,6 +183,15 @@ def linear_figure(result: Any) -> Figure | None:
                 f" (the limit |u| ≤ {limit:g} N·m is off scale)." if limit is not None else ".")
     svg = render(_draw_linear, design, t, ref, positions, u, limit)
     return Figure(f"Ideal linear {word} response", caption, svg, "fig-linear-response.svg")
+
+
+def _common_limit(limit: Any) -> float | None:
+    """One control limit to draw: the limit itself, or the common value of per-input limits (None when they
+    differ -- they are then only in the max_control check)."""
+    if limit is None:
+        return None
+    arr = np.atleast_1d(np.asarray(limit, dtype=float))
+    return float(arr[0]) if np.all(arr == arr[0]) else None
 
 
 def _control_limit(ax: Any, limit: float, peak: float) -> None:
@@ -271,9 +280,10 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
         ax_e.set_ylabel("error (rad)")
         ax_e.legend(loc="best", framealpha=0.9)
         drawn.append("the tracking error of every joint")
-    if req is not None and req.max_control is not None:
+    limit = _common_limit(req.max_control) if req is not None else None
+    if limit is not None:
         peak = max(float(np.max(np.abs(sim.u_command))), float(np.max(np.abs(sim.u_applied))))
-        _control_limit(ax_u, req.max_control, peak)
+        _control_limit(ax_u, limit, peak)
         drawn.append("the control limit")
     if _element_levels(ax_u, sim.settings.get("nonlinearity")):
         drawn.append("the element's output levels")

@@ -13,7 +13,12 @@ Signal chain, per integration step ``[t_k, t_k + dt]`` (``dt`` from :mod:`design
 State layout (computed from the plant, the law and the element, never fixed)::
 
     z = (x[nx], xc[nc], m[nm], e[ne], u_hold[nu], xc_dot_hold[nc], delay line[nu * delay_steps])
-    w = (r(t)[3n], r(t + dt/2)[3n], r(t + dt)[3n], noise[nx], d[nd], sample flag, u_feedforward[nu])
+    w = (r(t)[3n], r(t + dt/2)[3n], r(t + dt)[3n], noise[nx], d[nd], sample flag, u_feedforward[nu], p[np])
+
+The true plant's parameters ``p`` are an input of the step (repeated in every column of ``w``), so
+one built simulator runs on any parameter values (``Simulator.run(parameters=...)``): sweeps over
+an uncertainty box and model-mismatch studies never rebuild the step, and the compiled step is
+shared by every parameter value.
 
 Evaluation: when the controller is continuous (``sampling_period = 0``), there is no delay and
 the element is continuous and memoryless (none, saturation, dead zone), the whole chain is
@@ -92,9 +97,11 @@ class _Layout:
     def z_sizes(self) -> list[int]:
         return [self.nx, self.nc, self.nm, self.ne, self.nu, self.nc, self.nu * self.delay_steps]
 
+    np_: int = 0
+
     @property
     def w_sizes(self) -> list[int]:
-        return [3 * self.n, 3 * self.n, 3 * self.n, self.nx, self.nd, 1, self.nu]
+        return [3 * self.n, 3 * self.n, 3 * self.n, self.nx, self.nd, 1, self.nu, self.np_]
 
 
 def _split(v: Any, sizes: list[int]) -> list[Any]:
@@ -107,17 +114,16 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
     ``record`` is ``(x, xc, u_command, u_applied, y, d)`` at the step's start.
     """
     L = _Layout(len(plant.states), law.n_state, law.n_memory, element.n_memory, len(plant.inputs),
-                len(plant.disturbances), len(plant.positions), timing.delay_steps)
+                len(plant.disturbances), len(plant.positions), timing.delay_steps, len(plant.parameters))
     sampled = timing.steps_per_sample > 0
     per_step = sampled or L.delay_steps > 0 or not element.continuous
-    p_true = ca.DM(np.asarray(plant.parameter_vector, dtype=float))
     ode = plant.ode()
 
     # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values
     s, a = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", 3 * L.n)
-    h_sizes = [L.nx, L.nd, L.nu, L.nm, L.ne, L.nc, L.nu, L.nc]
+    h_sizes = [L.nx, L.nd, L.nu, L.nm, L.ne, L.nc, L.nu, L.nc, L.np_]
     h = ca.SX.sym("h", sum(h_sizes))
-    noise, dist, uff, m, e, gate, u_held, d_held = _split(h, h_sizes)
+    noise, dist, uff, m, e, gate, u_held, d_held, p_true = _split(h, h_sizes)
     x, xc = s[:L.nx], s[L.nx:]
     u_in = u_held if per_step else element.function(law.command(x + noise, xc, m, a) + uff, e)[0]
     xc_dot = d_held if sampled else law.derivative(x + noise, xc, m, a, gate)
@@ -127,7 +133,7 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
     sym = ca.MX.sym if numerics.integrator == "cvodes" else ca.SX.sym
     z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
     x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
-    r0, rm, r1, noise, dist, flag, uff = _split(w, L.w_sizes)
+    r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)
     y = x + noise
     gate = law.gate(y, xc, m, r0)
     if sampled:
@@ -143,7 +149,7 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
         line_next = ca.vertcat(v, line[: L.nu * (L.delay_steps - 1)]) if L.delay_steps > 0 else line
     else:
         u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
-    held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold)
+    held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold, p)
     s0 = ca.vertcat(x, xc)
     if numerics.integrator == "cvodes":
         s_next = variable_step(rhs, s0, timing.dt, (r0, rm, r1), held, rtol=numerics.rtol, atol=numerics.atol)
@@ -250,15 +256,32 @@ class Simulator:
         """Number of plant inputs (columns of a feedforward)."""
         return len(self.plant.inputs)
 
-    def run(self, *, feedforward: np.ndarray | None = None) -> SimulationResult:
-        """Simulate; ``feedforward`` ``(N, nu)`` (N*m) is added to the controller's command at each step."""
+    def run(self, *, feedforward: np.ndarray | None = None, parameters: Mapping[str, float] | None = None
+            ) -> SimulationResult:
+        """Simulate.
+
+        Parameters
+        ----------
+        feedforward : ndarray, shape (N, nu), optional
+            Added to the controller's command at each step (N*m).
+        parameters : mapping, optional
+            True-plant parameter values replacing the plant's (validated as ``plant.with_params`` does);
+            the step function is not rebuilt.
+        """
         inputs = self.inputs
+        plant = self.plant
+        npar = len(plant.parameters)
+        if feedforward is not None or parameters:
+            inputs = inputs.copy()
         if feedforward is not None:
             ff = np.asarray(feedforward, dtype=float).reshape(self.time.size, self.n_inputs)
-            inputs = inputs.copy()
-            inputs[-self.n_inputs:] = ff.T
+            inputs[inputs.shape[0] - npar - self.n_inputs:inputs.shape[0] - npar] = ff.T
+        if parameters:
+            plant = plant.with_params(**parameters)
+            if npar:
+                inputs[-npar:] = np.asarray(plant.parameter_vector, dtype=float)[:, None]
         rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated)
-        p, law = self.plant, self.law
+        p, law = plant, self.law
         nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
         cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
         x, xc, u_c, u_a, y, d = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
@@ -267,15 +290,16 @@ class Simulator:
             perturbation=d, measured=y, kind=self.kind, positions=tuple(p.positions), velocities=tuple(p.velocities),
             state_names=tuple(s.name for s in p.states), controller_state_names=law.state_names,
             input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
-            settings=self.settings,
+            settings=self.settings if not parameters else
+            freeze({**self.settings, "plant": {q.name: q.value for q in plant.parameters}}),
         )
 
 
-def _evaluator(step: ca.Function, n_steps: int, mode: str) -> tuple[ca.Function | None, dict[str, Any]]:
+def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tuple[ca.Function | None, dict[str, Any]]:
     """The compiled ``mapaccum`` to run ``step`` with, or None for the interpreted one, and why."""
     from designkit.models.codegen import cached_library, compile_function, find_compiler
 
-    estimate = n_steps * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
+    estimate = runs * n_steps * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
     info: dict[str, Any] = {"mode": mode, "interpreted_estimate_s": round(estimate, 4)}
     if mode == "never":
         return None, {**info, "compiled": False, "why": "numerics.compile: never"}
@@ -299,7 +323,35 @@ def _evaluator(step: ca.Function, n_steps: int, mode: str) -> tuple[ca.Function 
                                "flags": " ".join(COMPILE_FLAGS)}
 
 
-def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = None) -> Simulator:
+def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Spec, kind: str) -> None:
+    """The commanded motion must stay within the robot's joint limits (``qlim``) and, when the spec gives
+    them, ``plant.limits.velocity`` and ``acceleration``; else :class:`SpecError` naming the reference."""
+    key = "simulation.trajectory" if kind == "trajectory" else "simulation.step"
+    x = ref.evaluate(t)
+    for j, lim in enumerate(getattr(plant, "joint_limits", ())):
+        if lim is None:
+            continue
+        bad = np.flatnonzero((x[:, j, 0] < lim[0] - 1e-12) | (x[:, j, 0] > lim[1] + 1e-12))
+        if bad.size:
+            k = int(bad[0])
+            raise SpecError(key, f"joint {j + 1} leaves its limits [{lim[0]:.4g}, {lim[1]:.4g}] rad at t = "
+                                 f"{t[k]:.4g} s (qD = {x[k, j, 0]:.4g} rad)")
+    limits = getattr(spec.plant, "limits", None)
+    for name, column, unit in (("velocity", 1, "rad/s"), ("acceleration", 2, "rad/s^2")):
+        value = getattr(limits, name, None) if limits is not None else None
+        if value is None or kind != "trajectory":
+            continue
+        bound = np.broadcast_to(np.asarray(value, dtype=float), (ref.n,))
+        peak = np.max(np.abs(x[:, :, column]), axis=0)
+        j = int(np.argmax(peak / bound))
+        if peak[j] > bound[j] * (1 + 1e-9):
+            k = int(np.argmax(np.abs(x[:, j, column])))
+            raise SpecError(key, f"joint {j + 1} needs {peak[j]:.4g} {unit} at t = {t[k]:.4g} s, above "
+                                 f"plant.limits.{name} {bound[j]:g} {unit}")
+
+
+def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = None, expected_runs: int = 1
+          ) -> Simulator:
     """Build the simulation of ``design`` in the scenario ``spec.simulation`` on ``plant``.
 
     Parameters
@@ -314,6 +366,8 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     law : Law, optional
         The controller (default: the design's family's law with the spec's anti-windup); any
         :class:`~designkit.synthesis.law.Law`, e.g. one with a discrete memory.
+    expected_runs : int
+        How many times the simulator will run (a sweep): weighs the choice of compiled evaluation.
 
     Raises
     ------
@@ -331,6 +385,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     timing = resolve(spec, rates, ref.horizon)
 
     t = grid(timing)
+    check_reference(ref, t, true_plant, spec, kind)
     N, dt = timing.n_samples, timing.dt
     nx, nd, nu = len(true_plant.states), len(true_plant.disturbances), len(true_plant.inputs)
     noise, noise_settings = _noise(spec, N, nx, tuple(s.name for s in true_plant.states))
@@ -339,14 +394,15 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     if timing.steps_per_sample:
         flag[:] = 0.0
         flag[0, :: timing.steps_per_sample] = 1.0
+    p_rows = np.repeat(np.asarray(true_plant.parameter_vector, dtype=float).reshape(-1, 1), N, axis=1)
     inputs = np.vstack([ref.flat(t).T, ref.flat(t + 0.5 * dt).T, ref.flat(t + dt).T, noise, dist, flag,
-                        np.zeros((nu, N))])
+                        np.zeros((nu, N)), p_rows])
     x0 = np.asarray(true_plant.rest_state(ref.start), dtype=float)
     z0 = np.concatenate([x0, np.zeros(law.n_state), np.asarray(law.initial_memory, dtype=float),
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = _step_function(true_plant, law, element, timing, spec.numerics)
-    accumulated, compile_info = _evaluator(step, N, spec.numerics.compile)
+    accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
 
     unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
               "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[kind]

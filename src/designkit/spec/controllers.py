@@ -10,9 +10,24 @@ from __future__ import annotations
 
 from pydantic import Field, field_validator
 
-from designkit.spec.fields import Pole, PositiveFinite, Section, check_conjugates
+from designkit.spec.fields import Finite, Pole, PositiveFinite, Section, check_conjugates
+from designkit.spec.plants import Payload
 
-__all__ = ["PoleRequirementsController", "three_poles"]
+__all__ = ["ControllerModel", "PoleRequirementsController", "three_poles"]
+
+
+class ControllerModel(Section):
+    """The model a model-based controller believes, when it is not the true plant.
+
+    Without this section the controller knows the true plant exactly.  With it, the controller's
+    model is the plant's nominal robot (without the true plant's payload) changed as written:
+    ``parameters`` (named parameter values, e.g. mass errors), ``payload`` (a payload it assumes),
+    ``friction`` (false: the model leaves the joint friction out).
+    """
+
+    parameters: dict[str, Finite] = Field(default_factory=dict)
+    payload: Payload | None = None
+    friction: bool | None = None
 
 
 def three_poles(poles: list[complex]) -> list[complex]:

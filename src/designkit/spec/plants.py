@@ -17,11 +17,12 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import ConfigDict, Field, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_validator
 
-from designkit.spec.fields import Finite, NonNegativeFinite, PositiveFinite, Section
+from designkit.spec.fields import Finite, NonNegativeFinite, PerJoint, PositiveFinite, Section
 
-__all__ = ["DHLink", "ElasticJointPlantSpec", "LinkPlantSpec", "PlantSpec", "RobotPlantSpec", "Uncertainty"]
+__all__ = ["DHLink", "ElasticJointPlantSpec", "Limits", "LinkPlantSpec", "Payload", "PlantSpec", "RobotPlantSpec",
+           "Uncertainty"]
 
 
 class Uncertainty(Section):
@@ -103,6 +104,31 @@ class DHLink(Section):
     name: str = Field(default="", max_length=100)
 
 
+class Payload(Section):
+    """A payload of ``mass`` (kg) concentrated at the centre of mass of ``link`` (1-based, default the last)."""
+
+    mass: NonNegativeFinite
+    link: int | None = Field(default=None, ge=1)
+
+
+class Limits(Section):
+    """Actuator and motion limits of a robot, per joint (or one value for all): ``velocity`` (rad/s),
+    ``acceleration`` (rad/s^2) -- a trajectory exceeding them is refused -- and ``torque`` (N*m), which the
+    simulated commands are checked against.  Position limits come from the robot data (``qlim``)."""
+
+    velocity: PerJoint | None = None
+    acceleration: PerJoint | None = None
+    torque: PerJoint | None = None
+
+    @field_validator("velocity", "acceleration", "torque")
+    @classmethod
+    def _positive(cls, v: float | list[float] | None) -> float | list[float] | None:
+        for x in (v if isinstance(v, list) else [] if v is None else [v]):
+            if x <= 0:
+                raise ValueError(f"must be positive, got {x:g}")
+        return v
+
+
 class RobotPlantSpec(Section):
     """A serial manipulator: exactly one of ``robot`` (built-in name), ``dh`` (table) or ``urdf`` (path).
 
@@ -110,7 +136,8 @@ class RobotPlantSpec(Section):
     ``convention`` and ``gravity`` (m/s^2, base frame) describe a DH table; ``base_link`` and
     ``tip_link`` select the chain of a URDF (``gravity`` also applies).  ``friction`` includes the
     joints' viscous and Coulomb friction in the dynamics; ``motor_inertia`` the reflected rotor
-    inertia.
+    inertia; ``payload`` a mass carried by a link (part of the true plant); ``limits`` the joints'
+    velocity, acceleration and torque limits.
     """
 
     kind: Literal["robot"]
@@ -124,6 +151,8 @@ class RobotPlantSpec(Section):
     tip_link: str | None = None
     friction: bool = True
     motor_inertia: bool = False
+    payload: Payload | None = None
+    limits: Limits | None = None
     uncertainty: Uncertainty | None = None
 
     @model_validator(mode="after")

@@ -44,16 +44,19 @@ class Requirements(Section):
     """Time-domain requirements, each holding for every joint.
 
     overshoot (%), settling_time (s, to the ``settling_band``), rise_time (s, 10-90 %),
-    steady_state_error (same unit as the positions, absolute), max_control (peak |u| of every
-    input, N*m).
+    steady_state_error (same unit as the positions, absolute), tracking_error (largest |q - qD| over
+    the run, rad), max_control (peak |u| of every input, N*m, one value or one per input).
     """
 
     overshoot: NonNegativeFinite | None = None
     settling_time: PositiveFinite | None = None
     rise_time: PositiveFinite | None = None
     steady_state_error: NonNegativeFinite | None = None
-    max_control: PositiveFinite | None = None
+    tracking_error: PositiveFinite | None = None
+    max_control: PerJoint | None = None
     settling_band: float = Field(default=0.02, gt=0, lt=1)
+
+    _check_control = field_validator("max_control")(lambda v: v if v is None else _positive(v))
 
 
 # ----------------------------------------------------------------------------- nonlinear elements

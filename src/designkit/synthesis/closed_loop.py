@@ -70,7 +70,8 @@ class LoopFunctions:
     _maps: dict = field(default_factory=dict, repr=False, compare=False)
 
     def evaluate(self, z: np.ndarray, r0: np.ndarray, d0: np.ndarray, P: np.ndarray) -> list[np.ndarray]:
-        """``jacobians`` at every row of ``z`` and ``P`` (constant ``r0``, ``d0``), as arrays ``(N, rows, cols)``.
+        """``jacobians`` at every row of ``z`` and ``P`` (and of ``r0`` when it is 2-D; ``d0`` constant), as
+        arrays ``(N, rows, cols)``.
 
         Evaluated by ``map`` over blocks of at most :data:`BATCH` rows (the mapped function is built once per
         block size and cached), so the cost of building it does not grow with the batch.
@@ -81,20 +82,24 @@ class LoopFunctions:
             fn = self.jacobians if m == 1 else self.jacobians.map(m)
             self._maps[m] = (fn, *fn.buffer())
         fn, buf, call = self._maps[m]
-        r0 = np.ascontiguousarray(np.tile(np.asarray(r0, dtype=float).ravel(), m))  # map repeats every input
+        r_rows = np.asarray(r0, dtype=float)
+        if r_rows.ndim == 1:  # map repeats every input
+            r_rows = np.tile(r_rows.ravel(), (N, 1))
         d0 = np.ascontiguousarray(np.tile(np.asarray(d0, dtype=float).ravel(), m))
         sizes = [self.jacobians.size_out(i) for i in range(self.jacobians.n_out())]
         out = [np.empty((N, rows, cols)) for rows, cols in sizes]
         res = [np.empty(rows * cols * m) for rows, cols in sizes]
         for start in range(0, N, m):
-            zb, Pb = z[start:start + m], P[start:start + m]
+            zb, Pb, rb = z[start:start + m], P[start:start + m], r_rows[start:start + m]
             k = zb.shape[0]
             if k < m:  # pad the last block
                 zb = np.vstack([zb, np.repeat(zb[-1:], m - k, axis=0)])
                 Pb = np.vstack([Pb, np.repeat(Pb[-1:], m - k, axis=0)])
+                rb = np.vstack([rb, np.repeat(rb[-1:], m - k, axis=0)])
             # CasADi is column-major: a (rows, m) input is the (m, rows) C-ordered array
             zc, Pc = np.ascontiguousarray(zb, dtype=float), np.ascontiguousarray(Pb, dtype=float)
-            for i, arr in enumerate((zc, r0, d0, Pc)):
+            rc = np.ascontiguousarray(rb, dtype=float)
+            for i, arr in enumerate((zc, rc, d0, Pc)):
                 buf.set_arg(i, memoryview(arr))
             for i, arr in enumerate(res):
                 buf.set_res(i, memoryview(arr))

@@ -20,7 +20,7 @@ __all__ = ["CHECK_NAMES", "Display", "Family"]
 
 CHECK_NAMES = frozenset({
     "pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins", "time_domain",
-    "loops", "coupling",
+    "loops", "coupling", "error_poles", "tracking_bounds", "torque_limits",
 })
 """Checks a family may offer (see :mod:`designkit.verification.suite` for what each needs from a design)."""
 

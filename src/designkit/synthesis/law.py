@@ -36,7 +36,7 @@ import numpy as np
 
 from designkit.synthesis.design import freeze
 
-__all__ = ["Law", "integral_law", "law_symbols"]
+__all__ = ["Law", "integral_law", "law_symbols", "stateless_law"]
 
 
 @dataclass(frozen=True)
@@ -140,4 +140,34 @@ def integral_law(
         project=ca.Function(f"{kind}_project", [xc], [project_of(xc)], ["xc"], ["xc_projected"]),
         update=ca.Function(f"{kind}_update", args, [m], names, ["m_next"]),
         settings={**settings, "anti_windup": aw},
+    )
+
+
+def stateless_law(kind: str, plant: Any, output: Callable[[ca.SX, ca.SX], ca.SX], settings: Mapping[str, Any]) -> Law:
+    """A law without continuous state or memory: ``u = output(y, r)`` (computed torque, resolved acceleration).
+
+    Parameters
+    ----------
+    kind : str
+        Controller kind.
+    plant : Plant
+        Gives the sizes (states, joints).
+    output : callable
+        ``(y, r) -> u`` on SX.
+    settings : Mapping
+        Gains and options for the record.
+    """
+    n = len(plant.positions)
+    y, xc, m, r = law_symbols(len(plant.states), 0, 0, n)
+    names, args = ["y", "xc", "m", "r"], [y, xc, m, r]
+    g = ca.SX.sym("gate", 0)
+    empty = ca.SX(0, 1)
+    return Law(
+        kind=kind, state_names=(),
+        command=ca.Function(f"{kind}_command", args, [output(y, r)], names, ["u"]),
+        derivative=ca.Function(f"{kind}_derivative", [*args, g], [empty], [*names, "gate"], ["xc_dot"]),
+        gate=ca.Function(f"{kind}_gate", args, [empty], names, ["gate"]),
+        project=ca.Function(f"{kind}_project", [xc], [xc], ["xc"], ["xc_projected"]),
+        update=ca.Function(f"{kind}_update", args, [m], names, ["m_next"]),
+        settings=settings,
     )

@@ -172,18 +172,21 @@ class Sweeper:
     Parameters
     ----------
     design : Design
-        Its nominal plant, law (from its family) and operating point.
+        Its law (from its family) and operating point.
     names : sequence of str
         The plant parameters that vary.
+    plant : Plant, optional
+        The true plant whose parameters vary (default: the design's).
     """
 
-    def __init__(self, design: Any, names: tuple[str, ...]) -> None:
+    def __init__(self, design: Any, names: tuple[str, ...], plant: Any = None) -> None:
         from designkit.families import family
 
         self.design = design
         self.names = tuple(names)
         self.law = family(design.kind).law(design, None)
-        plant = design.plant
+        plant = design.plant if plant is None else plant
+        self.plant = plant
         self._index = [plant.parameter_names.index(plant.parameter(n).name) for n in self.names]  # ModelError
         self._p0 = np.asarray(plant.parameter_vector, dtype=float)
         op = design.operating_point
@@ -192,7 +195,7 @@ class Sweeper:
 
     @cached_property
     def _functions(self) -> Any:
-        return loop_functions(self.design.plant, self.law)
+        return loop_functions(self.plant, self.law)
 
     def parameters(self, theta: np.ndarray) -> np.ndarray:
         """Full parameter vectors ``(N, n_par)`` for the varying values ``theta`` ``(N, k)``."""
@@ -372,11 +375,13 @@ def lyapunov_vertex_check(design: Any, box: Box, sweeper: Sweeper | None = None,
     return replace(c, detail=c.detail + meaning + " [informational]", certificate=cert, required=False)
 
 
-def robustness_checks(design: Any, uncertainty: Any, *, eps: float = LMI_EPS,
-                      solver: str = "CLARABEL") -> tuple[Check, Check, Check]:
-    """``robust_vertices``, ``robust_grid`` and ``common_lyapunov`` for a spec's ``plant.uncertainty``."""
-    box = box_from_uncertainty(design.plant, uncertainty)
-    sweeper = Sweeper(design, box.names)
+def robustness_checks(design: Any, uncertainty: Any, *, eps: float = LMI_EPS, solver: str = "CLARABEL",
+                      plant: Any = None) -> tuple[Check, Check, Check]:
+    """``robust_vertices``, ``robust_grid`` and ``common_lyapunov`` for a spec's ``plant.uncertainty`` (over the
+    true ``plant``, default the design's)."""
+    plant = design.plant if plant is None else plant
+    box = box_from_uncertainty(plant, uncertainty)
+    sweeper = Sweeper(design, box.names, plant)
     return (
         vertex_check(design, box, sweeper),
         grid_check(design, box, sweeper),

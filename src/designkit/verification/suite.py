@@ -14,9 +14,12 @@ loops              per-joint ``loops``                   the three above for eac
 robust_box         ``characteristic.linear_conditions``  stability on the whole (Km, tau) box (LP + duality)
                    and an uncertainty on its parameters
 robustness         ``plant.uncertainty``                 corners, lattice, samples; common Lyapunov P
+error_poles        a trajectory design with poles        error poles along the path (computed torque)
+tracking_bounds    a trajectory design + uncertainty     tracking error over the box by simulation
 loop_margins       ``input_loop``                        gain/phase/modulus margins (informational)
 coupling           per-joint ``loops``                   intercoupling left to the loops (informational)
 time_domain        a simulation and ``requirements``     overshoot, settling, rise, error, peak control
+torque_limits      a simulation and ``plant.limits``     commanded torques within the actuator limits
 ================== ===================================== ==============================================
 """
 
@@ -34,11 +37,12 @@ __all__ = ["CHECKS", "CheckRule", "applicable", "run_checks"]
 
 @dataclass(frozen=True)
 class Context:
-    """What a check may read besides the design: the spec and the simulation."""
+    """What a check may read besides the design: the spec, the simulation and the true plant."""
 
     spec: Any
     simulation: Any
     solver: str
+    plant: Any = None
 
 
 @dataclass(frozen=True)
@@ -107,7 +111,30 @@ def _robust_box(design: Any, ctx: Context) -> tuple[Check, ...]:
 def _robustness(design: Any, ctx: Context) -> tuple[Check, ...]:
     from designkit.verification.robustness import robustness_checks
 
-    return robustness_checks(design, _uncertainty(ctx), solver=ctx.solver)
+    return robustness_checks(design, _uncertainty(ctx), solver=ctx.solver, plant=ctx.plant)
+
+
+def _error_poles(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.tracking import error_poles_check
+
+    return (error_poles_check(ctx.spec, design, ctx.plant),)
+
+
+def _tracking_bounds(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.tracking import tracking_bounds_check
+
+    return (tracking_bounds_check(ctx.spec, design, ctx.plant if ctx.plant is not None else design.plant),)
+
+
+def _torque_limits(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.tracking import torque_limits_check
+
+    return (torque_limits_check(ctx.spec, ctx.simulation),)
+
+
+def _limits(ctx: Context) -> Any:
+    limits = getattr(ctx.spec.plant, "limits", None)
+    return None if limits is None else limits.torque
 
 
 def _loop_margins(design: Any, ctx: Context) -> tuple[Check, ...]:
@@ -135,24 +162,28 @@ CHECKS: dict[str, CheckRule] = {
     "loops": CheckRule(lambda d, c: bool(d.loops), _loops),
     "robust_box": CheckRule(_box_applies, _robust_box),
     "robustness": CheckRule(lambda d, c: _uncertainty(c) is not None and d.operating_point != {}, _robustness),
+    "error_poles": CheckRule(lambda d, c: d.reference == "trajectory" and bool(d.poles), _error_poles),
+    "tracking_bounds": CheckRule(lambda d, c: _uncertainty(c) is not None and d.reference == "trajectory",
+                                 _tracking_bounds),
     "loop_margins": CheckRule(lambda d, c: d.input_loop is not None, _loop_margins),
     "coupling": CheckRule(lambda d, c: bool(d.loops), _coupling),
     "time_domain": CheckRule(lambda d, c: c.simulation is not None and c.spec.requirements is not None,
                              _time_domain),
+    "torque_limits": CheckRule(lambda d, c: c.simulation is not None and _limits(c) is not None, _torque_limits),
 }
 """Check name -> :class:`CheckRule`, in report order (a table, not if/elif)."""
 
 
-def applicable(design: Any, spec: Any, simulation: Any = None) -> tuple[str, ...]:
+def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None) -> tuple[str, ...]:
     """Names of the checks that run for ``design`` (offered by its family and exposed by the design)."""
     from designkit.families import family
 
     offered = set(family(design.kind).checks)
-    ctx = Context(spec, simulation, spec.numerics.solver)
+    ctx = Context(spec, simulation, spec.numerics.solver, plant)
     return tuple(name for name, rule in CHECKS.items() if name in offered and rule.applies(design, ctx))
 
 
-def run_checks(spec: Any, design: Any, simulation: Any = None) -> tuple[Check, ...]:
+def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None) -> tuple[Check, ...]:
     """Run every applicable check (see the module docstring).
 
     Parameters
@@ -163,13 +194,15 @@ def run_checks(spec: Any, design: Any, simulation: Any = None) -> tuple[Check, .
         The synthesised controller.
     simulation : SimulationResult or None
         Closed-loop run for the time-domain and coupling checks.
+    plant : Plant, optional
+        The true plant (default: the design's); differs when the controller's model does.
 
     Returns
     -------
     tuple of Check
     """
-    ctx = Context(spec, simulation, spec.numerics.solver)
+    ctx = Context(spec, simulation, spec.numerics.solver, plant)
     checks: list[Check] = []
-    for name in applicable(design, spec, simulation):
+    for name in applicable(design, spec, simulation, plant):
         checks.extend(CHECKS[name].run(design, ctx))
     return tuple(checks)

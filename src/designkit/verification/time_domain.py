@@ -269,7 +269,7 @@ def _check(name: str, limit: float, value: float | None, unit: str, what: str, w
 def time_domain_checks(requirements: Any, sim: Any) -> tuple[Check, ...]:
     """One Check per requirement present in ``requirements`` (a spec's ``Requirements``).
 
-    Order: overshoot, settling_time, rise_time, steady_state_error, max_control.  Margins are
+    Order: overshoot, settling_time, rise_time, steady_state_error, tracking_error, max_control.  Margins are
     ``limit - achieved`` in the requirement's unit (positive when met).
     """
     m = response_metrics(sim, settling_band=requirements.settling_band)
@@ -314,8 +314,35 @@ def time_domain_checks(requirements: Any, sim: Any) -> tuple[Check, ...]:
         what = ("final tracking error" if traj else "steady-state error") + " (mean |x1 - xD|, last 5 %)"
         out.append(_check("steady_state_error", req.steady_state_error, m.steady_state_error, "rad", what,
                           m.why_undefined.get("steady_state_error"), cert, fmt=".3g", note=at("steady_state_error")))
+    if req.tracking_error is not None:
+        err = np.abs(np.asarray(sim.state, dtype=float)[:, list(getattr(sim, "positions", (0,)))]
+                     - _desired(sim))
+        value = float(np.max(err)) if err.size and np.all(np.isfinite(err)) else None
+        worst = f" (joint {int(np.argmax(np.max(err, axis=0))) + 1})" if value is not None and err.shape[1] > 1 else ""
+        out.append(_check("tracking_error", req.tracking_error, value, "rad", "largest |q - qD| over the run",
+                          "the simulated position is not finite (diverged?)", cert, fmt=".4g", note=worst))
     if req.max_control is not None:
-        note = f" (peak |u_applied| {m.peak_u_applied:.4g} N*m)" if m.peak_u_applied is not None else ""
-        out.append(_check("max_control", req.max_control, m.peak_u_command, "N*m", "peak |u_command|",
-                          m.why_undefined.get("peak_u_command"), cert, note=note))
+        out.append(_max_control(req.max_control, sim, m, cert))
     return tuple(out)
+
+
+def _desired(sim: Any) -> np.ndarray:
+    ref = np.asarray(sim.reference, dtype=float)
+    return ref[:, :, 0] if ref.ndim == 3 else ref[:, :1]
+
+
+def _max_control(limit: Any, sim: Any, m: ResponseMetrics, cert: dict[str, Any]) -> Check:
+    """Peak ``|u_command|`` of every input against its limit (one for all inputs, or one per input)."""
+    u = np.asarray(sim.u_command, dtype=float)
+    u = u.reshape(u.shape[0], -1)
+    limits = np.broadcast_to(np.asarray(limit, dtype=float), (u.shape[1],))
+    if m.peak_u_command is None:
+        return _check("max_control", float(np.min(limits)), None, "N*m", "peak |u_command|",
+                      m.why_undefined.get("peak_u_command"), cert)
+    peaks = np.max(np.abs(u), axis=0)
+    k = int(np.argmax(peaks / limits))
+    note = f" (peak |u_applied| {m.peak_u_applied:.4g} N*m)" if m.peak_u_applied is not None else ""
+    if u.shape[1] > 1:
+        names = getattr(sim, "input_names", ()) or tuple(f"u{j + 1}" for j in range(u.shape[1]))
+        note = f" on {names[k]}, the input nearest its limit" + note
+    return _check("max_control", float(limits[k]), float(peaks[k]), "N*m", "peak |u_command|", None, cert, note=note)

@@ -14,7 +14,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "UNITS", "build", "description"]
+__all__ = ["DEFAULTS", "LINK_MASSES", "UNITS", "build", "description"]
 
 DEFAULTS: dict[str, float] = {
     "m": 1.0,  # rod mass (kg)
@@ -38,6 +38,9 @@ UNITS: dict[str, tuple[str, str]] = {
     "g": ("m/s^2", "gravitational acceleration"),
 }
 """Parameter name -> (SI unit, meaning), for reports and specs."""
+
+LINK_MASSES: tuple[str, ...] = ('m',)
+"""The parameter holding each link's mass (a payload on link i adds to it)."""
 
 
 def description(*, symbolic: bool | tuple[str, ...] = (), **overrides: Any) -> ChainDescription:

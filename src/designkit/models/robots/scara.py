@@ -19,7 +19,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "UNITS", "build", "description"]
+__all__ = ["DEFAULTS", "LINK_MASSES", "UNITS", "build", "description"]
 
 DEFAULTS: dict[str, float] = {
     "d1": 0.387,  # height of the shoulder (m)
@@ -51,6 +51,9 @@ UNITS: dict[str, tuple[str, str]] = {
     "g": ("m/s^2", "gravitational acceleration"),
 }
 """Parameter name -> (SI unit, meaning), for reports and specs."""
+
+LINK_MASSES: tuple[str, ...] = ('m1', 'm2', 'm3', 'm4')
+"""The parameter holding each link's mass (a payload on link i adds to it)."""
 
 _ARM_RADIUS = 0.05  # m
 _QUILL_LENGTH, _QUILL_RADIUS = 0.3, 0.01  # m
