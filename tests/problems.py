@@ -54,6 +54,16 @@ CASES = {
                     "trajectory: {kind: quintic, amplitude: 0.2, duration: 1.0}}",
                     "{tracking_error: 1.0e-6}"),
     },
+    "resolved_acceleration": {
+        "two_link": ("{kind: resolved_acceleration, poles: [-10, -10]}",
+                     "{duration: 1.5, initial_position: [0.3, 1.2], "
+                     "trajectory: {kind: line, displacement: [-0.3, 0.1, 0.0], duration: 1.0}}",
+                     "{tracking_error: 0.1}"),
+        "puma560": ("{kind: resolved_acceleration, damping: 1.0, natural_frequency: 10, orientation: held}",
+                    "{duration: 1.5, initial_position: [0, 0.785, -3.14, 0.5, 0.3, 0.2], "
+                    "trajectory: {kind: line, displacement: [0.0, 0.0, 0.1], duration: 1.0}}",
+                    "{tracking_error: 1.0e-6}"),
+    },
     "decentralized_pid": {
         "two_link": ("{kind: decentralized_pid, poles: [-4, -5, -20], zero: -3}",
                      "{duration: 3.0, step: [1.0, -0.5]}"),

@@ -97,6 +97,14 @@ def _recheck(check, design, result) -> None:
         for cond in design.characteristic.linear_conditions(design.gains):
             for corner in np.array(np.meshgrid(*[[lo[n], hi[n]] for n in lo])).T.reshape(-1, len(lo)):
                 assert cond.value(**dict(zip(lo, corner, strict=True))) > 0
+    if base == "singularity":  # the worst condition number again, from the robot's own Jacobian
+        robot, p = design.plant.robot, design.plant.model_parameters()
+        J = robot.jacobian(np.array(cert["worst_configuration"]), p=p)
+        rows = design.extra["task"]["rows"]
+        sv = np.linalg.svd(J[rows, :], compute_uv=False)
+        assert sv[0] / sv[-1] == pytest.approx(cert["worst_condition"], rel=1e-6)
+        if design.extra.get("damping") is None:
+            assert bool(cert["worst_condition"] <= cert["max_condition_allowed"]) is bool(check.passed)
     if base in ("robust_vertices", "robust_grid") and check.passed is True:
         assert check.margin > 0
     if base in ("overshoot", "settling_time", "steady_state_error") and check.achieved is not None:

@@ -99,7 +99,7 @@ class ComputedTorqueSpec(Section):
         return self
 
 
-def _joint_values(value: Any, n: int, path: str) -> tuple[float, ...]:
+def joint_values(value: Any, n: int, path: str) -> tuple[float, ...]:
     try:
         return per_joint(value, n, path)
     except ValueError as exc:
@@ -107,17 +107,18 @@ def _joint_values(value: Any, n: int, path: str) -> tuple[float, ...]:
         raise SpecError(key, msg) from None
 
 
-def error_poles(spec: Any, n: int) -> list[tuple[complex, complex]]:
-    """The pair of error poles of each joint, from ``poles`` or from ``damping`` and ``natural_frequency``."""
+def error_poles(spec: Any, n: int, what: str = "joint") -> list[tuple[complex, complex]]:
+    """The pair of error poles of each of ``n`` joints (or task coordinates: ``what``), from ``poles`` or from
+    ``damping`` and ``natural_frequency``."""
     ctrl = spec.controller
     if ctrl.poles is not None:
         if isinstance(ctrl.poles[0], list):
             if len(ctrl.poles) != n:
-                raise SpecError("controller.poles", f"needs one pair of poles per joint ({n}), got {len(ctrl.poles)}")
+                raise SpecError("controller.poles", f"needs one pair of poles per {what} ({n}), got {len(ctrl.poles)}")
             return [tuple(p) for p in ctrl.poles]
         return [tuple(ctrl.poles)] * n
-    zetas = _joint_values(ctrl.damping, n, "controller.damping")
-    wns = _joint_values(ctrl.natural_frequency, n, "controller.natural_frequency")
+    zetas = joint_values(ctrl.damping, n, "controller.damping")
+    wns = joint_values(ctrl.natural_frequency, n, "controller.natural_frequency")
     out = []
     for zeta, wn in zip(zetas, wns, strict=True):
         disc = complex(zeta * zeta - 1.0) ** 0.5
@@ -161,7 +162,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                      + ". The simulation and the robustness checks run on the true plant.")
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
-        q0 = np.array(_joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
+        q0 = np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
     design = Design(
         kind=KIND, plant=model, gains=gains, poles=tuple(p for pair in pairs for p in pair), reference="trajectory",
         formulas=("a* = qD'' + K1 (qD - q) + K2 (qD' - qd);  u = M^(q) a* + h^(q, qd) (model's Newton-Euler at a*)",

@@ -165,8 +165,8 @@ def linear_figure(result: Any) -> Figure | None:
     from designkit.simulation.reference import reference_for
 
     design, spec = result.design, result.loaded.spec
-    if design.closed_loop is None:
-        return None
+    if design.closed_loop is None or family(design.kind).motion is not None:
+        return None  # a task-space reference does not drive the joint-space linearization
     kind = family(design.kind).reference
     reference = reference_for(kind, spec.simulation, len(design.plant.positions))
     t = _time_grid(design, spec, reference.horizon)
@@ -262,24 +262,29 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
     fig, axes = new_figure(6.8, 6.2 if rows == 3 else 4.6, rows=rows)
     ax, ax_u = axes[0], axes[-1]
     drawn = []
+    task = getattr(sim, "task_space", False)
+    names = sim.coordinate_names
+    unit = ", ".join(dict.fromkeys(sim.coordinate_units))
+    n = len(names)
     for j in range(n):
         color = _JOINT_COLORS[j % len(_JOINT_COLORS)]
         plot_decimated(ax, t, sim.desired[:, j], color=color, ls="--", lw=1.0,
-                       label=f"xD{_joint_label(design, j)} (reference)")
-        plot_decimated(ax, t, sim.joint_positions[:, j], color=color, label=sim.state_names[sim.positions[j]])
+                       label=f"{names[j]}D (reference)" if task else f"xD{_joint_label(design, j)} (reference)")
+        plot_decimated(ax, t, sim.tracked_positions[:, j], color=color, label=names[j])
     if req is not None and t.size > 1 and n == 1 and _at_rest(t, sim.desired[:, 0]):
-        drawn += _draw_envelope(ax, t, float(sim.joint_positions[0, 0]), float(sim.desired[-1, 0]), req)
-    ax.set_ylabel("position (rad)")
+        drawn += _draw_envelope(ax, t, float(sim.tracked_positions[0, 0]), float(sim.desired[-1, 0]), req)
+    ax.set_ylabel(f"{'end effector' if task else 'position'} ({unit})")
     ax.legend(loc="best", framealpha=0.9, ncols=2 if n > 1 else 1)
     if rows == 3:
         ax_e = axes[1]
         for j in range(n):
             plot_decimated(ax_e, t, sim.tracking_errors[:, j], color=_JOINT_COLORS[j % len(_JOINT_COLORS)],
-                           label=f"{sim.state_names[sim.positions[j]]} − xD")
+                           label=f"{names[j]} − {names[j]}D" if task else f"{names[j]} − xD")
         ax_e.axhline(0.0, color=GREY, lw=0.8)
-        ax_e.set_ylabel("error (rad)")
+        ax_e.set_ylabel(f"error ({unit})")
         ax_e.legend(loc="best", framealpha=0.9)
-        drawn.append("the tracking error of every joint")
+        drawn.append("the tracking error of every end-effector coordinate" if task else
+                     "the tracking error of every joint")
     limit = _common_limit(req.max_control) if req is not None else None
     if limit is not None:
         peak = max(float(np.max(np.abs(sim.u_command))), float(np.max(np.abs(sim.u_applied))))
@@ -323,10 +328,12 @@ def simulation_figure(result: Any) -> Figure | None:
 
     svg = render(draw, result.design, sim, spec.requirements)
     plant = result.design.plant
+    what = ("the end effector's coordinates (" + ", ".join(sim.coordinate_names) + "; orientation as the rotation "
+            "from the held orientation) and their references" if getattr(sim, "task_space", False)
+            else "joint positions and their references")
     caption = (f"Simulation of the full nonlinear {plant.kind} plant with the spec's nonlinearity, delay, sampling, "
-               "noise and perturbation; the time-domain checks are measured on it. Top: joint positions and their "
-               "references (dashed). Bottom: the control each input receives as commanded by the controller and as "
-               "applied to the plant")
+               f"noise and perturbation; the time-domain checks are measured on it. Top: {what} (dashed). Bottom: "
+               "the control each input receives as commanded by the controller and as applied to the plant")
     caption += ("; also drawn: " + ", ".join(drawn) + ".") if drawn else "."
     return Figure("Nonlinear closed-loop simulation", caption, svg, "fig-simulation.svg")
 
@@ -431,12 +438,86 @@ def coupling_figure(result: Any, check: Any) -> Figure | None:
                   "fig-coupling.svg")
 
 
+def _draw_singularity(data: Any) -> Any:
+    t = np.asarray(data["time"], float)
+    fig, (ax_c, ax_w) = new_figure(6.8, 4.6, rows=2)
+    ax_c.semilogy(t, np.asarray(data["condition"], float), color=BLUE, label="condition number of J")
+    ax_c.axhline(float(data["limit"]), color=RED, ls="--", lw=1.0, label=f"near-singular above {data['limit']:g}")
+    ax_c.set_ylabel("κ(J)")
+    ax_c.legend(loc="best", framealpha=0.9)
+    ax_w.plot(t, np.asarray(data["manipulability"], float), color=GREEN, label="manipulability √det(J Jᵀ)")
+    ax_w.set_ylabel("manipulability")
+    ax_w.set_xlabel("time (s)")
+    ax_w.set_xlim(t[0], t[-1])
+    ax_w.legend(loc="best", framealpha=0.9)
+    return fig
+
+
+def singularity_figure(result: Any, check: Any) -> Figure | None:
+    """Conditioning of the task Jacobian along the exact joint path (singularity check data)."""
+    if not check.data:
+        return None
+    cert = check.certificate
+    caption = (f"Conditioning of the task Jacobian J along the joint path that tracks the reference exactly "
+               f"({cert['samples']} instants of inverse kinematics): its condition number (top, the limit "
+               f"{cert['max_condition_allowed']:g} dashed) peaks at {cert['worst_condition']:.4g} at "
+               f"t = {cert['worst_at_s']:.3g} s; manipulability (bottom) down to "
+               f"{cert['smallest_manipulability']:.3g}.")
+    if cert.get("damping"):
+        caption += (f" Damped least squares (λ = {cert['damping']:g}) keeps the resolution bounded; the task gain "
+                    f"along the weakest direction at the worst point is {cert['task_gain_at_worst']:.3g}.")
+    return Figure("Distance to singular configurations along the path", caption,
+                  render(_draw_singularity, check.data), "fig-singularity.svg")
+
+
+def _draw_workspace(data: Any) -> Any:
+    joints = [j for j in data["joints"] if math.isfinite(j["tau_stable"][1]) and j["tau_stable"][1] > 0]
+    if not joints:
+        return None
+    fig, (ax,) = new_figure(6.8, 1.5 + 0.4 * len(joints))
+    ratios = [1.0]
+    for k, j in enumerate(joints):
+        crit, y = j["tau_stable"][1], len(joints) - 1 - k
+        lo, hi, nominal = j["tau"][0] / crit, j["tau"][1] / crit, j["tau_nominal"] / crit
+        ratios += [lo, hi, nominal]
+        ax.plot([lo, hi], [y, y], color=GREEN if hi < 1.0 else RED, lw=7, solid_capstyle="butt", marker="|",
+                ms=14, label="τ_i over the workspace" if k == 0 else None)
+        ax.plot(nominal, y, "o", color=GREY, ms=5, label="τ_i at q*" if k == 0 else None)
+    ax.axvline(1.0, color=RED, ls="--", lw=1.0, label="stability limit")
+    if max(ratios) / min(ratios) > 10.0:
+        ax.set_xscale("log")
+    ax.set_yticks(range(len(joints)), [f"joint {j['joint']}" for j in reversed(joints)])
+    ax.set_ylim(-0.7, len(joints) - 0.3)
+    ax.set_xlabel("τ_i / τ_crit,i  =  D_ii(q) / D_crit,i")
+    fig.legend(loc="outside lower center", ncols=3, framealpha=0.9)
+    return fig
+
+
+def workspace_figure(result: Any, check: Any) -> Figure | None:
+    """Each joint's range of tau over the workspace against its stability limit (workspace check data)."""
+    if not check.data.get("joints"):
+        return None
+    svg = render(_draw_workspace, check.data)
+    if svg is None:
+        return None
+    worst = check.certificate["smallest_margin"]
+    at = ", ".join(f"{v:.3g}" for v in worst["configuration"])
+    caption = ("Each joint's time constant τ_i = D_ii(q)/f_i over the workspace box (bar, from the smallest to the "
+               "largest D_ii found; green when stable throughout, red when not) and at the design configuration "
+               "(dot), divided by the largest τ_i its PID loop tolerates, τ_crit,i = K1 (1 + Km K2)/K3: the loop is "
+               f"stable left of the dashed line. Smallest margin 1 − τ/τ_crit = {worst['margin']:.3g} on joint "
+               f"{worst['joint']} at q = [{at}].")
+    return Figure("Joint loops over the workspace", caption, svg, "fig-workspace.svg")
+
+
 DESIGN_FIGURES: tuple[Callable[[Any], Figure | None], ...] = (pole_zero_figure, linear_figure, simulation_figure)
 """Figures drawn from the design and the simulation, in report order."""
 
 CHECK_FIGURES: dict[str, Callable[[Any, Any], Figure | None]] = {
     "loop_margins": bode_figure,
     "coupling": coupling_figure,
+    "workspace": workspace_figure,
+    "singularity": singularity_figure,
 }
 """Check name -> figure drawn from that check's certificate and data."""
 

@@ -222,6 +222,9 @@ def via_points(times: Sequence[float], points: Sequence[Any], start: Any = 0.0, 
 
 
 def _trajectory(traj: Any, start: np.ndarray, n: int) -> Reference:
+    if traj.kind in ("line", "circle"):
+        raise SpecError("simulation.trajectory.kind", f"{traj.kind!r} is an end-effector path, for a task-space "
+                        "controller; this controller tracks joints: use quintic, sine, trapezoidal or via_points")
     def joints(value: Any, key: str) -> tuple[float, ...]:
         try:
             return per_joint(value, n, f"simulation.trajectory.{key}")

@@ -24,7 +24,8 @@ class SimulationResult:
     time : ndarray, shape (N,)
         Time instants (s).
     reference : ndarray, shape (N, n, 3)
-        Desired position, velocity and acceleration of each of the ``n`` joints.
+        Desired position, velocity and acceleration of each of the ``n`` tracked coordinates: the
+        joints, or the task coordinates of a task-space controller (``tracked``).
     state : ndarray, shape (N, nx)
         Plant state, columns named by ``state_names``.
     controller_state : ndarray, shape (N, nc)
@@ -46,6 +47,10 @@ class SimulationResult:
     settings : Mapping
         Every option used (dt, integrator, nonlinearity, delay, sampling period, noise seed...),
         written into the report.
+    tracked : ndarray, shape (N, m), optional
+        The tracked task coordinates (m, rad) of a task-space controller; ``None``: the joints are tracked.
+    tracked_names, tracked_units : tuple of str
+        Their names (``x``, ``y``, ``rz``) and units.
     """
 
     time: np.ndarray
@@ -64,6 +69,9 @@ class SimulationResult:
     input_names: tuple[str, ...] = ("u",)
     disturbance_names: tuple[str, ...] = ("xi",)
     settings: Mapping[str, Any] = field(default_factory=dict)
+    tracked: np.ndarray | None = None
+    tracked_names: tuple[str, ...] = ()
+    tracked_units: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         n_t = np.size(self.time)
@@ -76,6 +84,10 @@ class SimulationResult:
                 arr = arr.reshape(n_t, -1, 3)
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
+        if self.tracked is not None:
+            arr = np.array(self.tracked, dtype=float).reshape(n_t, -1)
+            arr.setflags(write=False)
+            object.__setattr__(self, "tracked", arr)
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
 
     @property
@@ -90,13 +102,33 @@ class SimulationResult:
 
     @property
     def desired(self) -> np.ndarray:
-        """Desired joint positions ``(N, n)`` (rad)."""
+        """Desired positions of the tracked coordinates ``(N, n)`` (rad; m for task positions)."""
         return self.reference[:, :, 0]
 
     @property
+    def task_space(self) -> bool:
+        """Whether task coordinates (not the joints) are tracked."""
+        return self.tracked is not None
+
+    @property
+    def tracked_positions(self) -> np.ndarray:
+        """The tracked coordinates ``(N, n)``: the joint positions, or the task coordinates."""
+        return self.tracked if self.tracked is not None else self.joint_positions
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """Names of the tracked coordinates (state names of the joints, or ``x``, ``y``, ...)."""
+        return self.tracked_names if self.tracked is not None else tuple(self.state_names[i] for i in self.positions)
+
+    @property
+    def coordinate_units(self) -> tuple[str, ...]:
+        """Their units."""
+        return self.tracked_units if self.tracked is not None else ("rad",) * len(self.positions)
+
+    @property
     def tracking_errors(self) -> np.ndarray:
-        """``q - qD`` per joint, ``(N, n)`` (rad)."""
-        return self.joint_positions - self.desired
+        """Actual minus desired of every tracked coordinate, ``(N, n)`` (rad; m for task positions)."""
+        return self.tracked_positions - self.desired
 
     @property
     def position(self) -> np.ndarray:

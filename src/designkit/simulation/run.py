@@ -250,6 +250,7 @@ class Simulator:
     settings: Mapping[str, Any] = field(default_factory=dict)
     accumulated: ca.Function | None = None
     compiled: Mapping[str, Any] = field(default_factory=dict)
+    motion: Any = None
 
     @property
     def n_inputs(self) -> int:
@@ -285,13 +286,19 @@ class Simulator:
         nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
         cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
         x, xc, u_c, u_a, y, d = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
+        tracked: dict[str, Any] = {}
+        if self.motion is not None:
+            from designkit.simulation.motion import tracked_outputs
+
+            tracked = {"tracked": tracked_outputs(self.motion, x[:, list(p.positions)]),
+                       "tracked_names": self.motion.space.names, "tracked_units": self.motion.space.units}
         return SimulationResult(
             time=self.time, reference=self.reference, state=x, controller_state=xc, u_command=u_c, u_applied=u_a,
             perturbation=d, measured=y, kind=self.kind, positions=tuple(p.positions), velocities=tuple(p.velocities),
             state_names=tuple(s.name for s in p.states), controller_state_names=law.state_names,
             input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
             settings=self.settings if not parameters else
-            freeze({**self.settings, "plant": {q.name: q.value for q in plant.parameters}}),
+            freeze({**self.settings, "plant": {q.name: q.value for q in plant.parameters}}), **tracked,
         )
 
 
@@ -375,17 +382,21 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
         On a per-joint list of the wrong length, or ``simulation.dt`` incompatible with the
         sampling period, the delay or the poles.
     """
+    from designkit.simulation.motion import motion_of
+
     true_plant = design.plant if plant is None else plant
     sim, kind = spec.simulation, design.reference
     n = len(true_plant.positions)
-    ref: Reference = reference_for(kind, sim, n)
+    motion = motion_of(spec, design)
+    ref: Reference = motion.reference if motion is not None else reference_for(kind, sim, n)
     law = family(design.kind).law(design, sim.anti_windup) if law is None else law
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant, law), reference_rate=ref.rate)
     timing = resolve(spec, rates, ref.horizon)
 
     t = grid(timing)
-    check_reference(ref, t, true_plant, spec, kind)
+    if motion is None:  # a task-space path is checked on its joint path (the family's motion)
+        check_reference(ref, t, true_plant, spec, kind)
     N, dt = timing.n_samples, timing.dt
     nx, nd, nu = len(true_plant.states), len(true_plant.disturbances), len(true_plant.inputs)
     noise, noise_settings = _noise(spec, N, nx, tuple(s.name for s in true_plant.states))
@@ -431,7 +442,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     }
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info))
+                     compiled=freeze(compile_info), motion=motion)
 
 
 def simulate(spec: Spec, design: Design, *, plant: Any = None) -> SimulationResult:

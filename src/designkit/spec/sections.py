@@ -12,12 +12,12 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from designkit.spec.fields import NonNegativeFinite, PerJoint, PositiveFinite, Section
+from designkit.spec.fields import Finite, NonNegativeFinite, PerJoint, PositiveFinite, Section
 
 __all__ = [
-    "AntiWindup", "DeadZone", "Nonlinearity", "Noise", "Numerics", "Perturbation", "QuinticTrajectory", "Quantizer",
-    "Relay", "Requirements", "Saturation", "Simulation", "SineTrajectory", "Trajectory", "TrapezoidalTrajectory",
-    "ViaPointsTrajectory",
+    "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "Noise", "Nonlinearity",
+    "Numerics", "Perturbation", "Quantizer", "QuinticTrajectory", "Relay", "Requirements", "Saturation",
+    "Simulation", "SineTrajectory", "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
 ]
 
 
@@ -185,8 +185,58 @@ class ViaPointsTrajectory(Section):
         return self
 
 
-Trajectory = Annotated[QuinticTrajectory | SineTrajectory | TrapezoidalTrajectory | ViaPointsTrajectory,
-                       Field(discriminator="kind")]
+Point3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
+"""A point or direction in the robot's base frame (m): ``[x, y, z]``."""
+
+
+class LineTrajectory(Section):
+    """Straight line of the end effector, rest to rest with a quintic time law, orientation held.
+
+    From the end effector's position at ``simulation.initial_position`` to ``to`` (m, base frame),
+    or by ``displacement`` (m), over ``duration`` (s).  For task-space controllers (resolved
+    acceleration).
+    """
+
+    kind: Literal["line"]
+    to: Point3 | None = None
+    displacement: Point3 | None = None
+    duration: PositiveFinite = 1.0
+
+    @model_validator(mode="after")
+    def _one_end(self) -> LineTrajectory:
+        if (self.to is None) == (self.displacement is None):
+            raise ValueError("give either to or displacement")
+        return self
+
+
+class CircleTrajectory(Section):
+    """Circle of the end effector about the axis through ``center`` along ``normal`` (base frame, m),
+    rest to rest with a quintic time law on the angle, orientation held.
+
+    It starts at the end effector's position at ``simulation.initial_position`` (the radius is its
+    distance from the axis) and turns ``turns`` times (positive: counter-clockwise about ``normal``)
+    over ``duration`` (s).  For task-space controllers (resolved acceleration).
+    """
+
+    kind: Literal["circle"]
+    center: Point3
+    normal: Point3 = Field(default_factory=lambda: [0.0, 0.0, 1.0])
+    turns: Finite = 1.0
+    duration: PositiveFinite = 1.0
+
+    @field_validator("normal")
+    @classmethod
+    def _direction(cls, v: list[float]) -> list[float]:
+        if sum(x * x for x in v) < 1e-24:
+            raise ValueError("must be a non-zero vector")
+        return v
+
+
+Trajectory = Annotated[QuinticTrajectory | SineTrajectory | TrapezoidalTrajectory | ViaPointsTrajectory
+                       | LineTrajectory | CircleTrajectory, Field(discriminator="kind")]
+
+JOINT_TRAJECTORIES = ("quintic", "sine", "trapezoidal", "via_points")
+"""Trajectory kinds given per joint; the others (``line``, ``circle``) are end-effector paths."""
 
 
 class Simulation(Section):

@@ -278,7 +278,8 @@ def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearS
     return closed, input_loop, point
 
 
-def with_closed_loop(design: Design, law: Law, r0: Any) -> Design:
-    """``design`` with ``closed_loop``, ``input_loop`` and ``operating_point`` from :func:`linearize`."""
-    closed, input_loop, point = linearize(design.plant, law, r0)
+def with_closed_loop(design: Design, law: Law, r0: Any, *, z0: Any = None) -> Design:
+    """``design`` with ``closed_loop``, ``input_loop`` and ``operating_point`` from :func:`linearize`
+    (``z0``: Newton's starting guess, see there)."""
+    closed, input_loop, point = linearize(design.plant, law, r0, z0=z0)
     return dataclasses.replace(design, closed_loop=closed, input_loop=input_loop, operating_point=point)

@@ -21,6 +21,8 @@ __all__ = ["CHECK_NAMES", "Display", "Family"]
 CHECK_NAMES = frozenset({
     "pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins", "time_domain",
     "loops", "coupling", "error_poles", "tracking_bounds", "torque_limits",
+    "singularity",
+    "workspace",
 })
 """Checks a family may offer (see :mod:`designkit.verification.suite` for what each needs from a design)."""
 
@@ -74,6 +76,11 @@ class Family:
     validate : callable or None
         ``spec -> None``: cross-section rules of the parsed spec (raise ``ValueError("key.path:
         message")``), e.g. "poles or requirements".
+    motion : callable or None
+        Task-space families: ``(spec, design) -> TaskMotion``
+        (:class:`~designkit.simulation.motion.TaskMotion`: the reference in task coordinates, the
+        tracked output and the joint path that tracks it).  ``None``: the joints are tracked and
+        the reference is :func:`~designkit.simulation.reference.reference_for`'s.
     """
 
     kind: str
@@ -85,6 +92,7 @@ class Family:
     checks: tuple[str, ...]
     display: Display
     validate: Callable[[Any], None] | None = None
+    motion: Callable[[Any, Design], Any] | None = None
 
     def __post_init__(self) -> None:
         unknown = set(self.checks) - CHECK_NAMES

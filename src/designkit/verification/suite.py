@@ -14,7 +14,10 @@ loops              per-joint ``loops``                   the three above for eac
 robust_box         ``characteristic.linear_conditions``  stability on the whole (Km, tau) box (LP + duality)
                    and an uncertainty on its parameters
 robustness         ``plant.uncertainty``                 corners, lattice, samples; common Lyapunov P
-error_poles        a trajectory design with poles        error poles along the path (computed torque)
+workspace          per-joint ``loops`` and a workspace   every joint loop stable for every configuration of
+                   box (``extra["workspace"]``)          the box (D_ii range; affine conditions at its ends)
+error_poles        a trajectory design with poles        error poles along the path (joint or task space)
+singularity        a task-space design (``motion``)      conditioning of J along the path; DLS bound
 tracking_bounds    a trajectory design + uncertainty     tracking error over the box by simulation
 loop_margins       ``input_loop``                        gain/phase/modulus margins (informational)
 coupling           per-joint ``loops``                   intercoupling left to the loops (informational)
@@ -114,10 +117,29 @@ def _robustness(design: Any, ctx: Context) -> tuple[Check, ...]:
     return robustness_checks(design, _uncertainty(ctx), solver=ctx.solver, plant=ctx.plant)
 
 
+def _workspace(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.verification.workspace import workspace_check
+
+    return (workspace_check(design),)
+
+
 def _error_poles(design: Any, ctx: Context) -> tuple[Check, ...]:
     from designkit.verification.tracking import error_poles_check
 
     return (error_poles_check(ctx.spec, design, ctx.plant),)
+
+
+def _singularity(design: Any, ctx: Context) -> tuple[Check, ...]:
+    from designkit.simulation.motion import motion_of
+    from designkit.verification.singularity import singularity_check
+
+    return (singularity_check(design, motion_of(ctx.spec, design)),)
+
+
+def _task_space(design: Any, ctx: Context) -> bool:
+    from designkit.families import family
+
+    return family(design.kind).motion is not None
 
 
 def _tracking_bounds(design: Any, ctx: Context) -> tuple[Check, ...]:
@@ -162,7 +184,9 @@ CHECKS: dict[str, CheckRule] = {
     "loops": CheckRule(lambda d, c: bool(d.loops), _loops),
     "robust_box": CheckRule(_box_applies, _robust_box),
     "robustness": CheckRule(lambda d, c: _uncertainty(c) is not None and d.operating_point != {}, _robustness),
+    "workspace": CheckRule(lambda d, c: bool(d.loops) and d.extra.get("workspace") is not None, _workspace),
     "error_poles": CheckRule(lambda d, c: d.reference == "trajectory" and bool(d.poles), _error_poles),
+    "singularity": CheckRule(_task_space, _singularity),
     "tracking_bounds": CheckRule(lambda d, c: _uncertainty(c) is not None and d.reference == "trajectory",
                                  _tracking_bounds),
     "loop_margins": CheckRule(lambda d, c: d.input_loop is not None, _loop_margins),

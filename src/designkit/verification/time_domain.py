@@ -213,7 +213,7 @@ def response_metrics(sim: Any, *, settling_band: float = 0.02) -> ResponseMetric
         and the steady-state error, not for overshoot and rise time.
     """
     t = np.asarray(sim.time, dtype=float)
-    pos = np.asarray(sim.state, dtype=float)[:, list(getattr(sim, "positions", (0,)))]
+    pos = _tracked(sim)
     ref = np.asarray(sim.reference, dtype=float)
     xd = ref[:, :, 0] if ref.ndim == 3 else ref[:, :1]
     n = pos.shape[1]
@@ -315,15 +315,28 @@ def time_domain_checks(requirements: Any, sim: Any) -> tuple[Check, ...]:
         out.append(_check("steady_state_error", req.steady_state_error, m.steady_state_error, "rad", what,
                           m.why_undefined.get("steady_state_error"), cert, fmt=".3g", note=at("steady_state_error")))
     if req.tracking_error is not None:
-        err = np.abs(np.asarray(sim.state, dtype=float)[:, list(getattr(sim, "positions", (0,)))]
-                     - _desired(sim))
+        err = np.abs(_tracked(sim) - _desired(sim))
         value = float(np.max(err)) if err.size and np.all(np.isfinite(err)) else None
-        worst = f" (joint {int(np.argmax(np.max(err, axis=0))) + 1})" if value is not None and err.shape[1] > 1 else ""
-        out.append(_check("tracking_error", req.tracking_error, value, "rad", "largest |q - qD| over the run",
+        names = getattr(sim, "coordinate_names", None)
+        k = int(np.argmax(np.max(err, axis=0))) if value is not None else 0
+        worst = "" if value is None or err.shape[1] == 1 else (
+            f" ({names[k]})" if getattr(sim, "task_space", False) else f" (joint {k + 1})")
+        task = getattr(sim, "task_space", False)
+        unit = "/".join(sorted(set(sim.coordinate_units))) if task else "rad"
+        out.append(_check("tracking_error", req.tracking_error, value, unit,
+                          "largest |x - xD| of the end effector over the run" if task else
+                          "largest |q - qD| over the run",
                           "the simulated position is not finite (diverged?)", cert, fmt=".4g", note=worst))
     if req.max_control is not None:
         out.append(_max_control(req.max_control, sim, m, cert))
     return tuple(out)
+
+
+def _tracked(sim: Any) -> np.ndarray:
+    tracked = getattr(sim, "tracked", None)
+    if tracked is not None:
+        return np.asarray(tracked, dtype=float)
+    return np.asarray(sim.state, dtype=float)[:, list(getattr(sim, "positions", (0,)))]
 
 
 def _desired(sim: Any) -> np.ndarray:
