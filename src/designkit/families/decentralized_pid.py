@@ -17,6 +17,12 @@ law, with the integrals ``x3_i' = q_i - qD_i`` and a centralized gravity feed-fo
 (:mod:`designkit.families.pid_servo`), so each joint loop places its requested poles exactly *on
 its simplified model*; the coupled arm's poles differ by the intercoupling, which the
 ``coupling`` check measures.
+
+``workspace`` (optional): a box of configurations, ``{low, high}`` (rad or m per joint, either
+omitted: the robot's joint limits) or ``joint_limits``, over which the ``workspace`` check
+(:mod:`designkit.verification.workspace`) certifies every joint loop for every ``D_ii(q)`` of the
+box, not only at ``q*``.  Velocity limits are not asked for: ``Km_i`` and ``tau_i`` do not depend on
+the joint velocities (the velocity-dependent torques are part of ``xi``).
 """
 
 from __future__ import annotations
@@ -41,6 +47,24 @@ from designkit.synthesis.requirements import poles_from_spec, poles_or_requireme
 KIND = "decentralized_pid"
 
 
+class Workspace(Section):
+    """A box of configurations ``low <= q <= high`` (rad, or m for a prismatic joint) for the ``workspace`` check.
+
+    ``low``, ``high``: one value for every joint or one per joint; either omitted: the robot's joint
+    limits (``qlim``).  ``samples``: grid points per outboard joint when the range of each ``D_ii``
+    over the box is searched (:func:`designkit.models.link.link_range`).  Checked against the robot
+    at synthesis: one value per joint, ``low < high``, inside the joint limits.
+    """
+
+    low: PerJoint | None = None
+    high: PerJoint | None = None
+    samples: int = Field(default=7, ge=2, le=101)
+
+
+def _workspace_schema(schema: dict[str, Any]) -> None:
+    schema["anyOf"].insert(1, {"const": "joint_limits", "type": "string"})
+
+
 class DecentralizedPidSpec(Section):
     """One PID servo per joint on its simplified link model, plus a gravity feed-forward.
 
@@ -49,6 +73,8 @@ class DecentralizedPidSpec(Section):
     for ``pid_servo``).  ``zero``: the zero of each joint's ``q_i/qD_i`` (negative, one for all
     or one per joint; omitted: ``K4 = 0``).  ``configuration`` (rad per joint): where each link's
     ``Km_i``, ``tau_i`` are computed (default: ``simulation.initial_position``, else zero).
+    ``workspace``: the box of configurations the ``workspace`` check certifies the loops over
+    (:class:`Workspace`, or ``joint_limits`` for the robot's joint limits; default: no such check).
     """
 
     kind: Literal["decentralized_pid"]
@@ -59,6 +85,18 @@ class DecentralizedPidSpec(Section):
     gravity_feedforward: Literal["measured", "desired", "none"] = "measured"
     third_pole_factor: PositiveFinite = 5.0
     design_margin: float = Field(default=0.1, ge=0, lt=1)
+    workspace: Workspace | None = Field(default=None, json_schema_extra=_workspace_schema,
+                                        description="Box of configurations {low, high} (rad or m per joint) "
+                                        "certified by the workspace check, or 'joint_limits'.")
+
+    @field_validator("workspace", mode="before")
+    @classmethod
+    def _joint_limits(cls, v: Any) -> Any:
+        if isinstance(v, str):
+            if v.strip() != "joint_limits":
+                raise ValueError(f"must be 'joint_limits' or a mapping {{low, high, samples}}, got {v!r}")
+            return {}
+        return v
 
     @field_validator("poles")
     @classmethod
@@ -127,6 +165,57 @@ def configuration(spec: Any, n: int) -> np.ndarray:
     return np.zeros(n)
 
 
+def workspace(spec: Any, plant: Any) -> dict[str, Any] | None:
+    """The ``controller.workspace`` box checked against the robot (rad or m per joint), or None.
+
+    Returns
+    -------
+    dict or None
+        ``{"low": [...], "high": [...], "samples": int, "source": {"low": ..., "high": ...}}``, the
+        source of each side being ``"spec"`` or ``"joint limits"``.
+
+    Raises
+    ------
+    SpecError
+        ``controller.workspace.low``: not one value per joint, or omitted on a robot without joint
+        limits; ``controller.workspace.high[i]``: not above ``low[i]``; either side outside the
+        joint limits.
+    """
+    ws = spec.controller.workspace
+    if ws is None:
+        return None
+    n, limits = plant.n_joints, plant.joint_limits
+    sides: dict[str, tuple[float, ...]] = {}
+    source: dict[str, str] = {}
+    for k, side in enumerate(("low", "high")):
+        given = getattr(ws, side)
+        if given is None:
+            missing = next((i for i, lim in enumerate(limits) if lim is None), None)
+            if missing is not None:
+                raise SpecError(f"controller.workspace.{side}", f"needed: joint {missing + 1} has no joint limits "
+                                "(qlim) in the robot data to default to")
+            sides[side], source[side] = tuple(lim[k] for lim in limits), "joint limits"
+        else:
+            sides[side], source[side] = _per_joint(given, n, f"controller.workspace.{side}"), "spec"
+
+    def path(side: str, i: int) -> str:
+        return f"controller.workspace.{side}" + (f"[{i}]" if isinstance(getattr(ws, side), list) else "")
+
+    low, high = sides["low"], sides["high"]
+    for i in range(n):
+        if not low[i] < high[i]:
+            raise SpecError(path("high", i), f"must be greater than low ({low[i]:g}) for joint {i + 1}, "
+                            f"got {high[i]:g}")
+        lim = limits[i]
+        if lim is not None and low[i] < lim[0]:
+            raise SpecError(path("low", i), f"outside joint {i + 1}'s limits [{lim[0]:.6g}, {lim[1]:.6g}], "
+                            f"got {low[i]:g}")
+        if lim is not None and high[i] > lim[1]:
+            raise SpecError(path("high", i), f"outside joint {i + 1}'s limits [{lim[0]:.6g}, {lim[1]:.6g}], "
+                            f"got {high[i]:g}")
+    return {"low": list(low), "high": list(high), "samples": ws.samples, "source": source}
+
+
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u_i = -K1_i e_i - K2_i q_i' - K3_i x3_i + K3_i K4_i qD_i + g^_i`` (N*m per joint)."""
     plant = design.plant
@@ -161,6 +250,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("plant.friction", "decentralized_pid designs each joint on Km = 1/f (f the joint's viscous "
                         "friction), so the plant needs its friction: set plant.friction: true")
     q_star = configuration(spec, n)
+    box = workspace(spec, plant)
     pole_sets, notes, extra = _pole_sets(spec, n)
     ctrl = spec.controller
     zeros: tuple[float | None, ...] = (None,) * n
@@ -192,7 +282,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                   *pid_servo.pid.SERVO_FORMULAS[2:]),
         notes=notes,
         extra={**extra, "configuration": q_star.tolist(), "links": links,
-               "gravity_feedforward": ctrl.gravity_feedforward,
+               "gravity_feedforward": ctrl.gravity_feedforward, "workspace": box,
                "codegen_terms": [] if ctrl.gravity_feedforward == "none" else ["g_hat"]},
     )
     r0 = np.concatenate([q_star, np.zeros(2 * n)])
@@ -206,7 +296,7 @@ FAMILY = Family(
     reference="step",
     synthesize=synthesize,
     law=law,
-    checks=("loops", "lyapunov", "robustness", "loop_margins", "time_domain", "coupling"),
+    checks=("loops", "lyapunov", "robustness", "loop_margins", "time_domain", "coupling", "workspace"),
     display=Display(
         label="Decentralized PID with gravity feed-forward",
         law=("u_i = -K1_i (q_i - qD_i) - K2_i q̇_i - K3_i ∫(q_i - qD_i) dt + K3_i K4_i qD_i + ĝ_i(q)",),

@@ -24,6 +24,13 @@ is an ``m``-fold root to working precision: a perturbation ``d`` of the coeffici
 ``d**(1/m)``, so its poles are compared to ``POLE_REL ** (1/m)`` (3.2e-5 for a double pole,
 1e-3 for a triple one).  The coefficient comparison stays at ``POLE_REL``."""
 
+ERROR_DYNAMICS_REL = 1e-8
+"""Largest entry-wise deviation, relative to the largest entry, of a linearized error-dynamics matrix
+from the decoupled companion form ``[[0, I], [-K1, -K2]]`` (check ``error_poles``).  The matrix is
+the automatic derivative of an exactly cancelling composition (the model's inverse dynamics fed to
+its forward dynamics, through ``J^-1`` for task space): rounding leaves ~1e-13 of the entries, times
+the condition number of ``J`` (up to ~1e3 on a path the ``singularity`` check accepts)."""
+
 ZERO_INFINITE_REL = 1e10
 """A zero returned by the QZ algorithm with ``|z| > ZERO_INFINITE_REL * ||[A B; C D]||`` is an
 infinite zero rounded to a finite number (its ``beta`` is of the order of machine epsilon) and
