@@ -394,6 +394,11 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
     [
         (_planar("{kind: resolved_acceleration, poles: [-10, -10]}",
                  "{kind: line, to: [0.625, 0.675, 0.0], duration: 0.5}"), "simulation.trajectory.to: out of reach"),
+        (_planar("{kind: resolved_acceleration, poles: [-10, -10]}",
+                 "{kind: line, displacement: [0.5, 0.5, 0.0], duration: 0.5}"),
+         "simulation.trajectory.displacement: out of reach"),
+        (_planar("{kind: resolved_acceleration, poles: [-10, -10]}",
+                 "{kind: quintic, amplitude: 0.1, duration: 0.5}"), "simulation.trajectory.kind: a task-space"),
         (_puma(dls=False, displacement="[0, 0, 0.3]"), "simulation.trajectory: the joint motion leaves joint 4's"),
         (_planar("{kind: computed_torque, poles: [-10, -10]}", LINE), "simulation.trajectory.kind:"),
         (_puma(dls=False, orientation="none"), "controller.orientation: the task space must be square"),
@@ -406,7 +411,8 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
                  f"{{kind: circle, center: [{float(fk(Q0)[0, 0])!r}, {float(fk(Q0)[0, 1])!r}, -0.3], duration: 0.5}}"),
          "simulation.trajectory.center:"),
     ],
-    ids=["target-out-of-reach", "puma-joint-limits", "line-for-computed-torque", "non-square-task",
+    ids=["target-out-of-reach", "displacement-out-of-reach", "joint-trajectory-for-task-space",
+         "puma-joint-limits", "line-for-computed-torque", "non-square-task",
          "pole-pairs-count", "planar-path-along-z", "circle-start-on-axis"],
 )
 def test_bad_input_exits_2_with_the_key_path(tmp_path, capsys, text, message):

@@ -165,8 +165,8 @@ def motion(spec: Any, design: Design) -> Any:
     traj = spec.simulation.trajectory
     if traj is None or traj.kind not in ("line", "circle"):
         got = "none" if traj is None else repr(traj.kind)
-        raise SpecError("simulation.trajectory", f"a task-space controller follows an end-effector path: give "
-                        f"kind line or circle (got {got})")
+        raise SpecError("simulation.trajectory" if traj is None else "simulation.trajectory.kind",
+                        f"a task-space controller follows an end-effector path: give kind line or circle (got {got})")
     plant = design.plant
     n = plant.n_joints
     space = _space(design)
@@ -180,8 +180,10 @@ def motion(spec: Any, design: Design) -> Any:
     path = joint_path(fns, q0, t, X[:, :, 0], X[:, :, 1])
     limits = getattr(spec.plant, "limits", None)
     try:
-        check_path(path, "simulation.trajectory" + (".to" if traj.kind == "line" and traj.to is not None else ""),
-                   plant.joint_limits, getattr(limits, "velocity", None) if limits is not None else None)
+        end = ("to" if traj.to is not None else "displacement") if traj.kind == "line" else "center"
+        check_path(path, "simulation.trajectory", plant.joint_limits,
+                   getattr(limits, "velocity", None) if limits is not None else None,
+                   reach_key=f"simulation.trajectory.{end}")
     except ModelError as exc:
         raise SpecError(exc.field, exc.message) from None
     return TaskMotion(ref, space, fns, path)

@@ -202,7 +202,8 @@ class JointPath:
     manipulability : ndarray (N,)
         Yoshikawa's ``sqrt(det(J J^T))`` = the product of the singular values.
     residual : ndarray (N,)
-        Inverse-kinematics residual ``|tracked(q) - xD|`` (m, rad).
+        Inverse-kinematics residual ``|tracked(q) - xD|`` (m, rad); after the first point out of
+        reach the path is not solved (``inf``).
     """
 
     time: np.ndarray
@@ -259,6 +260,10 @@ def joint_path(functions: TaskFunctions, q0: Any, time: np.ndarray, targets: np.
             err = targets[k] - np.asarray(tracked(q)).ravel()
         Q[k] = q
         residual[k] = float(np.linalg.norm(err))
+        if residual[k] > REACH_TOLERANCE:  # out of reach: the rest of the path is not solved
+            Q[k + 1:] = q
+            residual[k + 1:] = np.inf
+            break
     J_all = np.asarray(functions.jacobian.map(N)(Q.T)).reshape(-1, N, order="F")
     m = targets.shape[1]
     Js = np.stack([J_all[:, k].reshape(m, -1, order="F") for k in range(N)])
@@ -269,19 +274,21 @@ def joint_path(functions: TaskFunctions, q0: Any, time: np.ndarray, targets: np.
     return JointPath(time, Q, Qd, sigma, condition, np.prod(sigma, axis=1), residual)
 
 
-def check_path(path: JointPath, key: str, limits: Any, velocity_limits: Any = None) -> None:
+def check_path(path: JointPath, key: str, limits: Any, velocity_limits: Any = None, *,
+               reach_key: str | None = None) -> None:
     """Refuse a path out of reach, or whose joint motion leaves the joint or velocity limits.
 
     Raises
     ------
     ModelError
-        Path ``key`` with the instant and the numbers.
+        Path ``key`` (``reach_key`` for a point out of reach, default ``key``) with the instant and
+        the numbers.
     """
     far = np.flatnonzero(path.residual > REACH_TOLERANCE)
     if far.size:
         k = int(far[0])
-        raise ModelError(key, f"out of reach: at t = {path.time[k]:.4g} s the closest the end effector gets to "
-                              f"the path is {path.residual[k]:.3g} (m, rad)")
+        raise ModelError(reach_key or key, f"out of reach: at t = {path.time[k]:.4g} s the closest the end "
+                                           f"effector gets to the path is {path.residual[k]:.3g} (m, rad)")
     for j, lim in enumerate(limits):
         if lim is None:
             continue

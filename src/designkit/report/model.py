@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.analysis.experiment1 import lab_answers
 from designkit.families import family
 from designkit.report.certificates import CertificateEntry, fmt_compact, fmt_number, fmt_signed, render_certificate
 from designkit.report.figures import Figure, design_figures
@@ -66,6 +67,24 @@ class CheckRow:
 
 
 @dataclass(frozen=True)
+class LabTable:
+    """A table of the lab-questions section: ``caption``, ``header`` and ``rows`` (formatted cells)."""
+
+    caption: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True)
+class LabSection:
+    """A lab question of the notes' experiment 1 and its answer: ``sentences`` and ``tables`` computed from the run."""
+
+    question: str
+    sentences: tuple[str, ...]
+    tables: tuple[LabTable, ...] = ()
+
+
+@dataclass(frozen=True)
 class ReportModel:
     """Everything a report shows; one model drives both the HTML and the PDF.
 
@@ -110,6 +129,11 @@ class ReportModel:
         Simulation settings (empty when no simulation ran).
     figures : tuple of Figure
         Figures in report order.
+    lab_intro : str
+        How the lab questions were answered (empty when they are not: not a robot, or no simulation).
+    lab : tuple of LabSection
+        The notes' lab questions of experiment 1 answered from this run
+        (:func:`designkit.analysis.experiment1.lab_answers`).
     """
 
     title: str
@@ -135,6 +159,8 @@ class ReportModel:
     checks: tuple[CheckRow, ...]
     simulation: tuple[ParameterRow, ...]
     figures: tuple[Figure, ...]
+    lab_intro: str = ""
+    lab: tuple[LabSection, ...] = ()
 
 
 # ----------------------------------------------------------------------------- sections
@@ -319,6 +345,88 @@ def _simulation_rows(simulation) -> tuple[ParameterRow, ...]:
     return tuple(rows)
 
 
+def _lab_sections(answers: Any) -> tuple[str, tuple[LabSection, ...]]:
+    """The lab questions' section from :class:`~designkit.analysis.experiment1.LabAnswers` (None: no section)."""
+    if answers is None:
+        return "", ()
+    f = fmt_number
+    tr = answers.tracking
+    tables = []
+    if tr.coordinates:
+        tables.append(LabTable("Tracking error e = x − xD per tracked coordinate",
+                               ("Coordinate", "Move", "Peak |e|", "at t (s)", "RMS |e|", "Final |e|", "Unit"),
+                               tuple((c.name, f(c.move), f(c.peak), f(c.peak_at), f(c.rms), f(c.final), unit(c.unit))
+                                     for c in tr.coordinates)))
+    if tr.torques:
+        tables.append(LabTable("Peak commanded torque per joint", ("Input", "Peak |u|", "at t (s)", "Unit"),
+                               tuple((q.name, f(q.peak), f(q.at), unit(q.unit)) for q in tr.torques)))
+    sections = [LabSection("How well does the controller perform? How to characterize its performance?",
+                           tr.sentences, tuple(tables))]
+
+    st = answers.gains
+    gain_tables = []
+    if st.effects:
+        step = any(r.overshoot is not None for e in st.effects for r in e.runs)
+        first = next(r for r in st.effects[0].runs if r.scale == 1.0)
+        kind = "RMS |e|" if st.measure.startswith("RMS") else "peak |e|"
+        poles = any(r.abscissa is not None for e in st.effects for r in e.runs)
+        header = ("Gain", "Scale", "Loop", *(("max Re(pole) (1/s)",) if poles else ()),
+                  *(f"{kind} {c} ({unit(u)})" for c, u in zip(st.coordinates, st.units, strict=True)),
+                  f"peak |{first.peak_torque_input}| ({unit(first.peak_torque_unit)})",
+                  *(("Overshoot (%)", "Settling (s)") if step else ()))
+        rows = []
+        for e in st.effects:
+            for r in e.runs:
+                values = r.rms_error if kind == "RMS |e|" else r.peak_error
+                cells = [f(v) for v in values] if r.ok else ["—"] * len(st.coordinates)
+                status = "as designed" if r.scale == 1.0 else ("stable" if r.ok else r.status)
+                rows.append((e.name, f"× {r.scale:g}", status, *((f(r.abscissa),) if poles else ()), *cells,
+                             f(r.peak_torque) if r.ok else "—",
+                             *((f(r.overshoot), f(r.settling_time)) if step else ())))
+        gain_tables.append(LabTable("Each gain scaled on every joint, everything else equal, on the true plant "
+                                    "(the × 1 rows are the run above)", header, tuple(rows)))
+    sections.append(LabSection("What is the function of each gain? How do gain variations influence performance?",
+                               (*st.sentences, *(e.sentence for e in st.effects)), tuple(gain_tables)))
+
+    cf = answers.configuration
+    loops = any(j.design_value is not None for j in cf.joints)
+    header = ("Joint", "min D_ii", "at t (s)", "max D_ii", "at t (s)", "max/min", "Unit",
+              *(("D_ii(q*)", "loop poles at min D_ii (1/s)", "at max D_ii (1/s)") if loops else ()))
+    rows = tuple((str(j.joint), f(j.low), f(j.low_at), f(j.high), f(j.high_at), f(j.ratio), unit(j.unit),
+                  *((f(j.design_value), ", ".join(f(p) for p in sorted(j.poles_at_low, key=_pole_key)),
+                     ", ".join(f(p) for p in sorted(j.poles_at_high, key=_pole_key))) if loops else ()))
+                 for j in cf.joints)
+    sections.append(LabSection(
+        "What is the influence of the working configuration?", cf.sentences,
+        (LabTable("Diagonal of the true plant's inertia matrix along the simulated path", header, rows),)
+        if rows else ()))
+    sections.append(LabSection("What is the influence of the mass parameters?", answers.mass))
+
+    cp = answers.coupling
+    model_based = any(j.model_error is not None for j in cp.joints)
+    header = ("Joint", "Off-diagonal Σ D_ij q̈_j", "Coriolis and centrifugal", "Coupling (sum)", "at t (s)",
+              "Own D_ii q̈_i", "Coupling/own", *(("Model error ID_plant − ID_model",) if model_based else ()),
+              "Unit")
+    rows = tuple((str(j.joint), f(j.off_diagonal), f(j.coriolis), f(j.coupling), f(j.coupling_at), f(j.own_inertial),
+                  f"{f(100 * j.ratio, 3)} %" if math.isfinite(j.ratio) else "∞",
+                  *((f(j.model_error),) if model_based else ()), unit(j.unit)) for j in cp.joints)
+    stride = f", one instant in {cp.stride}" if cp.stride > 1 else ""
+    sections.append(LabSection(
+        "How effective is the controller in neutralizing intercouplings, centripetal and Coriolis forces?",
+        cp.sentences,
+        (LabTable(f"Peak torques along the simulated path (q̈ by finite differences of the simulated velocities"
+                  f"{stride})", header, rows),) if rows else ()))
+    intro = (f"The questions of the notes' simulation experiment 1 (appendix A), answered for this design "
+             f"({answers.controller}) from the simulation above: every number is measured on this run and every "
+             "sentence is written from those numbers; the gain study re-simulates the same scenario with one gain "
+             "scaled at a time.")
+    return intro, tuple(sections)
+
+
+def _pole_key(p: complex) -> tuple[float, float]:
+    return (p.real, p.imag)
+
+
 def build_report_model(result: Any) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
 
@@ -339,6 +447,7 @@ def build_report_model(result: Any) -> ReportModel:
     display = family(design.kind).display
     label = display.label
     plant = design.plant
+    lab_intro, lab = _lab_sections(lab_answers(result))
     return ReportModel(
         title=f"{label} — {spec.name}",
         name=spec.name,
@@ -365,6 +474,8 @@ def build_report_model(result: Any) -> ReportModel:
         checks=_check_rows(checks),
         simulation=_simulation_rows(result.simulation),
         figures=design_figures(result),
+        lab_intro=lab_intro,
+        lab=lab,
     )
 
 
@@ -372,6 +483,8 @@ __all__ = [
     "CertificateEntry",
     "CheckRow",
     "Figure",
+    "LabSection",
+    "LabTable",
     "ParameterRow",
     "PoleRow",
     "ReportModel",

@@ -18,7 +18,7 @@ from designkit.simulation.reference import Reference
 
 __all__ = ["TaskMotion", "motion_of", "tracked_outputs"]
 
-_MEMO: OrderedDict[tuple[int, int], tuple[Any, Any, TaskMotion | None]] = OrderedDict()
+_MEMO: OrderedDict[tuple[Any, ...], tuple[Any, Any, TaskMotion | None]] = OrderedDict()
 _MEMO_SIZE = 8
 
 
@@ -46,18 +46,25 @@ class TaskMotion:
 
 
 def motion_of(spec: Any, design: Any) -> TaskMotion | None:
-    """``family(design.kind).motion(spec, design)`` (memoised), or None for a joint-space family."""
+    """``family(design.kind).motion(spec, design)`` (memoised), or None for a joint-space family.
+
+    The motion depends on the spec, the controller's model and the task space, not on the gains:
+    designs that differ only in their gains (a gain study) share one inverse-kinematics solution.
+    """
+    import json
+
     from designkit.families import family
 
     hook = family(design.kind).motion
     if hook is None:
         return None
-    key = (id(spec), id(design))
+    task = json.dumps(design.extra.get("task"), sort_keys=True, default=str)
+    key = (id(spec), id(design.plant), design.kind, task)
     hit = _MEMO.get(key)
-    if hit is not None and hit[0] is spec and hit[1] is design:
+    if hit is not None and hit[0] is spec and hit[1] is design.plant:
         return hit[2]
     value = hook(spec, design)
-    _MEMO[key] = (spec, design, value)
+    _MEMO[key] = (spec, design.plant, value)
     while len(_MEMO) > _MEMO_SIZE:
         _MEMO.popitem(last=False)
     return value

@@ -339,6 +339,10 @@ def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Spec, kind:
         if lim is None:
             continue
         bad = np.flatnonzero((x[:, j, 0] < lim[0] - 1e-12) | (x[:, j, 0] > lim[1] + 1e-12))
+        start = ref.start[j] if j < len(ref.start) else 0.0
+        if not lim[0] - 1e-12 <= start <= lim[1] + 1e-12:
+            raise SpecError("simulation.initial_position", f"joint {j + 1} starts at {start:.4g} rad, outside its "
+                                                           f"limits [{lim[0]:.4g}, {lim[1]:.4g}] rad")
         if bad.size:
             k = int(bad[0])
             raise SpecError(key, f"joint {j + 1} leaves its limits [{lim[0]:.4g}, {lim[1]:.4g}] rad at t = "

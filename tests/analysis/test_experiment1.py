@@ -1,0 +1,344 @@
+"""The lab questions of experiment 1 answered from a run (designkit.analysis.experiment1).
+
+Independent routes: the two-link arm's dynamics derived here by Lagrange with sympy (coupling and
+Coriolis torques), the payload's weight written by hand (model error torque), the static error of
+computed torque under a model error solved with scipy (the gain study's runs), and synthetic numbers
+for the generated sentences.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from functools import cache
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+from designkit.analysis import experiment1 as ex
+from designkit.analysis.experiment1 import (
+    GainEffect,
+    GainRun,
+    JointCoupling,
+    coupling_level,
+    coupling_sentences,
+    coupling_torques,
+    gain_sentence,
+    lab_answers,
+    model_error_torque,
+    study_sentences,
+    tracking_sentences,
+)
+from designkit.models.robot_plant import zoo_plant
+from designkit.pipeline import run
+from designkit.report.html import render_html
+from designkit.report.model import build_report_model
+from designkit.report.pdf import compile_pdf
+from designkit.spec.loader import parse_spec
+from tests.problems import POSSPEED_YAML
+from tests.tolerances import TOL
+
+# computed torque on the SIMNOG arm with a model that believes m2 = 2.5 kg (the plant has 3 kg): a static
+# error remains after the quintic, which the gain study must scale with 1/K1
+CT_MISMATCH = """\
+name: lab-ct-mismatch
+plant: {kind: robot, robot: planar2r}
+controller: {kind: computed_torque, poles: [-20, -20], model: {parameters: {m2: 2.5}}}
+simulation: {duration: 3.0, trajectory: {kind: quintic, amplitude: [1.0, -0.5], duration: 1.0}}
+"""
+CT_EXACT = CT_MISMATCH.replace(", model: {parameters: {m2: 2.5}}", "").replace("lab-ct-mismatch", "lab-ct-exact")
+# joint 2's loop on slow poles has K2 = -0.52 < 0: doubled, K2 < -1/Km2 and the Routh condition fails
+PID_FRAGILE = """\
+name: lab-pid-fragile
+plant: {kind: robot, robot: planar2r}
+controller: {kind: decentralized_pid, poles: [[-4, -5, -20], [-0.5, -1, -1.5]]}
+simulation: {duration: 3.0, step: [0.2, 0.1], dt: 0.002}
+"""
+
+
+@pytest.fixture(scope="module")
+def mismatch():
+    result = run(parse_spec(CT_MISMATCH))
+    return result, lab_answers(result)
+
+
+@pytest.fixture(scope="module")
+def exact():
+    result = run(parse_spec(CT_EXACT))
+    return result, lab_answers(result)
+
+
+# ----------------------------------------------------------------------------- independent dynamics
+
+
+@cache
+def _lagrange_planar2r():
+    """``M(q)`` and the Coriolis/centrifugal torque ``c(q, qd)`` of two uniform rods (relative second angle),
+    from the kinetic energy by Lagrange's equations, as NumPy functions."""
+    import sympy as sp
+
+    q1, q2, qd1, qd2, qdd1, qdd2 = sp.symbols("q1 q2 qd1 qd2 qdd1 qdd2")
+    m1, m2, d1, d2, I1, I2 = sp.symbols("m1 m2 d1 d2 I1 I2", positive=True)
+    t = sp.symbols("t")
+    Q1, Q2 = sp.Function("Q1")(t), sp.Function("Q2")(t)
+    c1 = sp.Matrix([d1 / 2 * sp.cos(Q1), d1 / 2 * sp.sin(Q1)])
+    c2 = sp.Matrix([d1 * sp.cos(Q1) + d2 / 2 * sp.cos(Q1 + Q2), d1 * sp.sin(Q1) + d2 / 2 * sp.sin(Q1 + Q2)])
+    v1, v2 = c1.diff(t), c2.diff(t)
+    T = (m1 * v1.dot(v1) + I1 * Q1.diff(t) ** 2 + m2 * v2.dot(v2) + I2 * (Q1.diff(t) + Q2.diff(t)) ** 2) / 2
+    tau = [sp.diff(T.diff(Qi.diff(t)), t) - T.diff(Qi) for Qi in (Q1, Q2)]
+    subs = {Q1.diff(t, 2): qdd1, Q2.diff(t, 2): qdd2, Q1.diff(t): qd1, Q2.diff(t): qd2}
+    tau = [sp.expand(e.subs(subs).subs({Q1: q1, Q2: q2})) for e in tau]
+    M = sp.Matrix(2, 2, lambda i, j: sp.diff(tau[i], (qdd1, qdd2)[j]))
+    c = [e.subs({qdd1: 0, qdd2: 0}) for e in tau]
+    args = (q1, q2, qd1, qd2, m1, m2, d1, d2, I1, I2)
+    return sp.lambdify(args, M, "numpy"), sp.lambdify(args, c, "numpy")
+
+
+def _hand_coupling(plant, q, qd, qdd):
+    M_fn, c_fn = _lagrange_planar2r()
+    p = {s.name: s.value for s in plant.parameters}
+    own, off, cor = np.empty_like(q), np.empty_like(q), np.empty_like(q)
+    for k in range(q.shape[0]):
+        args = (*q[k], *qd[k], p["m1"], p["m2"], p["d1"], p["d2"], p["I1"], p["I2"])
+        M = np.asarray(M_fn(*args), dtype=float)
+        own[k] = np.diag(M) * qdd[k]
+        off[k] = M @ qdd[k] - own[k]
+        cor[k] = np.asarray(c_fn(*args), dtype=float)
+    return own, off, cor
+
+
+def _scaled_error(x, ref):
+    return float(np.max(np.abs(np.asarray(x) - np.asarray(ref)) / (1 + np.abs(np.asarray(ref)))))
+
+
+def test_coupling_torques_match_the_lagrange_equations_of_two_rods():
+    plant = zoo_plant("planar2r")
+    rng = np.random.default_rng(7)
+    q, qd, qdd = (rng.uniform(-3, 3, size=(25, 2)) for _ in range(3))
+    got = coupling_torques(plant, q, qd, qdd)
+    own, off, cor = _hand_coupling(plant, q, qd, qdd)
+    assert _scaled_error(got["own"], own) <= TOL["algebra"]
+    assert _scaled_error(got["off_diagonal"], off) <= TOL["algebra"]
+    assert _scaled_error(got["coriolis"], cor) <= TOL["algebra"]
+    assert _scaled_error(got["coupling"], off + cor) <= TOL["algebra"]
+
+
+def test_coupling_answers_are_the_peaks_along_the_simulated_path(mismatch):
+    result, answers = mismatch
+    sim = result.simulation
+    assert answers.coupling.stride == 1
+    q = np.asarray(sim.joint_positions)
+    qd = np.asarray(sim.state)[:, list(sim.velocities)]
+    qdd = np.gradient(qd, np.asarray(sim.time), axis=0)
+    own, off, cor = _hand_coupling(result.plant, q, qd, qdd)
+    for i, j in enumerate(answers.coupling.joints):
+        assert j.joint == i + 1 and j.unit == "N*m"
+        assert j.coupling == pytest.approx(np.max(np.abs(off[:, i] + cor[:, i])), rel=1e-9)
+        assert j.off_diagonal == pytest.approx(np.max(np.abs(off[:, i])), rel=1e-9)
+        assert j.coriolis == pytest.approx(np.max(np.abs(cor[:, i])), rel=1e-9)
+        assert j.own_inertial == pytest.approx(np.max(np.abs(own[:, i])), rel=1e-9)
+        assert j.ratio == pytest.approx(j.coupling / j.own_inertial, rel=1e-12)
+
+
+# ----------------------------------------------------------------------------- model error torque
+
+
+def test_model_error_torque_is_exactly_zero_for_an_exact_model(exact):
+    plant = zoo_plant("planar2r")
+    rng = np.random.default_rng(1)
+    q, qd, qdd = (rng.uniform(-2, 2, size=(10, 2)) for _ in range(3))
+    assert np.all(model_error_torque(plant, plant.with_params(m2=3.0), q, qd, qdd) == 0.0)
+    result, answers = exact
+    assert answers.nature == "model-based"
+    assert [j.model_error for j in answers.coupling.joints] == [0.0, 0.0]
+    assert any("cancelled exactly" in s for s in answers.coupling.sentences)
+
+
+def test_model_error_torque_at_rest_is_the_missing_payload_weight():
+    model = zoo_plant("planar2r")
+    payload = 0.7
+    plant = model.with_payload(payload, 2)
+    q = np.array([[0.0, 0.0], [0.4, -1.1], [2.0, 0.5], [-np.pi / 2, np.pi / 3]])
+    zero = np.zeros_like(q)
+    d1, d2, g = 0.5, 0.4, 9.81
+    expected = np.column_stack([payload * g * (d1 * np.cos(q[:, 0]) + d2 / 2 * np.cos(q[:, 0] + q[:, 1])),
+                                payload * g * d2 / 2 * np.cos(q[:, 0] + q[:, 1])])
+    got = model_error_torque(plant, model, q, zero, zero)
+    assert _scaled_error(got, expected) <= TOL["algebra"]
+
+
+def test_mismatch_reports_the_model_error_and_the_differing_parameter(mismatch):
+    result, answers = mismatch
+    errs = [j.model_error for j in answers.coupling.joints]
+    assert all(e is not None and e > 0 for e in errs)
+    assert any("m2 2.5 against 3 kg" in s for s in answers.mass)
+
+
+# ----------------------------------------------------------------------------- gain study
+
+
+def test_unit_row_of_the_gain_table_is_the_main_run(mismatch):
+    result, answers = mismatch
+    err = np.abs(np.asarray(result.simulation.tracking_errors))
+    assert answers.gains.measure.startswith("peak |e|")
+    for effect in answers.gains.effects:
+        nominal = next(r for r in effect.runs if r.scale == 1.0)
+        assert [r.scale for r in effect.runs] == [0.5, 1.0, 2.0]
+        assert nominal.peak_error == tuple(np.max(err, axis=0))
+        assert nominal.final_error == tuple(err[-1])
+    assert answers.tracking.coordinates[0].peak == float(np.max(err[:, 0]))
+
+
+def test_scaled_K1_runs_end_at_the_static_error_of_the_scaled_gain(mismatch):
+    """At rest computed torque gives ``M^(q) K1 (qD - q) + g^(q) = g(q)``: solved here for each scale of K1."""
+    result, answers = mismatch
+    plant, model = result.plant, result.design.plant
+    qD = np.asarray(result.simulation.desired)[-1]
+    K1 = np.asarray(result.design.gains["K1"], dtype=float)
+    effect = next(e for e in answers.gains.effects if e.name == "K1")
+    for r in effect.runs:
+        assert r.ok
+
+        def residual(q, k1=r.scale * K1):
+            M = model.robot.mass_matrix(q, p=model.model_parameters())
+            gm = model.robot.gravity_torque(q, p=model.model_parameters())
+            g = plant.robot.gravity_torque(q, p=plant.model_parameters())
+            return M @ (k1 * (qD - q)) + gm - g
+
+        q = scipy.optimize.fsolve(residual, qD, xtol=1e-13)
+        assert np.allclose(r.final_error, np.abs(qD - q), rtol=1e-4, atol=1e-9), (r.scale, r.final_error, qD - q)
+    ratios = dict(effect.ratios)
+    assert ratios[0.5] > 1.5 and ratios[2.0] < 0.7  # the static error scales with 1/K1
+    assert answers.gains.most_sensitive == "K1"
+    assert "so raising K1 lowers the peak |e|" in effect.sentence
+
+
+def test_exact_model_gain_study_says_the_error_stays_at_integrator_precision(exact):
+    _, answers = exact
+    assert answers.gains.most_sensitive is None
+    assert any("integrator's precision" in s for s in answers.gains.sentences)
+
+
+def test_a_destabilizing_gain_is_reported_not_raised():
+    result = run(parse_spec(PID_FRAGILE))
+    answers = lab_answers(result)
+    assert answers.nature == "per-joint loops"
+    k2 = next(e for e in answers.gains.effects if e.name == "K2")
+    doubled = next(r for r in k2.runs if r.scale == 2.0)
+    assert doubled.status in ("unstable", "non-finite", "diverging") and doubled.abscissa > 0
+    assert dict(k2.ratios)[2.0] is None and math.isinf(k2.sensitivity)
+    assert "doubling it destabilizes the loop" in k2.sentence
+    assert "Doubling K2 destabilizes the loop." in answers.gains.sentences
+    assert all(r.ok for e in answers.gains.effects if e.name != "K2" for r in e.runs)
+
+
+def test_gain_study_is_skipped_beyond_its_bounds(mismatch, monkeypatch):
+    result, _ = mismatch
+    monkeypatch.setattr(ex, "MAX_JOINTS", 1)
+    study = lab_answers(result).gains
+    assert study.effects == () and "2 joints" in study.skipped and study.sentences[0].startswith("Gain study skipped")
+    monkeypatch.setattr(ex, "MAX_JOINTS", 6)
+    monkeypatch.setattr(ex, "STUDY_BUDGET_S", 0.0)
+    study = lab_answers(result).gains
+    assert study.effects == () and "budget" in study.skipped
+
+
+# ----------------------------------------------------------------------------- configuration
+
+
+def test_configuration_is_the_diagonal_inertia_along_the_path(mismatch):
+    result, answers = mismatch
+    q = np.asarray(result.simulation.joint_positions)
+    p = {s.name: s.value for s in result.plant.parameters}
+    m1, m2, d1, d2 = p["m1"], p["m2"], p["d1"], p["d2"]
+    D11 = m1 * d1**2 / 4 + m2 * (d1**2 + d2**2 / 4 + d1 * d2 * np.cos(q[:, 1])) + p["I1"] + p["I2"]  # appendix B
+    j1, j2 = answers.configuration.joints
+    assert j1.low == pytest.approx(D11.min(), rel=1e-12) and j1.high == pytest.approx(D11.max(), rel=1e-12)
+    assert j1.ratio == pytest.approx(D11.max() / D11.min(), rel=1e-12)
+    assert j2.ratio == pytest.approx(1.0, abs=1e-12)  # D22 = m2 d2^2/4 + I2 does not depend on q
+    assert f"varies by a factor {j1.ratio:.3g}" in answers.configuration.sentences[0]
+    assert any("error_poles" in s for s in answers.configuration.sentences)
+
+
+# ----------------------------------------------------------------------------- sentences follow the numbers
+
+
+def _joint(ratio: float, model_error: float | None = None) -> JointCoupling:
+    return JointCoupling(1, "N*m", ratio, 0.1, ratio, 0.5, 1.0, ratio, model_error)
+
+
+def test_coupling_wording_is_monotone_in_the_ratio():
+    ratios = [0.0, 0.01, 0.049, 0.05, 0.2, 0.31, 0.9, 1.0, 1.01, 5.0, math.inf]
+    order = ["negligible", "moderate", "significant", "dominant"]
+    levels = [order.index(coupling_level(r)) for r in ratios]
+    assert levels == sorted(levels) and levels[0] == 0 and levels[-1] == 3
+    low, high = (coupling_sentences([_joint(r)], "other")[0] for r in (0.01, 2.0))
+    assert low.endswith("negligible.") and high.endswith("dominant.") and "1 %" in low and "200 %" in high
+
+
+def test_model_error_wording_follows_its_size():
+    words = [coupling_sentences([_joint(1.0, e)], "model-based", "Computed torque")[-1] for e in (0.0, 0.01, 0.5, 3.0)]
+    assert "cancelled exactly" in words[0]
+    assert "almost exactly" in words[1]
+    assert "disturbance on the error dynamics" in words[2]
+    assert "the model mismatch, not the coupling" in words[3]
+
+
+def test_gain_sentence_follows_the_direction_of_the_ratios():
+    runs = (GainRun(0.5, "ok"), GainRun(1.0, "ok"), GainRun(2.0, "ok"))
+    raise_it = gain_sentence("K1", "proportional", "peak |e|", runs, [(0.5, 3.1), (2.0, 0.4)])
+    assert "halving it multiplies the peak |e| by 3.1; doubling it multiplies it by 0.4" in raise_it
+    assert raise_it.endswith("so raising K1 lowers the peak |e|.")
+    assert gain_sentence("K1", "p", "e", runs, [(0.5, 0.5), (2.0, 2.0)]).endswith("so lowering K1 lowers the e.")
+    assert gain_sentence("K1", "p", "e", runs, [(0.5, 1.5), (2.0, 1.3)]).endswith(
+        "the designed value gives the smallest e of the three.")
+    assert "practically unchanged" in gain_sentence("K1", "p", "e", runs, [(0.5, 1.001), (2.0, 0.999)])
+
+
+def test_the_most_sensitive_gain_is_decided_by_the_numbers():
+    def effect(name: str, lo: float, hi: float) -> GainEffect:
+        return GainEffect(name, "", "", (), ((0.5, lo), (2.0, hi)), max(abs(math.log(lo)), abs(math.log(hi))), "")
+
+    for strength in np.linspace(1.1, 3.0, 8):  # K2's effect grows; K1's stays at x1.5
+        text = study_sentences("peak |e|", [effect("K1", 1.5, 0.7), effect("K2", strength, 1 / strength)])[0]
+        top = "K2" if math.log(strength) > math.log(1.5) else "K1"
+        assert text.startswith(f"The peak |e| is most sensitive to {top} ")
+    unstable = GainEffect("K3", "", "", (), ((0.5, 1.2), (2.0, None)), math.inf, "")
+    out = study_sentences("peak |e|", [effect("K1", 1.5, 0.7), unstable])
+    assert out[0] == "Doubling K3 destabilizes the loop." and out[1].startswith("Of the gains that keep")
+
+
+def test_tracking_sentence_tells_a_static_error_from_a_decaying_one():
+    def coords(final: float):
+        return [ex.CoordinateError("q1", "rad", 1.0, 0.01, 0.5, 0.005, final)]
+
+    static = tracking_sentences("trajectory", coords(0.009), [])
+    decays = tracking_sentences("trajectory", coords(1e-5), [])
+    assert "a static error remains" in static[1] and "decays" in decays[1]
+    assert "0.01 rad on q1" in static[0] and "1 % of its move" in static[0]
+
+
+# ----------------------------------------------------------------------------- report
+
+
+def test_none_for_a_link_plant_or_without_simulation(exact):
+    link = run(parse_spec(POSSPEED_YAML), simulate=False)
+    assert lab_answers(link) is None
+    result, _ = exact
+    assert lab_answers(dataclasses.replace(result, simulation=None)) is None
+    assert build_report_model(link).lab == ()
+
+
+def test_report_of_a_robot_spec_has_the_lab_section(exact):
+    result, answers = exact
+    model = build_report_model(result)
+    questions = [s.question for s in model.lab]
+    assert len(questions) == 5 and questions[0].startswith("How well does the controller perform")
+    html = render_html(model)
+    assert '<h2 id="lab">Lab questions (notes, experiment 1)</h2>' in html
+    assert answers.tracking.sentences[0] in html.replace("&#39;", "'")
+    gain_table = model.lab[1].tables[0]
+    unit_rows = [row for row in gain_table.rows if row[1] == "× 1"]
+    assert len(unit_rows) == 2 and all(row[2] == "as designed" for row in unit_rows)
+    assert compile_pdf(model).startswith(b"%PDF")
