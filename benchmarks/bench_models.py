@@ -1,4 +1,4 @@
-"""Benchmark of the PUMA 560 model: build time, operation counts, batched inverse dynamics.
+"""Benchmark of the PUMA 560 model: build time, operation counts, the plain NumPy calls.
 
 Run apart from the tests:  python benchmarks/bench_models.py  [--quick]
 Pinned to one core (``os.sched_setaffinity``, like ``taskset -c 0``; BLAS/OpenMP threads = 1).
@@ -11,11 +11,22 @@ Baselines measured in the same run:
 (b) operation counts against the course notes' figures (Lagrange--Euler 66,271 multiplications
     and 51,548 additions for n = 6) and the recursive Newton--Euler of Luh, Walker & Paul (1980),
     150n - 48 = 852 multiplications and 131n - 48 = 738 additions;
-(c) inverse dynamics over 1e5 states: generated C (``casadi.Function.map``, serial) and the
-    interpreted CasADi map against ``pinocchio.rnea`` called from Python in a loop, Pinocchio's
-    model read from ``models/robots/puma560.urdf`` (same parameters, checked to 1e-10 first).
+(c) the PLAIN calls a user makes -- ``arm.inverse_dynamics(Q, QD, QDD)``, ``arm.mass_matrix(Q)``,
+    ``arm.gravity_torque(Q)``, ``arm.forward_dynamics(Q, QD, TAU)`` on ``(N, 6)`` arrays, N = 1e5
+    and 100 -- against Pinocchio called from a Python loop over the same states (``rnea``,
+    ``crba``, ``computeGeneralizedGravity``, ``aba``; model read from ``models/robots/puma560.urdf``,
+    checked against ours to 1e-10, scaled, first).  Goal: plain call <= 0.5x Pinocchio per state.
+    *Cold cache*: a fresh robot with an empty private ``DESIGNKIT_CACHE_DIR`` (temporary folder);
+    its first call (lookup, and for N >= ``batch.COMPILE_MIN_STATES`` the compilation) is reported
+    apart from the steady per-state cost of the calls after it.  *Warm cache*: the library built
+    by the cold run is on disk; the first call of a new process (subprocess, import and build
+    not counted) and the steady cost of a fresh robot.  Also: the interpreted fallback (no
+    compiler), and the previous implementation of the plain call (``casadi.DM`` conversions and
+    an interpreted ``Function.map``) re-created here as the before figure;
+(d) the raw ``casadi.Function.map`` of inverse dynamics on pre-converted ``casadi.DM`` inputs, as
+    generated C (``-O3 -march=native``) and interpreted: the floor without any NumPy handling.
 
-Prints a markdown table and writes benchmarks/results/models.json.  Skips SymPy or Pinocchio
+Prints markdown tables and writes benchmarks/results/models.json.  Skips SymPy or Pinocchio
 with a message when they are not installed.
 """
 
@@ -30,9 +41,11 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import platform  # noqa: E402
+import shutil  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
+import tempfile  # noqa: E402
 import time  # noqa: E402
 from importlib.resources import files  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -40,6 +53,7 @@ from pathlib import Path  # noqa: E402
 import casadi  # noqa: E402
 import numpy as np  # noqa: E402
 
+from designkit.models import batch, codegen  # noqa: E402
 from designkit.models.codegen import compile_function  # noqa: E402
 from designkit.models.robots import robot  # noqa: E402
 from designkit.models.summary import operation_counts  # noqa: E402
@@ -142,7 +156,39 @@ def time_map(f: casadi.Function, args: list[casadi.DM], repeat: int) -> float:
     return median_time(lambda: mapped.call(args), repeat) / count
 
 
-def pinocchio_loop(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, reference: np.ndarray) -> dict[str, object]:
+PLAIN = {"inverse_dynamics": 3, "mass_matrix": 1, "gravity_torque": 1, "forward_dynamics": 3}
+"""The plain calls timed in (c): function -> number of ``(N, 6)`` arguments."""
+GOAL_RATIO = 0.5
+"""Goal of the plain call: at most this fraction of Pinocchio's time per state (from Python)."""
+
+WARM_SCRIPT = r"""
+import sys, time
+import numpy as np
+from designkit.models.robots import robot
+name, count, inputs = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+rng = np.random.default_rng(0)
+args = [rng.uniform(-2.0, 2.0, (count, 6)) for _ in range(inputs)]
+arm = robot("puma560")
+arm.functions[name]  # build (not counted)
+start = time.perf_counter()
+getattr(arm, name)(*args)
+print(time.perf_counter() - start, arm.evaluator(name).compiled)
+"""
+
+
+def per_state(fn, count: int, samples: int) -> float:
+    """Median seconds per state of ``fn`` (which evaluates ``count`` states), calls grouped to >= 2e4 states."""
+    inner = max(1, 20_000 // count)
+
+    def group() -> None:
+        for _ in range(inner):
+            fn()
+
+    return median_time(group, samples) / (inner * count)
+
+
+def pinocchio_baselines(arm, rows: dict[str, list[np.ndarray]]) -> dict[str, object]:
+    """Pinocchio's loop per function (``loop(count)`` over the first ``count`` states), checked against ours."""
     try:
         import pinocchio as pin
     except ImportError:
@@ -152,19 +198,128 @@ def pinocchio_loop(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, reference: np
     model.gravity.linear = np.array([0.0, 0.0, -9.81])
     data = model.createData()
     assert all(joint.nq == 1 for joint in model.joints[1:]), "PUMA URDF joints are revolute with limits"
-    rows = [np.ascontiguousarray(x) for x in (q, qd, qdd)]
-    check = max(np.abs(pin.rnea(model, data, rows[0][k], rows[1][k], rows[2][k]) - reference[k]).max()
-                for k in range(100))
-    if check > 1e-10:
-        return {"status": f"model mismatch {check:.2e}"}
+    calls = {"inverse_dynamics": pin.rnea, "mass_matrix": pin.crba, "gravity_torque": pin.computeGeneralizedGravity,
+             "forward_dynamics": pin.aba}
+    loops, checks = {}, {}
+    for name, fn in calls.items():
+        args = rows[name]
+        ours = getattr(arm, name)(*(a[:100] for a in args))
+        theirs = np.array([fn(model, data, *(a[k] for a in args)).copy() for k in range(100)])
+        if name == "mass_matrix":  # crba fills the upper triangle
+            theirs = np.triu(theirs) + np.transpose(np.triu(theirs, 1), (0, 2, 1))
+        checks[name] = float((np.abs(ours - theirs) / (1.0 + np.abs(theirs))).max())  # scaled, as in the tests
+        if len(args) == 3:
+            def loop(count: int, fn=fn, args=args) -> None:
+                for x, y, z in zip(args[0][:count], args[1][:count], args[2][:count]):  # noqa: B905
+                    fn(model, data, x, y, z)
+        else:
+            def loop(count: int, fn=fn, args=args) -> None:
+                for x in args[0][:count]:
+                    fn(model, data, x)
+        loops[name] = loop
+    if max(checks.values()) > 1e-10:
+        return {"status": f"model mismatch {checks}"}
+    return {"status": "ok", "version": pin.__version__, "check_max_scaled_diff": checks, "loops": loops}
 
-    def loop() -> None:
-        rnea = pin.rnea
-        for a, b, c in zip(*rows, strict=True):
-            rnea(model, data, a, b, c)
 
-    seconds = median_time(loop, 3) / q.shape[0]
-    return {"status": "ok", "us_per_eval": seconds * 1e6, "check_max_abs_diff": check, "version": pin.__version__}
+def warm_first_call(name: str, count: int, inputs: int, cache: str) -> dict[str, object]:
+    """First plain call of a new process whose cache holds the library (subprocess; import and build not counted)."""
+    env = {**os.environ, "DESIGNKIT_CACHE_DIR": cache}
+    proc = subprocess.run([sys.executable, "-c", WARM_SCRIPT, name, str(count), str(inputs)], capture_output=True,
+                          text=True, check=True, env=env)
+    seconds, compiled = proc.stdout.split()
+    return {"seconds": float(seconds), "compiled": compiled == "True"}
+
+
+def plain_calls(rows: dict[str, list[np.ndarray]], sizes: tuple[int, ...], pin: dict[str, object],
+                samples: int) -> dict[str, object]:
+    """(c): the plain NumPy calls, cold and warm cache, the fallback and the previous implementation."""
+    results: dict[str, object] = {}
+    saved = os.environ.get("DESIGNKIT_CACHE_DIR")
+    roots = []
+    try:
+        for name, inputs in PLAIN.items():
+            per_size: dict[str, object] = {}
+            built = None  # cache folder of the largest batch's cold run
+            for count in sorted(sizes, reverse=True):
+                args = [a[:count] for a in rows[name]]
+                entry: dict[str, object] = {"states": count}
+                # cold cache: a fresh robot, an empty private cache
+                cold_dir = tempfile.mkdtemp(prefix="bench-models-cold-")
+                roots.append(cold_dir)
+                os.environ["DESIGNKIT_CACHE_DIR"] = cold_dir
+                arm = robot("puma560")
+                arm.functions[name]  # build (timed in (a))
+                method = getattr(arm, name)
+                start = time.perf_counter()
+                method(*args)
+                first = time.perf_counter() - start
+                evaluator = arm.evaluator(name)
+                entry["cold"] = {"first_call_s": first, "path": evaluator.why, "compiled": evaluator.compiled,
+                                 "us_per_state": per_state(lambda m=method, a=args: m(*a), count, samples) * 1e6}
+                if built is None and evaluator.compiled:
+                    built = cold_dir
+                # warm cache: the library built above is on disk
+                if built is not None:
+                    os.environ["DESIGNKIT_CACHE_DIR"] = built
+                    warm = robot("puma560")
+                    warm_method = getattr(warm, name)
+                    warm_out = warm_method(*args)
+                    entry["warm"] = {
+                        "first_call_new_process": warm_first_call(name, count, inputs, built),
+                        "path": warm.evaluator(name).why, "compiled": warm.evaluator(name).compiled,
+                        "us_per_state": per_state(lambda m=warm_method, a=args: m(*a), count, samples) * 1e6,
+                    }
+                # interpreted fallback (no compiler) and the previous implementation
+                real_find = codegen.find_compiler
+                codegen.find_compiler = lambda: None
+                try:
+                    plain = robot("puma560")
+                    plain_method = getattr(plain, name)
+                    interpreted_out = plain_method(*args)
+                    entry["no_compiler_us_per_state"] = per_state(lambda m=plain_method, a=args: m(*a), count,
+                                                                  samples) * 1e6
+                finally:
+                    codegen.find_compiler = real_find
+                if "warm" in entry:
+                    entry["compiled_equals_interpreted"] = bool(np.array_equal(warm_out, interpreted_out))
+                f = plain.functions[name]
+                mapped = f.map(count)
+                shape = f.size_out(0)
+
+                def previous(a=args, mapped=mapped, shape=shape, count=count) -> np.ndarray:
+                    out = mapped.call([casadi.DM(x.T) for x in a])
+                    return np.array(out[0]).reshape(shape[0], count, shape[1]).transpose(1, 0, 2)
+
+                entry["previous_implementation_us_per_state"] = per_state(previous, count, samples) * 1e6
+                if name == "inverse_dynamics":
+                    dm = [casadi.DM(x.T) for x in args]
+                    out = mapped.call(dm)
+                    entry["previous_breakdown_us_per_state"] = {
+                        "DM conversion of the inputs": per_state(lambda a=args: [casadi.DM(x.T) for x in a], count,
+                                                                 samples) * 1e6,
+                        "interpreted map call": per_state(lambda m=mapped, d=dm: m.call(d), count, samples) * 1e6,
+                        "output to NumPy": per_state(lambda o=out: np.array(o[0]), count, samples) * 1e6,
+                    }
+                if pin.get("status") == "ok":
+                    loop = pin["loops"][name]
+                    pin_us = per_state(lambda lp=loop, c=count: lp(c), count, samples) * 1e6
+                    entry["pinocchio_us_per_state"] = pin_us
+                    for case in ("cold", "warm"):
+                        if case in entry:
+                            entry[case]["ratio_to_pinocchio"] = entry[case]["us_per_state"] / pin_us
+                    if "warm" in entry:
+                        entry["goal_met_warm"] = entry["warm"]["ratio_to_pinocchio"] <= GOAL_RATIO
+                per_size[str(count)] = entry
+            results[name] = per_size
+    finally:
+        if saved is None:
+            os.environ.pop("DESIGNKIT_CACHE_DIR", None)
+        else:
+            os.environ["DESIGNKIT_CACHE_DIR"] = saved
+        for root in roots:
+            shutil.rmtree(root, ignore_errors=True)
+    return results
 
 
 def main() -> None:
@@ -175,6 +330,7 @@ def main() -> None:
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     states = 10_000 if args.quick else 100_000
+    sizes = (100, states)
 
     # (a) build time
     build_puma()  # warm-up: imports, first-call caches
@@ -186,21 +342,28 @@ def main() -> None:
     counts = {name: operation_counts(arm.functions[name]).__dict__ for name in
               ("inverse_dynamics", "mass_matrix", "coriolis_matrix", "gravity_torque", "regressor")}
 
-    # (c) batched inverse dynamics
+    # (c) the plain calls
     rng = np.random.default_rng(0)
     q = rng.uniform(-math.pi, math.pi, (states, 6))
     qd, qdd = rng.uniform(-2, 2, (states, 6)), rng.uniform(-2, 2, (states, 6))
+    tau = rng.uniform(-20, 20, (states, 6))
+    rows = {"inverse_dynamics": [q, qd, qdd], "mass_matrix": [q], "gravity_torque": [q],
+            "forward_dynamics": [q, qd, tau]}
+    pin = pinocchio_baselines(arm, rows)
+    plain = plain_calls(rows, sizes, pin, samples=5)
+
+    # (d) the raw map on casadi.DM inputs
     dm = [casadi.DM(x.T) for x in (q, qd, qdd)]
     f = arm.functions["inverse_dynamics"]
-    start = time.perf_counter()
-    compiled = compile_function(f)
-    compile_seconds = time.perf_counter() - start
-    reference = np.asarray(f.map(states)(*dm)).T
-    interpreted = time_map(f, dm, 3)
-    generated = time_map(compiled.function, dm, 5) if compiled.compiled else None
-    if compiled.compiled:
-        diff = float(np.abs(np.asarray(compiled.function.map(states)(*dm)).T - reference).max())
-    pin_result = pinocchio_loop(q, qd, qdd, reference)
+    with tempfile.TemporaryDirectory(prefix="bench-models-raw-") as raw_cache:
+        start = time.perf_counter()
+        compiled = compile_function(f, directory=raw_cache)
+        compile_seconds = time.perf_counter() - start
+        reference = np.asarray(f.map(states)(*dm)).T
+        interpreted = time_map(f, dm, 3)
+        generated = time_map(compiled.function, dm, 5) if compiled.compiled else None
+        diff = float(np.abs(np.asarray(compiled.function.map(states)(*dm)).T - reference).max()) \
+            if compiled.compiled else None
 
     results = {
         "machine": {"python": platform.python_version(), "casadi": casadi.__version__, "cpu": platform.processor(),
@@ -210,14 +373,21 @@ def main() -> None:
         "operation_counts": counts,
         "notes_lagrange_euler_n6": NOTES_LE,
         "luh_walker_paul_rnea_n6": LUH_RNEA,
-        "inverse_dynamics_batch": {
+        "plain_call": {
+            "goal": f"plain call <= {GOAL_RATIO}x Pinocchio (Python loop) per state",
+            "block": batch.BLOCK, "compile_min_states": batch.COMPILE_MIN_STATES,
+            "flags": " ".join(codegen.EXACT_FLAGS),
+            "pinocchio": {k: v for k, v in pin.items() if k != "loops"},
+            "functions": plain,
+        },
+        "raw_map_inverse_dynamics": {
             "states": states,
             "casadi_interpreted_us": interpreted * 1e6,
             "generated_c_us": None if generated is None else generated * 1e6,
             "generated_c_status": "ok" if compiled.compiled else compiled.reason,
+            "generated_c_flags": " ".join(codegen.DEFAULT_FLAGS),
             "compile_seconds": compile_seconds,
-            "generated_vs_interpreted_max_abs_diff": diff if compiled.compiled else None,
-            "pinocchio_python_loop": pin_result,
+            "generated_vs_interpreted_max_abs_diff": diff,
         },
     }
 
@@ -247,17 +417,48 @@ def main() -> None:
     print(f"| our E-L route (M, C, g) mult. / add. | {sum(x['multiplications'] for x in le)} / "
           f"{sum(x['additions'] for x in le)} | notes' L-E {NOTES_LE['multiplications']} / "
           f"{NOTES_LE['additions']} | | |")
-    print(f"| inverse dynamics, CasADi interpreted map | {interpreted * 1e6:.3f} us/eval | | | |")
+    print(f"| raw map of inverse dynamics on casadi.DM, interpreted | {interpreted * 1e6:.3f} us/eval | | | |")
     if generated is not None:
-        line = f"| inverse dynamics, generated C map ({states:.0e} states) | {generated * 1e6:.3f} us/eval | "
-        if pin_result.get("status") == "ok":
-            ratio = pin_result["us_per_eval"] / (generated * 1e6)
-            line += f"pinocchio.rnea Python loop {pin_result['us_per_eval']:.3f} us/eval | {ratio:.1f}x | <= 0.7 us |"
-        else:
-            line += f"pinocchio: {pin_result['status']} | | <= 0.7 us |"
-        print(line)
+        print(f"| raw map of inverse dynamics on casadi.DM, generated C (-O3) | {generated * 1e6:.3f} us/eval | | | |")
     else:
         print(f"| generated C | {compiled.reason} | | | |")
+
+    print(f"\n## Plain calls on (N, 6) arrays vs Pinocchio from a Python loop (goal <= {GOAL_RATIO}x per state)\n")
+    if pin.get("status") != "ok":
+        print(f"pinocchio: {pin['status']}\n")
+    print("| call | N | cache | first call | per state | Pinocchio per state | ratio | goal met |")
+    print("|---|---|---|---|---|---|---|---|")
+    labels = {"inverse_dynamics": "arm.inverse_dynamics(Q, QD, QDD)", "mass_matrix": "arm.mass_matrix(Q)",
+              "gravity_torque": "arm.gravity_torque(Q)", "forward_dynamics": "arm.forward_dynamics(Q, QD, TAU)"}
+    for name, per_size in plain.items():
+        for entry in per_size.values():
+            n = entry["states"]
+            pin_us = entry.get("pinocchio_us_per_state")
+            pin_text = f"{pin_us:.3f} us" if pin_us else "-"
+            for case in ("cold", "warm"):
+                e = entry.get(case)
+                if e is None:
+                    continue
+                first = e["first_call_s"] if case == "cold" else e["first_call_new_process"]["seconds"]
+                ratio = e.get("ratio_to_pinocchio")
+                kind = "compiled" if e["compiled"] else "interpreted"
+                met = "" if ratio is None else ("yes" if ratio <= GOAL_RATIO else "no")
+                print(f"| {labels[name]} | {n:.0e} | {case} ({kind}) | {first * 1e3:.1f} ms | "
+                      f"{e['us_per_state']:.3f} us | {pin_text} | {'' if ratio is None else f'{ratio:.2f}x'} | "
+                      f"{met} |")
+            fallback = entry["no_compiler_us_per_state"]
+            fallback_ratio = f"{fallback / pin_us:.2f}x" if pin_us else ""
+            print(f"| {labels[name]} | {n:.0e} | no compiler (interpreted) | | {fallback:.3f} us | {pin_text} | "
+                  f"{fallback_ratio} | |")
+            print(f"| {labels[name]} | {n:.0e} | previous implementation (DM + interpreted map) | | "
+                  f"{entry['previous_implementation_us_per_state']:.3f} us | {pin_text} | | |")
+    breakdown = plain["inverse_dynamics"][str(states)].get("previous_breakdown_us_per_state", {})
+    if breakdown:
+        print("\nWhere the previous plain call spent its time (inverse dynamics, per state): "
+              + "; ".join(f"{k} {v:.3f} us" for k, v in breakdown.items()))
+    met = [entry.get("goal_met_warm") for entry in plain["inverse_dynamics"].values()]
+    print(f"\nGoal (warm cache, inverse dynamics, N = {', '.join(plain['inverse_dynamics'])}): "
+          f"{'met' if all(met) else 'NOT met'} ({met})")
     out = ROOT / "benchmarks" / "results"
     out.mkdir(exist_ok=True)
     (out / "models.json").write_text(json.dumps(results, indent=2, default=str))

@@ -103,3 +103,34 @@ def test_fallback_on_compiler_error(tmp_path):
     assert not cf.compiled and cf.reason.startswith("compilation failed")
     assert "\n" not in cf.reason
     assert not list(tmp_path.glob("*.so"))
+
+
+@needs_cc
+def test_exact_flags_reproduce_the_interpreter_bit_for_bit(puma, tmp_path):
+    f = puma.functions["inverse_dynamics"]
+    mapped = f.map("inverse_dynamics_exact", "serial", 200, [], [])
+    cf = compile_function(mapped, directory=tmp_path, flags=codegen.EXACT_FLAGS)
+    assert cf.compiled, cf.reason
+    q, qd, qdd = random_states(np.random.default_rng(5), 6, 200)
+    args = [casadi.DM(x.T) for x in (q, qd, qdd)]
+    assert np.array_equal(np.asarray(cf.function(*args)), np.asarray(mapped(*args)))
+
+
+@needs_cc
+def test_load_cached_never_compiles(tmp_path, monkeypatch):
+    x = casadi.SX.sym("x", 2)
+    f = casadi.Function("cube", [x], [x**3], ["x"], ["y"])
+    assert codegen.load_cached(f, directory=tmp_path, flags=codegen.EXACT_FLAGS) is None
+    assert not list(tmp_path.iterdir())  # a lookup writes nothing
+    built = compile_function(f, directory=tmp_path, flags=codegen.EXACT_FLAGS)
+
+    def no_compiler(*args, **kwargs):
+        raise AssertionError("compiler called by load_cached")
+
+    monkeypatch.setattr(subprocess, "run", no_compiler)
+    loaded = codegen.load_cached(f, directory=tmp_path, flags=codegen.EXACT_FLAGS)
+    assert loaded is not None and loaded.compiled and loaded.library == built.library
+    assert loaded(np.array([2.0, -1.0]))["y"].ravel().tolist() == [8.0, -1.0]
+    assert codegen.load_cached(f, directory=tmp_path) is None  # other flags, other library
+    monkeypatch.setattr(codegen, "find_compiler", lambda: None)
+    assert codegen.load_cached(f, directory=tmp_path, flags=codegen.EXACT_FLAGS) is None

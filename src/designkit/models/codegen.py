@@ -32,6 +32,11 @@ Parallelization = Literal["serial", "thread"]
 DEFAULT_FLAGS: tuple[str, ...] = ("-O3", "-march=native", "-fPIC", "-shared")
 """Compiler flags; ``-march=native`` is safe because the cache is per machine."""
 
+EXACT_FLAGS: tuple[str, ...] = ("-O1", "-ffp-contract=off", "-fPIC", "-shared")
+"""Flags under which the compiled code computes what CasADi's interpreter computes, operation for operation:
+no reassociation and no fused multiply-add (``-ffp-contract=off``), so results are bit-identical to the
+interpreted Function (checked in ``tests/models/test_codegen.py``).  Used by :mod:`designkit.models.batch`."""
+
 COMPILER_CANDIDATES: tuple[str, ...] = ("cc", "gcc", "clang")
 
 MAX_CACHED_LIBRARIES = 256
@@ -260,4 +265,21 @@ def compile_function(
         except OSError as exc:
             return CompiledFunction(f, f, False, f"cannot write to cache directory {cache}: {exc}")
     loaded = casadi.external(f.name(), str(library))
+    return CompiledFunction(loaded, f, True, "", library, c_file)
+
+
+def load_cached(f: casadi.Function, *, directory: str | os.PathLike[str] | None = None,
+                flags: tuple[str, ...] = DEFAULT_FLAGS, compiler: str | None = None) -> CompiledFunction | None:
+    """The :class:`CompiledFunction` :func:`compile_function` would return for ``f``, if its library is already
+    built; else None.  Never runs the compiler (it generates the C source once, to hash it)."""
+    cc = shutil.which(compiler) if compiler else find_compiler()
+    if cc is None:
+        return None
+    _, library, c_file = _library_path(f, cc, flags, directory)
+    if not library.exists():
+        return None
+    try:
+        loaded = casadi.external(f.name(), str(library))
+    except RuntimeError:  # an unloadable file under the expected name: not usable
+        return None
     return CompiledFunction(loaded, f, True, "", library, c_file)

@@ -12,9 +12,13 @@ When the description holds CasADi symbols (``description.symbols``), every
 function takes one more, last, input ``"p"``: the symbols stacked in the order
 of ``description.symbols``; the NumPy methods then need ``p=``.
 
-Every NumPy method accepts one state (shape ``(n,)``) or a batch (shape ``(N, n)``,
-evaluated with ``casadi.Function.map``, see :mod:`designkit.models.batch`) and returns
+Every NumPy method accepts one state (shape ``(n,)``) or a batch (shape ``(N, n)``) and returns
 results stacked along a leading axis of length ``N``.  Units are SI (m, rad, kg, s, N, N*m).
+The plain call is the fast path (:mod:`designkit.models.batch`): NumPy arrays handed to
+CasADi's buffer interface (no ``casadi.DM`` conversions), and the function's compiled C when a
+C compiler is present -- built once for a batch of at least ``batch.COMPILE_MIN_STATES`` states,
+cached on disk, loaded from the cache by every later robot with the same function; interpreted
+otherwise, with identical results.  :meth:`Robot.evaluator` tells which path a method runs and why.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ import numpy as np
 
 from designkit.errors import ModelError
 from designkit.models import chain, regressor
-from designkit.models.batch import evaluate, shape_output
+from designkit.models.batch import Evaluator, evaluate, evaluator_for, shape_output
 from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.functions import FUNCTION_SPECS, Expressions, FunctionTable
 
@@ -116,7 +120,7 @@ class Robot:
     functions: FunctionTable = field(init=False, repr=False)
     parameter_names: tuple[str, ...] = field(init=False, repr=False)
     parameters: np.ndarray | None = field(init=False, repr=False)
-    _maps: dict[tuple[str, int], ca.Function] = field(init=False, repr=False, default_factory=dict)
+    _evaluators: dict[str, Evaluator] = field(init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         _validate(self.description)
@@ -146,8 +150,18 @@ class Robot:
     # ---------------------------------------------------------------- evaluation
 
     def _call(self, name: str, args: Sequence[tuple[str, Any]], p: Any) -> Any:
-        outputs, batch = evaluate(self.functions[name], args, p, symbol_names=self.symbol_names, maps=self._maps)
+        outputs, batch = evaluate(self.functions[name], args, p, symbol_names=self.symbol_names,
+                                  evaluators=self._evaluators)
         return shape_output(outputs[0], FUNCTION_SPECS[name].kinds[0], batch)
+
+    def evaluator(self, name: str) -> Evaluator:
+        """The :class:`~designkit.models.batch.Evaluator` behind the NumPy methods of function ``name``.
+
+        Its ``compiled`` and ``why`` say whether calls run compiled C or the interpreter, and why;
+        ``evaluator(name).compile()`` compiles ahead of time (else the policy of
+        :mod:`designkit.models.batch` applies).
+        """
+        return evaluator_for(self.functions[name], self._evaluators, 1 if self.symbol_names else 0)
 
     # ---------------------------------------------------------------- kinematics
 

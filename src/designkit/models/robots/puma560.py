@@ -3,8 +3,16 @@
 Values as tabulated by P. Corke and B. Armstrong-Helouvry, "A search for
 consensus among model parameters reported for the PUMA 560 robot", Proc. IEEE
 ICRA 1994, pp. 1608-1613 -- the same numbers as the ``Puma560`` model of Peter
-Corke's Robotics Toolbox (Python ``roboticstoolbox.models.DH.Puma560``, with the
-0.672 m shoulder height ``d1``).  SI units: m, rad, kg, kg*m^2.
+Corke's Robotics Toolbox for Python (``roboticstoolbox.models.DH.Puma560``),
+with the shoulder height ``d1`` (mounting surface to shoulder axis) that the
+Python toolbox has used since November 2020: ``26.45 * inch`` = 0.67183 m
+(printed 0.6718; commit 5562ebb, "Include pedestal as parameter d1", unchanged in
+the current source; the MATLAB toolbox's model has no pedestal).  An earlier
+designkit used the toolbox's first value, ``base = 0.672`` m (September 2020,
+commit 44e5457); the 0.17 mm between the two moves the base frame along joint
+1's axis, the gravity direction, so tool poses shift by 0.17 mm in z and no
+dynamic quantity (torques, inertia, Coriolis, gravity, regressor) depends on it.
+``puma560.urdf`` is written from this description.  SI units: m, rad, kg, kg*m^2.
 
 The link mass ``m1`` is 0: Armstrong et al. give none, and it does not act on the
 joints.  Actuator data, used only with ``friction=True`` / ``motor_inertia=True``
@@ -28,7 +36,7 @@ from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.robot import Robot
 from designkit.models.robots._parameters import resolve
 
-__all__ = ["DEFAULTS", "UNITS", "QN", "QR", "QS", "QZ", "build", "description"]
+__all__ = ["DEFAULTS", "LINK_MASSES", "UNITS", "QN", "QR", "QS", "QZ", "build", "description"]
 
 _DEG = math.pi / 180
 
@@ -53,10 +61,13 @@ UNITS: dict[str, tuple[str, str]] = {
 }
 """Parameter name -> (SI unit, meaning), for reports and specs."""
 
+LINK_MASSES: tuple[str, ...] = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
+"""The parameter holding each link's mass (a payload on link i adds to it)."""
+
 # d (m), a (m), alpha (rad), centre of mass (m), (Ixx, Iyy, Izz) about it (kg*m^2),
 # Jm (kg*m^2), G, B (N*m*s/rad, motor side), Tc = (Tc+, Tc-) (N*m, motor side), qlim (rad)
 _LINKS: tuple[dict[str, Any], ...] = (
-    dict(d=0.672, a=0.0, alpha=math.pi / 2, r=(0.0, 0.0, 0.0), I=(0.0, 0.35, 0.0),
+    dict(d=26.45 * 0.0254, a=0.0, alpha=math.pi / 2, r=(0.0, 0.0, 0.0), I=(0.0, 0.35, 0.0),
          Jm=200e-6, G=-62.6111, B=1.48e-3, Tc=(0.395, -0.435), qlim=(-160 * _DEG, 160 * _DEG)),
     dict(d=0.0, a=0.4318, alpha=0.0, r=(-0.3638, 0.006, 0.2275), I=(0.13, 0.524, 0.539),
          Jm=200e-6, G=107.815, B=0.817e-3, Tc=(0.126, -0.071), qlim=(-45 * _DEG, 225 * _DEG)),
