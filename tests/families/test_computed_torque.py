@@ -21,12 +21,12 @@ import control
 import numpy as np
 import pytest
 
-from designkit.cli import main
 from designkit.families import family
 from designkit.pipeline import design as design_of
 from designkit.pipeline import plant as plant_of
 from designkit.simulation.run import build
 from designkit.spec.loader import parse_spec
+from tests.cli_input import assert_bad_input
 from tests.tolerances import TOL
 
 PUMA_Q0 = (0.0, 0.785, -3.1416, 0.0, 0.785, 0.0)  # table-top pose, joint 3 at -pi (limits [-3.927, 0.785] rad)
@@ -232,14 +232,4 @@ def _bad(plant: str = "", controller: str = "damping: 1, natural_frequency: 10",
          "damping-length"],
 )
 def test_bad_input_exits_2_with_the_key_path(tmp_path, capsys, text, message):
-    spec = tmp_path / "spec.yaml"
-    spec.write_text(text)
-    out = tmp_path / "out"
-    code = main(["synth", str(spec), "--out", str(out)])
-    captured = capsys.readouterr()
-    assert code == 2, captured
-    assert message in captured.err
-    assert captured.err.startswith("designkit: error: ")
-    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
-    assert captured.out == ""
-    assert not out.exists() or not any(out.rglob("*"))
+    assert_bad_input(tmp_path, capsys, text, message)

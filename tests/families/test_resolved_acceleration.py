@@ -30,7 +30,6 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 from scipy.optimize import brentq, linear_sum_assignment
 
-from designkit.cli import main
 from designkit.families import family
 from designkit.models.robots import robot
 from designkit.pipeline import design as design_of
@@ -40,6 +39,7 @@ from designkit.simulation.run import build
 from designkit.spec.loader import parse_spec
 from designkit.verification.singularity import singularity_check
 from designkit.verification.tracking import error_poles_check
+from tests.cli_input import assert_bad_input
 from tests.tolerances import TOL
 
 D1, D2 = 0.5, 0.4  # planar2r link lengths (m)
@@ -416,14 +416,4 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
          "pole-pairs-count", "planar-path-along-z", "circle-start-on-axis"],
 )
 def test_bad_input_exits_2_with_the_key_path(tmp_path, capsys, text, message):
-    spec = tmp_path / "spec.yaml"
-    spec.write_text(text)
-    out = tmp_path / "out"
-    code = main(["synth", str(spec), "--out", str(out)])
-    captured = capsys.readouterr()
-    assert code == 2, captured
-    assert message in captured.err
-    assert captured.err.startswith("designkit: error: ")
-    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
-    assert captured.out == ""
-    assert not out.exists() or not any(out.rglob("*"))
+    assert_bad_input(tmp_path, capsys, text, message)

@@ -38,6 +38,7 @@ from designkit.verification.workspace import (
     workspace_check,
 )
 from tests import oracles
+from tests.cli_input import assert_bad_input
 from tests.tolerances import TOL
 from tests.verification.helpers import pole_sets
 
@@ -373,15 +374,7 @@ def test_omitted_side_defaults_to_the_joint_limits():
 def test_bad_workspace_exits_2_with_the_key_path(tmp_path, capsys, replace, by, message):
     text = FRAGILE.replace(replace, by)
     assert text != FRAGILE
-    spec = tmp_path / "spec.yaml"
-    spec.write_text(text)
-    out = tmp_path / "out"
-    code = main(["synth", str(spec), "--out", str(out)])
-    captured = capsys.readouterr()
-    assert code == 2, captured
-    assert message in captured.err
-    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err
-    assert captured.out == "" and not out.exists()
+    assert_bad_input(tmp_path, capsys, text, message)
 
 
 def test_joint_limits_on_a_robot_without_limits_is_bad_input(tmp_path, capsys):
