@@ -36,6 +36,11 @@ def _robot(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
     plant = _robot_model(section, base_dir)
     if section.payload is not None:
         plant = plant.with_payload(section.payload.mass, section.payload.link)
+    limits = section.limits
+    for name in ("velocity", "acceleration", "torque"):
+        value = getattr(limits, name, None) if limits is not None else None
+        if isinstance(value, list) and len(value) != plant.n_joints:
+            raise ModelError(f"limits.{name}", f"needs one value per joint ({plant.n_joints}), got {len(value)}")
     return plant
 
 
