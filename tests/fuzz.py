@@ -112,7 +112,9 @@ def mutants(seed: int, count: int, specs: list[Path] | None = None) -> list[Muta
         elif op == "delete" and path:
             text = yaml.safe_dump(_delete(doc, path), sort_keys=False)
         elif op == "extra":
-            target = path if isinstance(_get(doc, path), dict) else path[:-1]
+            target = path
+            while target and not isinstance(_get(doc, target), dict):  # the nearest mapping holding the path
+                target = target[:-1]
             text = yaml.safe_dump(_set(doc, (*target, "surplus_key"), 1.0) if target else {**doc, "surplus_key": 1},
                                   sort_keys=False)
             path = (*target, "surplus_key")

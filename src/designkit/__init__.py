@@ -3,6 +3,9 @@
 The public API is re-exported here explicitly.  Names are resolved lazily (PEP 562) so that
 ``import designkit`` and ``designkit --help`` do not import CasADi, cvxpy or matplotlib.
 
+Every user mistake raises a :class:`DesignkitError` (:class:`SpecError`, :class:`ModelError`,
+:class:`OutputError`; see :mod:`designkit.errors`); anything else is a bug.
+
 Examples
 --------
 >>> import designkit as dk
@@ -61,6 +64,7 @@ _EXPORTS: dict[str, str] = {
     "DesignkitError": "designkit.errors",
     "SpecError": "designkit.errors",
     "ModelError": "designkit.errors",
+    "OutputError": "designkit.errors",
 }
 
 __all__ = ["__version__", *_EXPORTS]

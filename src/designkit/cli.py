@@ -1,7 +1,9 @@
 """Command-line interface: thin wrapper over :mod:`designkit.pipeline`.
 
 Exit codes: 0 designed and every check passed; 1 designed but a check failed or is
-undecided; 2 bad input (one line on stderr naming the key path; nothing written).
+undecided; 2 bad input: any :class:`~designkit.errors.DesignkitError`, printed as one line
+``designkit: error: <key path>: <message>`` on stderr, nothing written; 3 an internal error
+(a bug: anything else, one line unless ``--debug``).
 Heavy libraries are imported inside the command functions so that ``--help`` is instant.
 """
 
@@ -14,9 +16,18 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from designkit import __version__
-from designkit.errors import DesignkitError, SpecError
+from designkit.errors import DesignkitError, OutputError, SpecError
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+
+MAX_ERROR_LINE = 1000
+"""Longest error line printed (characters); messages quoting user values are far shorter."""
+
+
+def _one_line(text: str) -> str:
+    """``text`` on one line (line breaks become spaces), cut to :data:`MAX_ERROR_LINE` characters."""
+    line = " ".join(text.split("\n")).replace("\r", " ")
+    return line if len(line) <= MAX_ERROR_LINE else line[: MAX_ERROR_LINE - 1] + "…"
 
 
 def _fmt(value: object) -> str:
@@ -83,8 +94,10 @@ def cmd_synth(args: argparse.Namespace) -> int:
     if not args.no_report:
         try:
             files = write_report(result, Path(args.out))
-        except OSError as exc:
-            raise SpecError("--out", f"cannot write the report: {exc.strerror or exc}") from None
+        except OutputError as exc:
+            raise OutputError("--out", f"cannot write the report: {exc.message}") from None
+        except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
+            raise OutputError("--out", f"cannot write the report: {exc.strerror or exc}") from None
     if args.json:
         payload = result.to_json()
         if files is not None:
@@ -126,7 +139,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                        *sim.controller_state_names, *[f"{u}_command" for u in sim.input_names],
                        *[f"{u}_applied" for u in sim.input_names], *sim.disturbance_names])
     if args.csv:
-        np.savetxt(args.csv, columns, delimiter=",", header=header, comments="")
+        try:
+            np.savetxt(args.csv, columns, delimiter=",", header=header, comments="")
+        except OSError as exc:
+            raise OutputError("--csv", f"cannot write {args.csv}: {exc.strerror or exc}") from None
         print(f"wrote {len(sim.time)} samples to {args.csv}")
     else:
         print(f"{loaded.spec.name}: simulated {sim.time[-1]:.4g} s in {len(sim.time) - 1} steps")
@@ -230,9 +246,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     func: Callable[[argparse.Namespace], int] = args.func
     try:
         return func(args)
-    except DesignkitError as exc:
-        print(f"designkit: error: {exc}", file=sys.stderr)
-        return exc.exit_code
+    except DesignkitError as exc:  # every user mistake, whatever the layer that found it: exit 2, one line
+        print(f"designkit: error: {_one_line(str(exc))}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except BrokenPipeError:  # output piped into e.g. `head`
         return EXIT_OK
     except KeyboardInterrupt:
@@ -241,8 +257,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # a bug, not bad input: say so in one line unless --debug
         if args.debug:
             raise
-        print(f"designkit: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the "
-              "traceback)", file=sys.stderr)
+        print(f"designkit: internal error: {type(exc).__name__}: {_one_line(str(exc))} (rerun with --debug for "
+              "the traceback)", file=sys.stderr)
         return EXIT_INTERNAL
 
 

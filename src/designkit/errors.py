@@ -1,19 +1,77 @@
 """Exception hierarchy of designkit; the CLI maps each class to an exit code.
 
-Every mistake a user can make is a :class:`DesignkitError`: a spec that does not validate
-(:class:`SpecError`, which names the YAML key path) or a model that cannot be built
-(:class:`ModelError`, which names the model argument; the spec layer re-raises it as a
-:class:`SpecError` with the full key path, e.g. ``plant.dh[1].mass``).  Anything else that
-escapes is a bug.
+Every mistake a user can make is a :class:`DesignkitError` (the CLI answers it with exit code 2
+and one line ``designkit: error: <key path>: <message>``); anything else that escapes is a bug.
+
+* :class:`DesignkitError`: the base class; catch it to handle every user mistake at once.
+* :class:`SpecError`: a spec that does not validate (YAML syntax, types, values, size limits) or a
+  wrong argument of the API (``load_spec(None)``, ``run(42)``); ``path`` is the YAML key path
+  (``controller.poles[2]``) or the argument's name.
+* :class:`ModelError`: a model that cannot be built, naming the model argument (the spec layer
+  re-raises it as a :class:`SpecError` with the full key path, e.g. ``plant.dh[1].mass``).
+* :class:`OutputError`: an output location that cannot be written (``write_report`` to an
+  existing file, an unwritable folder); nothing is overwritten.
+
+Every class has ``path`` (where, possibly empty) and ``message`` (what, one line) attributes.
+Messages that quote a user value quote at most :data:`QUOTE_LIMIT` characters of it
+(:func:`short_repr`).
 """
 
 from __future__ import annotations
 
+import math
+import reprlib
+
+QUOTE_LIMIT = 80
+"""Longest quotation of a user value in an error message (characters, ellipsis included)."""
+
+PATH_LIMIT = 320
+"""Longest quotation of a file system path in an error message (the user's own argument, kept readable)."""
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel = 3
+_REPR.maxlist = _REPR.maxtuple = _REPR.maxset = _REPR.maxfrozenset = 8
+_REPR.maxdict = 6
+_REPR.maxstring = _REPR.maxother = QUOTE_LIMIT
+
+
+def shorten(text: str, limit: int = QUOTE_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters, the last one an ellipsis when it was cut."""
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def short_repr(value: object, limit: int = QUOTE_LIMIT) -> str:
+    """A ``repr`` of ``value`` of at most ``limit`` characters, never built in full.
+
+    Long strings are cut before they are quoted, containers show their first items
+    (:mod:`reprlib`), and an integer too long to print is described by its size.
+
+    Examples
+    --------
+    >>> short_repr("x" * 1000, 12)
+    "'xxxxxxxxxx…"
+    >>> short_repr(10**5000)
+    'an integer of 5001 digits'
+    """
+    if isinstance(value, bool) or value is None:
+        return repr(value)
+    if isinstance(value, int) and value.bit_length() > 256:
+        return f"an integer of {math.floor(value.bit_length() * math.log10(2)) + 1} digits"
+    if isinstance(value, str):
+        return shorten(repr(value[:limit]), limit)
+    return shorten(_REPR.repr(value), limit)
+
 
 class DesignkitError(Exception):
-    """Base class of every error designkit raises on purpose (exit code 2: bad input)."""
+    """Base class of every error designkit raises on purpose (exit code 2: bad input).
+
+    Subclasses set :attr:`path` (the key path, argument or option at fault; may be empty) and
+    :attr:`message` (what is wrong, one line).
+    """
 
     exit_code: int = 2
+    path: str = ""
+    message: str = ""
 
 
 class SpecError(DesignkitError):
@@ -22,7 +80,8 @@ class SpecError(DesignkitError):
     Parameters
     ----------
     path : str
-        Key path of the offending field, e.g. ``"controller.poles[2]"``; empty for the whole input.
+        Key path of the offending field, e.g. ``"controller.poles[2]"``, or the name of the
+        offending argument; empty for the whole input.
     message : str
         What is wrong, in one line.
     """
@@ -55,6 +114,25 @@ class ModelError(DesignkitError):
         super().__init__(f"{field}: {message}" if field else message)
 
     @property
-    def path(self) -> str:
+    def path(self) -> str:  # type: ignore[override]
         """Same as :attr:`field` (the key path relative to the model)."""
         return self.field
+
+
+class OutputError(DesignkitError, OSError):
+    """An output location that cannot be written; nothing was written or overwritten.
+
+    Also an :class:`OSError`, as the file system errors it replaces were.
+
+    Parameters
+    ----------
+    path : str
+        The argument or option naming the location (``"out_dir"``; the CLI says ``"--out"``).
+    message : str
+        What is wrong, naming the file system path, in one line.
+    """
+
+    def __init__(self, path: str, message: str) -> None:
+        self.path = path
+        self.message = message
+        super().__init__(f"{path}: {message}" if path else message)

@@ -12,7 +12,9 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from designkit.errors import SpecError
 from designkit.spec.loader import LoadedSpec
+from designkit.spec.schema import Spec
 from designkit.synthesis.design import Design
 from designkit.verification.check import Check, all_passed, not_passed
 
@@ -110,21 +112,44 @@ def design(loaded: LoadedSpec, true_plant: Any = None) -> Design:
     return family(loaded.spec.controller.kind).synthesize(loaded.spec, true_plant)
 
 
-def run(loaded: LoadedSpec, *, simulate: bool = True) -> PipelineResult:
+def _check_per_input(spec: Spec, true_plant: Any) -> None:
+    """Per-input requirement lists have one entry per plant input, else :class:`SpecError`."""
+    limit = spec.requirements.max_control if spec.requirements is not None else None
+    if isinstance(limit, list | tuple) and len(limit) != true_plant.n_inputs:
+        raise SpecError("requirements.max_control",
+                        f"needs one value per input ({true_plant.n_inputs}), got {len(limit)}")
+
+
+def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
     """Synthesise, simulate and verify a spec.
 
     Parameters
     ----------
-    loaded : LoadedSpec
-        A validated spec (see :func:`designkit.spec.load_spec`).
+    loaded : LoadedSpec or Spec
+        A validated spec (see :func:`designkit.spec.load_spec`), or a :class:`Spec` built in
+        Python, which is wrapped with :meth:`LoadedSpec.from_spec`: its text (and the report's
+        spec hash) is then the SHA-256 of its canonical JSON (``model_dump(mode="json")``, keys
+        sorted), and model files such as a URDF are resolved against the working directory.
     simulate : bool
         Run the closed-loop simulation and the time-domain checks that need it.
+
+    Raises
+    ------
+    SpecError
+        ``loaded`` is neither a :class:`LoadedSpec` nor a :class:`Spec`, or the spec cannot be
+        designed as given (a :class:`~designkit.errors.DesignkitError` names the key path).
     """
     from designkit.simulation.run import simulate as simulate_loop
     from designkit.verification.suite import run_checks
 
+    if isinstance(loaded, Spec):
+        loaded = LoadedSpec.from_spec(loaded)
+    elif not isinstance(loaded, LoadedSpec):
+        hint = "; read a file with load_spec or YAML text with parse_spec" if isinstance(loaded, str | Path) else ""
+        raise SpecError("loaded", f"expected a LoadedSpec or a Spec, got {type(loaded).__name__}{hint}")
     spec = loaded.spec
     true_plant = plant(loaded)
+    _check_per_input(spec, true_plant)
     dsn = design(loaded, true_plant)
     sim = simulate_loop(spec, dsn, plant=true_plant) if simulate else None
     checks = run_checks(spec, dsn, sim, plant=true_plant)

@@ -417,3 +417,17 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
 )
 def test_bad_input_exits_2_with_the_key_path(tmp_path, capsys, text, message):
     assert_bad_input(tmp_path, capsys, text, message)
+
+
+def test_a_path_starting_at_a_singular_configuration_is_refused_naming_the_start(tmp_path, capsys):
+    # q = (0, 0): the arm stretched, det J = l1 l2 sin(q2) = 0, the exact-inverse law is undefined there
+    # (found by the fuzzer as an internal error, issue 8); with damped least squares it is designed
+    text = ("name: rac-singular\nplant: {kind: robot, robot: planar2r}\n"
+            "controller: {kind: resolved_acceleration, poles: [-10, -10]}\nnumerics: {compile: never}\n"
+            f"simulation: {{duration: 1.0, initial_position: [0.0, 0.0], trajectory: {LINE}}}\n")
+    assert abs(np.linalg.det(jac(np.zeros(2)))) == 0.0
+    assert_bad_input(tmp_path, capsys, text, "simulation.initial_position: no equilibrium of the closed loop")
+    damped = text.replace("poles: [-10, -10]}", "poles: [-10, -10], damped_least_squares: {damping: 0.05}}")
+    loaded = parse_spec(damped)
+    check = error_poles_check(loaded.spec, design_of(loaded))
+    assert np.isfinite(check.achieved)  # defined at every instant of the path with the damping

@@ -77,9 +77,14 @@ def test_marginal_rotation_has_no_lyapunov_function():
     assert "imaginary axis" in c.detail
 
 
-def test_stiff_but_stable_is_undecided_not_failed():
-    """Condition number beyond 1/eps: no certificate with margin eps exists; undecided, not FAIL."""
+def test_stiff_but_stable_is_certified_by_the_equation_and_beyond_rounding_undecided():
+    """Condition number beyond 1/eps: no LMI certificate with margin eps exists, the Lyapunov equation's
+    P (judged by rounding bounds) certifies it; where even that is within rounding: undecided, not FAIL."""
     c = lyapunov_lmi(np.diag([-1e-8, -1.0]))
+    assert c.passed is True and "equation_route" in c.certificate
+    P = np.array(c.certificate["equation_route"]["P"])
+    assert P[0, 0] == pytest.approx(0.5e8, rel=1e-9) and P[1, 1] == pytest.approx(0.5, rel=1e-9)  # -1/(2 lambda)
+    c = lyapunov_lmi(np.diag([-1e-17, -1.0]))
     assert c.passed is None
     assert c.status == "UNDECIDED"
     assert lyapunov_lmi(np.diag([-1e-3, -1.0])).passed is True

@@ -27,7 +27,8 @@ from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.spec.controllers import ControllerModel
-from designkit.spec.fields import PerJoint, Section, check_conjugates, parse_pole, per_joint
+from designkit.spec.fields import Section, check_conjugates, parse_pole, per_joint
+from designkit.spec.ranges import RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -47,6 +48,7 @@ def _pole(value: Any, where: str) -> complex:
 def _pair(poles: list[complex], where: str) -> list[complex]:
     if len(poles) != 2:
         raise ValueError(f"{where}must list exactly 2 poles per joint, got {len(poles)}")
+    check_poles(poles, where.removesuffix(": "))
     try:
         check_conjugates(poles)
     except ValueError as exc:
@@ -58,15 +60,17 @@ class ComputedTorqueSpec(Section):
     """Computed torque ``u = M^(q)(qD'' + K1 e + K2 e') + h^(q, qd)``.
 
     Give the error poles -- ``poles``: two poles (1/s) for every joint, or one pair per joint -- or
-    ``damping`` and ``natural_frequency`` (rad/s), one value or one per joint.  ``model``: the model
-    the controller believes (default: the true plant).
+    ``damping`` (1e-6 to 1e3) and ``natural_frequency`` (rad/s, 1e-12 to 1e12), one value or one per
+    joint; either way every ``|p|`` lies between 1e-12 and 1e12 1/s and ``max |p| / min |Re p|`` is at
+    most 1e12 (:func:`~designkit.spec.ranges.check_poles`).  ``model``: the model the controller
+    believes (default: the true plant).
     """
 
     kind: Literal["computed_torque"]
     poles: list[Any] | None = Field(default=None, description="Two error poles (1/s) for every joint, or a pair "
                                     "per joint.")
-    damping: PerJoint | None = None
-    natural_frequency: PerJoint | None = None
+    damping: RangedPerJoint(1e-6, 1e3, "") | None = None
+    natural_frequency: RangedPerJoint(1e-12, 1e12, "rad/s") | None = None
     model: ControllerModel | None = None
 
     @field_validator("poles")
@@ -81,7 +85,9 @@ class ComputedTorqueSpec(Section):
             return _pair([_pole(p, f"[{k}]") for k, p in enumerate(v)], "")
         if not v:
             raise ValueError("needs at least one pair of poles")
-        return [_pair([_pole(p, f"[{i}][{k}]") for k, p in enumerate(row)], f"[{i}]: ") for i, row in enumerate(v)]
+        pairs = [_pair([_pole(p, f"[{i}][{k}]") for k, p in enumerate(row)], f"[{i}]: ") for i, row in enumerate(v)]
+        check_poles([p for pair in pairs for p in pair])  # one closed loop: the spread over every joint
+        return pairs
 
     @model_validator(mode="after")
     def _one_way(self) -> ComputedTorqueSpec:
@@ -96,7 +102,25 @@ class ComputedTorqueSpec(Section):
             for x in (value if isinstance(value, list) else [] if value is None else [value]):
                 if x <= 0:
                     raise ValueError(f"{name}: must be positive, got {x:g}")
+        if by_zeta:
+            zetas, wns = (v if isinstance(v, list) else [v] for v in (self.damping, self.natural_frequency))
+            if len(zetas) == len(wns) or 1 in (len(zetas), len(wns)):  # else refused per joint at synthesis
+                n = max(len(zetas), len(wns))
+                poles = [p for k in range(n) for p in _damped_pair(zetas[k % len(zetas)], wns[k % len(wns)])]
+                try:
+                    check_poles(poles)
+                except ValueError as exc:
+                    what = str(exc).split("]: ", 1)[-1] if str(exc).startswith("[") else str(exc)
+                    raise ValueError(f"natural_frequency: the error poles of damping and natural_frequency: {what}"
+                                     ) from None
         return self
+
+
+def _damped_pair(zeta: float, wn: float) -> tuple[complex, complex]:
+    """The error poles ``wn (-zeta +- sqrt(zeta^2 - 1))`` (1/s) of a damping ratio and natural frequency (rad/s),
+    as :func:`error_poles` computes them (for the spec's check of their range)."""
+    disc = complex(zeta * zeta - 1.0) ** 0.5
+    return wn * (-zeta + disc), wn * (-zeta - disc)
 
 
 def joint_values(value: Any, n: int, path: str) -> tuple[float, ...]:
@@ -170,7 +194,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         notes=tuple(notes),
         extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"]},
     )
-    return with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]))
+    return with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
+                            field="simulation.initial_position")
 
 
 FAMILY = Family(

@@ -37,7 +37,8 @@ from designkit.errors import ModelError, SpecError
 from designkit.families import pid_servo
 from designkit.models.link import simplified_link
 from designkit.spec.controllers import three_poles
-from designkit.spec.fields import PerJoint, PositiveFinite, Section, parse_pole, per_joint
+from designkit.spec.fields import PositiveFinite, Section, parse_pole, per_joint
+from designkit.spec.ranges import Ranged, RangedInt, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -50,15 +51,15 @@ KIND = "decentralized_pid"
 class Workspace(Section):
     """A box of configurations ``low <= q <= high`` (rad, or m for a prismatic joint) for the ``workspace`` check.
 
-    ``low``, ``high``: one value for every joint or one per joint; either omitted: the robot's joint
-    limits (``qlim``).  ``samples``: grid points per outboard joint when the range of each ``D_ii``
-    over the box is searched (:func:`designkit.models.link.link_range`).  Checked against the robot
-    at synthesis: one value per joint, ``low < high``, inside the joint limits.
+    ``low``, ``high``: one value for every joint or one per joint (each within 100); either omitted: the
+    robot's joint limits (``qlim``).  ``samples`` (2 to 101): grid points per outboard joint when the
+    range of each ``D_ii`` over the box is searched (:func:`designkit.models.link.link_range`).  Checked
+    against the robot at synthesis: one value per joint, ``low < high``, inside the joint limits.
     """
 
-    low: PerJoint | None = None
-    high: PerJoint | None = None
-    samples: int = Field(default=7, ge=2, le=101)
+    low: RangedPerJoint(-100, 100, "rad or m") | None = None
+    high: RangedPerJoint(-100, 100, "rad or m") | None = None
+    samples: RangedInt(2, 101) = 7
 
 
 def _workspace_schema(schema: dict[str, Any]) -> None:
@@ -68,11 +69,13 @@ def _workspace_schema(schema: dict[str, Any]) -> None:
 class DecentralizedPidSpec(Section):
     """One PID servo per joint on its simplified link model, plus a gravity feed-forward.
 
-    ``poles`` (1/s): three poles for every joint, or a list with one set of three per joint; or
-    omitted, with the poles derived from ``requirements.overshoot`` and ``settling_time`` (as
-    for ``pid_servo``).  ``zero``: the zero of each joint's ``q_i/qD_i`` (negative, one for all
-    or one per joint; omitted: ``K4 = 0``).  ``configuration`` (rad per joint): where each link's
-    ``Km_i``, ``tau_i`` are computed (default: ``simulation.initial_position``, else zero).
+    ``poles`` (1/s): three poles for every joint, or a list with one set of three per joint (every
+    ``|p|`` 1e-12 to 1e12, all of them spread at most 1e12); or omitted, with the poles derived from
+    ``requirements.overshoot`` and ``settling_time`` (as for ``pid_servo``; ``third_pole_factor`` 1 to
+    100, ``design_margin`` 0 to 0.9).  ``zero``: the zero of each joint's ``q_i/qD_i`` (1/s, -1e12 to
+    -1e-12, one for all or one per joint; omitted: ``K4 = 0``).  ``configuration`` (rad per joint,
+    within 100): where each link's ``Km_i``, ``tau_i`` are computed (default:
+    ``simulation.initial_position``, else zero).
     ``workspace``: the box of configurations the ``workspace`` check certifies the loops over
     (:class:`Workspace`, or ``joint_limits`` for the robot's joint limits; default: no such check).
     """
@@ -80,11 +83,11 @@ class DecentralizedPidSpec(Section):
     kind: Literal["decentralized_pid"]
     poles: list[Any] | None = Field(default=None, description="Three poles (1/s) for every joint, or one set "
                                     "of three per joint.")
-    zero: PerJoint | None = None
-    configuration: PerJoint | None = None
+    zero: RangedPerJoint(-1e12, -1e-12, "1/s") | None = None
+    configuration: RangedPerJoint(-100, 100, "rad or m") | None = None
     gravity_feedforward: Literal["measured", "desired", "none"] = "measured"
-    third_pole_factor: PositiveFinite = 5.0
-    design_margin: float = Field(default=0.1, ge=0, lt=1)
+    third_pole_factor: Ranged(1, 100, "", base=PositiveFinite) = 5.0
+    design_margin: Ranged(0, 0.9, "") = 0.1
     workspace: Workspace | None = Field(default=None, json_schema_extra=_workspace_schema,
                                         description="Box of configurations {low, high} (rad or m per joint) "
                                         "certified by the workspace check, or 'joint_limits'.")
@@ -113,10 +116,12 @@ class DecentralizedPidSpec(Section):
         out = []
         for i, row in enumerate(v):
             poles = [_pole(p, f"[{i}][{k}]") for k, p in enumerate(row)]
+            check_poles(poles, f"[{i}]")
             try:
                 out.append(three_poles(poles))
             except ValueError as exc:
                 raise ValueError(f"[{i}]: {exc}") from None
+        check_poles([p for row in out for p in row])  # one closed loop: the spread over every joint
         return out
 
     @field_validator("zero")
@@ -286,7 +291,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                "codegen_terms": [] if ctrl.gravity_feedforward == "none" else ["g_hat"]},
     )
     r0 = np.concatenate([q_star, np.zeros(2 * n)])
-    return with_closed_loop(design, law(design), r0)
+    return with_closed_loop(design, law(design), r0, field="controller.configuration")
 
 
 FAMILY = Family(

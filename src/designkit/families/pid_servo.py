@@ -19,6 +19,7 @@ from pydantic import field_validator, model_validator
 
 from designkit.spec.controllers import PoleRequirementsController
 from designkit.spec.fields import Finite
+from designkit.spec.ranges import Ranged
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
@@ -39,12 +40,12 @@ GAIN_INFO = {
 class PidServoSpec(PoleRequirementsController):
     """PID position servo ``u = -K1 (x1 - xD) - K2 x2 - K3 int(x1 - xD) + K3 K4 xD``.
 
-    ``zero`` (1/s) is the closed-loop zero of ``x1/xD``; when omitted, ``K4 = 0`` and the zero
-    falls at ``-K3/K1`` (reported), or, with poles derived from requirements, on the third pole.
+    ``zero`` (1/s, -1e12 to -1e-12) is the closed-loop zero of ``x1/xD``; when omitted, ``K4 = 0`` and
+    the zero falls at ``-K3/K1`` (reported), or, with poles derived from requirements, on the third pole.
     """
 
     kind: Literal["pid_servo"]
-    zero: Finite | None = None
+    zero: Ranged(-1e12, -1e-12, "1/s", base=Finite) | None = None
 
     @field_validator("zero")
     @classmethod
@@ -117,7 +118,7 @@ def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, n
         kind=KIND, plant=plant, gains=g, poles=tuple(poles), zeros=(complex(z),), reference="step",
         characteristic=characteristic(), formulas=pid.SERVO_FORMULAS, notes=tuple(notes_out), extra=extra or {},
     )
-    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0])
+    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
 
 def synthesize(spec: Any, plant: Any) -> Design:

@@ -73,7 +73,7 @@ def design(plant: Any, poles: Sequence[complex], *, notes: tuple[str, ...] = (),
         characteristic=characteristic(plant), formulas=pid.TRACKING_FORMULAS, notes=notes,
         extra={**(extra or {}), "integral_action": True},
     )
-    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0])
+    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
 
 def synthesize(spec: Any, plant: Any) -> Design:

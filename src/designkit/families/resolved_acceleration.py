@@ -38,6 +38,7 @@ from designkit.errors import ModelError, SpecError
 from designkit.families import computed_torque
 from designkit.models.task import TaskSpace, check_path, joint_path, task_functions, task_space
 from designkit.spec.fields import PositiveFinite, Section
+from designkit.spec.ranges import Ranged
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -50,9 +51,9 @@ PATH_SAMPLES = 401
 
 
 class DampedLeastSquares(Section):
-    """Damped least-squares resolution: ``damping`` lambda (units of ``J``'s singular values: m/rad)."""
+    """Damped least-squares resolution: ``damping`` lambda (units of ``J``'s singular values: m/rad; 1e-6 to 1e3)."""
 
-    damping: PositiveFinite
+    damping: Ranged(1e-6, 1e3, "m/rad", base=PositiveFinite)
 
 
 class ResolvedAccelerationSpec(computed_torque.ComputedTorqueSpec):
@@ -61,15 +62,15 @@ class ResolvedAccelerationSpec(computed_torque.ComputedTorqueSpec):
     Error poles as for ``computed_torque``, one pair per task coordinate.  ``orientation``:
     ``none`` (position only) or ``held`` (the initial orientation is held; error
     ``e_o = sin(theta) k``).  ``damped_least_squares``: resolve with damping (default: exact
-    inverse).  ``max_condition``: the condition number of ``J`` above which a configuration on the
-    path counts as near-singular.
+    inverse).  ``max_condition`` (above 1, at most 1e12): the condition number of ``J`` above which a
+    configuration on the path counts as near-singular.
     """
 
     kind: Literal["resolved_acceleration"]  # type: ignore[assignment]
     orientation: Literal["none", "held"] = "none"
     damped_least_squares: DampedLeastSquares | None = None
-    max_condition: float = Field(default=100.0, gt=1.0, description="Condition number of J counted as "
-                                 "near-singular.")
+    max_condition: Ranged(1, 1e12, "", low_open=True) = Field(default=100.0, description="Condition number of J "
+                                                              "counted as near-singular.")
 
 
 def _q0(spec: Any, n: int) -> np.ndarray:
@@ -147,7 +148,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
     fns = task_functions(model.robot, model.model_parameters(), space)
     x0 = np.asarray(fns.tracked(q0)).ravel()
     r0 = np.concatenate([x0, np.zeros(2 * n)])
-    return with_closed_loop(design, law(design), r0, z0=np.concatenate([q0, np.zeros(n)]))
+    return with_closed_loop(design, law(design), r0, z0=np.concatenate([q0, np.zeros(n)]),
+                            field="simulation.initial_position",
+                            hint=" (a singular task Jacobian: start away from the singularity or set "
+                                 "controller.damped_least_squares)")
 
 
 def motion(spec: Any, design: Design) -> Any:

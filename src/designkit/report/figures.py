@@ -12,6 +12,11 @@ Analysis is never done here: margins, frequency responses, stability over the la
 decoupled predictions are computed by the checks (:mod:`designkit.verification`); figures only
 draw them, and every caption is written from what is drawn.  Rendering (rc settings, palette,
 byte-for-byte reproducible SVG, decimation) lives in :mod:`designkit.report.svg`.
+
+Any finite value a spec accepts can be drawn: a requirement or element level far from the signals
+(more than :data:`OFF_SCALE` times their extent, e.g. a 1e6 N*m saturation on a 30 N*m command) is
+named in the legend as "off scale" instead of squashing the signals or overflowing matplotlib's
+axis arithmetic, and signal samples beyond :data:`~designkit.report.svg.MAX_DRAWN` are left out.
 """
 
 from __future__ import annotations
@@ -24,12 +29,58 @@ from typing import Any
 import numpy as np
 
 from designkit.report.heatmap import robustness_svg
-from designkit.report.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render
+from designkit.report.svg import (
+    BLUE,
+    GREEN,
+    GREY,
+    MAX_DRAWN,
+    ORANGE,
+    PURPLE,
+    RED,
+    drawable,
+    new_figure,
+    plot_decimated,
+    render,
+)
 from designkit.verification.loop import achieved_zeros
 
 __all__ = ["CHECK_FIGURES", "DESIGN_FIGURES", "Figure", "design_figures"]
 
 _JOINT_COLORS = (BLUE, GREEN, PURPLE, ORANGE, RED, GREY)
+
+OFF_SCALE = 3.0
+"""A level is drawn when it lies within this many times the extent of the drawn signals beyond them
+(for a control limit: at most this many times the peak |u|); otherwise it is only named in the legend,
+marked "off scale"."""
+
+
+def on_scale(levels: Sequence[float], *signals: Any) -> bool:
+    """True when every level (same unit as the signals) can be drawn without squashing the ``signals``.
+
+    The signals' finite samples span ``[lo, hi]``; a level is on scale within ``OFF_SCALE * extent`` of
+    that span, ``extent`` being ``hi - lo`` or, for a constant signal, its magnitude.  Non-finite levels,
+    levels beyond :data:`~designkit.report.svg.MAX_DRAWN` and signals without a finite sample are off scale.
+
+    Examples
+    --------
+    >>> on_scale([1.1], [0.0, 1.0]), on_scale([1e308], [0.0, 1.0]), on_scale([0.5 + 1e-300], [0.0, 1.0])
+    (True, False, True)
+    """
+    values = np.concatenate([np.ravel(drawable(s)) for s in signals]) if signals else np.array([])
+    values = values[np.isfinite(values)]
+    levels = np.asarray(levels, dtype=float)
+    if values.size == 0 or not np.all(np.abs(levels) <= MAX_DRAWN):
+        return False
+    lo, hi = float(np.min(values)), float(np.max(values))
+    extent = (hi - lo) or abs(hi)
+    if extent == 0.0:
+        return bool(np.all(levels == 0.0))
+    return bool(np.all((levels >= lo - OFF_SCALE * extent) & (levels <= hi + OFF_SCALE * extent)))
+
+
+def _off_scale(ax: Any, label: str, **style: Any) -> None:
+    """A legend entry for a level that is not drawn."""
+    ax.plot([], [], label=f"{label} (off scale)", **style)
 
 
 @dataclass(frozen=True)
@@ -143,14 +194,15 @@ def _draw_linear(design: Any, t: np.ndarray, ref: np.ndarray, positions: np.ndar
     n = positions.shape[1]
     for j in range(n):
         color = _JOINT_COLORS[j % len(_JOINT_COLORS)]
-        ax.plot(t, ref[:, j, 0], color=color, ls="--", lw=1.0, label=f"xD{_joint_label(design, j)} (reference)")
-        ax.plot(t, positions[:, j], color=color, label=f"{_pos_name(design, j)} (linear, nominal)")
+        ax.plot(t, drawable(ref[:, j, 0]), color=color, ls="--", lw=1.0,
+                label=f"xD{_joint_label(design, j)} (reference)")
+        ax.plot(t, drawable(positions[:, j]), color=color, label=f"{_pos_name(design, j)} (linear, nominal)")
     ax.set_ylabel("position (rad)")
     ax.legend(loc="best", framealpha=0.9)
     for k in range(u.shape[1]):
-        ax_u.plot(t, u[:, k], color=_JOINT_COLORS[k % len(_JOINT_COLORS)], label=design.plant.inputs[k].name)
+        ax_u.plot(t, drawable(u[:, k]), color=_JOINT_COLORS[k % len(_JOINT_COLORS)], label=design.plant.inputs[k].name)
     if limit is not None:
-        _control_limit(ax_u, limit, float(np.max(np.abs(u))))
+        _control_limit(ax_u, limit, u)
     ax_u.set_xlabel("time (s)")
     ax_u.set_ylabel("control (N·m)")
     ax_u.legend(loc="best", framealpha=0.9)
@@ -174,7 +226,7 @@ def linear_figure(result: Any) -> Figure | None:
     positions, u = linear_response(design, t, ref)
     req = spec.requirements
     limit = _common_limit(req.max_control) if req is not None else None
-    shown = limit is not None and limit <= 3.0 * float(np.max(np.abs(u)))
+    shown = limit is not None and _limit_on_scale(limit, u)
     word = "trajectory" if kind == "trajectory" else "step"
     caption = (f"The nominal closed loop linearized at its operating point, driven by the {word} reference (dashed), "
                "without saturation, delay, noise or perturbation: the response the design predicts. Bottom: the "
@@ -194,14 +246,23 @@ def _common_limit(limit: Any) -> float | None:
     return float(arr[0]) if np.all(arr == arr[0]) else None
 
 
-def _control_limit(ax: Any, limit: float, peak: float) -> None:
-    """Draw ``|u| <= limit``; a limit far beyond the signal (more than 3x its peak) is named in the legend only."""
+def _limit_on_scale(limit: float, *signals: Any) -> bool:
+    """A symmetric limit ``|u| <= limit`` is drawn when it is at most ``OFF_SCALE`` times the signals' peak."""
+    values = np.concatenate([np.ravel(drawable(s)) for s in signals])
+    values = values[np.isfinite(values)]
+    peak = float(np.max(np.abs(values))) if values.size else 0.0
+    return bool(peak > 0.0 and limit <= OFF_SCALE * peak)
+
+
+def _control_limit(ax: Any, limit: float, *signals: Any) -> None:
+    """Draw ``|u| <= limit``; a limit far beyond the signals (more than ``OFF_SCALE`` times their peak) is named
+    in the legend only."""
     label = f"|u| ≤ {limit:g} N·m"
-    if limit <= 3.0 * peak:
+    if _limit_on_scale(limit, *signals):
         ax.axhline(limit, color=RED, ls="--", lw=1.0, label=label)
         ax.axhline(-limit, color=RED, ls="--", lw=1.0)
     else:
-        ax.plot([], [], color=RED, ls="--", lw=1.0, label=f"{label} (off scale)")
+        _off_scale(ax, label, color=RED, ls="--", lw=1.0)
 
 
 # ----------------------------------------------------------------------------- nonlinear simulation
@@ -214,15 +275,22 @@ def _at_rest(t: np.ndarray, xd: np.ndarray) -> bool:
     return final != 0.0 and float(np.ptp(tail)) <= 1e-9 * max(1.0, abs(final))
 
 
-def _draw_envelope(ax: Any, t: np.ndarray, start: float, target: float, req: Any) -> list[str]:
+def _draw_envelope(ax: Any, t: np.ndarray, start: float, target: float, req: Any, signals: Sequence[Any]) -> list[str]:
+    """The requirement envelope of a step from ``start`` to ``target`` (rad); a level off the scale of
+    ``signals`` (:func:`on_scale`) is only named in the legend.  Returns what the caption should name."""
     a = target - start
     mag = abs(a)
     t_end = float(t[-1])
     drawn = []
     if req.overshoot is not None:
-        ax.axhline(target + math.copysign(mag * req.overshoot / 100.0, a), color=RED, ls="--", lw=1.0,
-                   label=f"overshoot limit ({req.overshoot:g} %)")
-        drawn.append("the overshoot limit")
+        level = target + math.copysign(mag * req.overshoot / 100.0, a)
+        label = f"overshoot limit ({req.overshoot:g} %)"
+        if on_scale([level], *signals):
+            ax.axhline(level, color=RED, ls="--", lw=1.0, label=label)
+            drawn.append("the overshoot limit")
+        else:
+            _off_scale(ax, label, color=RED, ls="--", lw=1.0)
+            drawn.append("the overshoot limit (off scale)")
     if req.settling_time is not None and req.settling_time < t_end:
         band = req.settling_band * mag
         ax.fill_between([req.settling_time, t_end], target - band, target + band, color=GREEN, alpha=0.18, lw=0,
@@ -233,26 +301,40 @@ def _draw_envelope(ax: Any, t: np.ndarray, start: float, target: float, req: Any
         from designkit.verification.tolerances import STEADY_STATE_WINDOW
 
         t0 = t[0] + (1.0 - STEADY_STATE_WINDOW) * (t_end - t[0])
-        ax.hlines([target - e, target + e], t0, t_end, colors=ORANGE, lw=1.2,
-                  label=f"steady-state band ±{e:g} rad (last {100 * STEADY_STATE_WINDOW:g} %)")
-        drawn.append("the steady-state band")
+        label = f"steady-state band ±{e:g} rad (last {100 * STEADY_STATE_WINDOW:g} %)"
+        if on_scale([target - e, target + e], *signals):
+            ax.hlines([target - e, target + e], t0, t_end, colors=ORANGE, lw=1.2, label=label)
+            drawn.append("the steady-state band")
+        else:
+            _off_scale(ax, label, color=ORANGE, lw=1.2)
+            drawn.append("the steady-state band (off scale)")
     return drawn
 
 
 _ELEMENT_LEVELS = {"saturation": ("limit", "saturation ±limit"), "relay": ("amplitude", "relay ±amplitude")}
 
 
-def _element_levels(ax: Any, element: Any) -> bool:
+def _element_levels(ax: Any, element: Any, *signals: Any) -> str | None:
+    """Draw the element's output levels ``±level`` (N*m); levels off the scale of the control ``signals``
+    (more than ``OFF_SCALE`` times their peak) are only named in the legend.  Returns what the caption
+    should name (None: no levels)."""
     if not hasattr(element, "get") or element.get("kind") not in _ELEMENT_LEVELS:
-        return False
+        return None
     key, label = _ELEMENT_LEVELS[element["kind"]]
     level = element.get(key)
     levels = [level] if isinstance(level, int | float) else list(level or [])
-    for k, lv in enumerate(levels):
-        if isinstance(lv, int | float) and math.isfinite(lv):
-            ax.axhline(lv, color=ORANGE, ls=":", lw=1.0, label=label if k == 0 else None)
-            ax.axhline(-lv, color=ORANGE, ls=":", lw=1.0)
-    return bool(levels)
+    levels = [float(lv) for lv in levels if isinstance(lv, int | float) and math.isfinite(lv)]
+    if not levels:
+        return None
+    shown = [lv for lv in levels if _limit_on_scale(abs(lv), *signals)]
+    for k, lv in enumerate(shown):
+        ax.axhline(lv, color=ORANGE, ls=":", lw=1.0, label=label if k == 0 else None)
+        ax.axhline(-lv, color=ORANGE, ls=":", lw=1.0)
+    if len(shown) < len(levels):
+        off = ", ".join(f"{lv:g}" for lv in levels if lv not in shown)
+        _off_scale(ax, f"{label} = {off} N·m", color=ORANGE, ls=":", lw=1.0)
+        return f"the element's output levels ({'some ' if shown else ''}off scale)"
+    return "the element's output levels"
 
 
 def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
@@ -272,7 +354,8 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
                        label=f"{names[j]}D (reference)" if task else f"xD{_joint_label(design, j)} (reference)")
         plot_decimated(ax, t, sim.tracked_positions[:, j], color=color, label=names[j])
     if req is not None and t.size > 1 and n == 1 and _at_rest(t, sim.desired[:, 0]):
-        drawn += _draw_envelope(ax, t, float(sim.tracked_positions[0, 0]), float(sim.desired[-1, 0]), req)
+        drawn += _draw_envelope(ax, t, float(sim.tracked_positions[0, 0]), float(sim.desired[-1, 0]), req,
+                                (sim.desired[:, 0], sim.tracked_positions[:, 0]))
     ax.set_ylabel(f"{'end effector' if task else 'position'} ({unit})")
     ax.legend(loc="best", framealpha=0.9, ncols=2 if n > 1 else 1)
     if rows == 3:
@@ -287,11 +370,12 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, list[str]]:
                      "the tracking error of every joint")
     limit = _common_limit(req.max_control) if req is not None else None
     if limit is not None:
-        peak = max(float(np.max(np.abs(sim.u_command))), float(np.max(np.abs(sim.u_applied))))
-        _control_limit(ax_u, limit, peak)
-        drawn.append("the control limit")
-    if _element_levels(ax_u, sim.settings.get("nonlinearity")):
-        drawn.append("the element's output levels")
+        _control_limit(ax_u, limit, sim.u_command, sim.u_applied)
+        drawn.append("the control limit" if _limit_on_scale(limit, sim.u_command, sim.u_applied) else
+                     "the control limit (off scale)")
+    levels = _element_levels(ax_u, sim.settings.get("nonlinearity"), sim.u_command, sim.u_applied)
+    if levels is not None:
+        drawn.append(levels)
     for k in range(sim.u_applied.shape[1]):
         color = _JOINT_COLORS[k % len(_JOINT_COLORS)]
         name = sim.input_names[k]

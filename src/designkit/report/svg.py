@@ -35,6 +35,10 @@ RC_PARAMS = {
 BLUE, ORANGE, RED, GREEN, GREY, PURPLE = "#1f5fa8", "#e07b00", "#c0282d", "#2e8b57", "#666666", "#7b3fa0"
 MAX_POINTS = 2000
 """Samples per plotted line; longer signals are min/max decimated."""
+MAX_DRAWN = 1e300
+"""Largest magnitude drawn: matplotlib's axis and tick arithmetic overflows for extents near the
+largest double (about 1.8e308); samples beyond (a diverging run, inf, NaN) are left out of the
+line, which then stops where the signal leaves the drawable range."""
 
 
 def new_figure(width: float, height: float, rows: int = 1, sharex: bool = True):
@@ -90,7 +94,15 @@ def minmax_decimate(t: np.ndarray, y: np.ndarray, max_points: int = MAX_POINTS) 
     return t[sel], y[sel]
 
 
+def drawable(y: np.ndarray) -> np.ndarray:
+    """``y`` as float with every sample that is not finite or beyond :data:`MAX_DRAWN` in magnitude set to NaN
+    (not drawn)."""
+    y = np.asarray(y, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.where(np.abs(y) <= MAX_DRAWN, y, np.nan)
+
+
 def plot_decimated(ax, t, y, **kwargs):
-    """``ax.plot`` of the signal after :func:`minmax_decimate`."""
+    """``ax.plot`` of the signal after :func:`minmax_decimate`, samples beyond :data:`MAX_DRAWN` left out."""
     td, yd = minmax_decimate(t, y)
-    return ax.plot(td, yd, **kwargs)
+    return ax.plot(td, drawable(yd), **kwargs)

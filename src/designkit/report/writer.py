@@ -14,6 +14,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from designkit.errors import PATH_LIMIT, OutputError, SpecError, shorten
 from designkit.report.html import render_html
 from designkit.report.model import build_report_model
 from designkit.report.pdf import compile_pdf
@@ -66,6 +67,32 @@ def _report_folder(out_dir: Path, name: str) -> Path:
     return out_dir / name
 
 
+def _shown(path: Path) -> str:
+    return shorten(str(path), PATH_LIMIT)
+
+
+def _check_destination(out_dir: object, name: str) -> Path:
+    """The report folder ``out_dir/name``, checked before anything is rendered; ``OutputError`` when it
+    cannot be one (a file in the way, no permission to create it)."""
+    if isinstance(out_dir, bytes | bytearray) or not isinstance(out_dir, str | os.PathLike):
+        raise OutputError("out_dir", f"expected a folder path (str or os.PathLike), got {type(out_dir).__name__}")
+    try:
+        folder = _report_folder(Path(out_dir), name)
+    except (TypeError, ValueError) as exc:
+        raise OutputError("out_dir", str(exc)) from None
+    for path in (folder / HTML_NAME, folder / PDF_NAME):
+        if path.is_dir():
+            raise OutputError("out_dir", f"{_shown(path)} is a folder, a report file cannot replace it")
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent  # the nearest ancestor that exists (a broken symlink counts as missing)
+    if existing.exists() and not existing.is_dir():
+        raise OutputError("out_dir", f"{_shown(existing)} is an existing file, not a folder; nothing was written")
+    if existing.exists() and not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError("out_dir", f"no permission to write in {_shown(existing)}; nothing was written")
+    return folder
+
+
 def write_report(result, out_dir: str | os.PathLike[str]) -> ReportFiles:
     """Render the report of ``result`` and write ``out_dir/<spec name>/report.{html,pdf}``.
 
@@ -80,12 +107,31 @@ def write_report(result, out_dir: str | os.PathLike[str]) -> ReportFiles:
     -------
     ReportFiles
         Where the two documents were written.
+
+    Raises
+    ------
+    SpecError
+        ``result`` is not a :class:`~designkit.pipeline.PipelineResult`.
+    OutputError
+        ``out_dir`` (or a folder on the way to it) is an existing file, or the report folder cannot
+        be created; checked before rendering, nothing is written or overwritten.
+    OSError
+        Writing failed part-way (e.g. disk full); an existing report is left as it was.
     """
+    from designkit.pipeline import PipelineResult
+
+    if not isinstance(result, PipelineResult):
+        raise SpecError("result", f"expected the PipelineResult of designkit.run, got {type(result).__name__}")
+    _check_destination(out_dir, result.loaded.spec.name)  # before the costly rendering
     model = build_report_model(result)
     html = render_html(model).encode("utf-8")
     pdf = compile_pdf(model)
-    folder = _report_folder(Path(out_dir), model.name)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = _check_destination(out_dir, model.name)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError("out_dir", f"cannot create the folder {_shown(folder)}: {exc.strerror or exc}; "
+                          "nothing was written") from None
     files = ReportFiles(html=folder / HTML_NAME, pdf=folder / PDF_NAME)
     staged: list[Path] = []
     try:

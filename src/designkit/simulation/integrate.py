@@ -11,6 +11,8 @@
 :func:`run_steps` evaluates a one-step Function ``(z, w) -> (z_next, record)`` over ``N`` steps
 without a Python loop per step: one ``Function.mapaccum`` over ``chunk`` steps, evaluated chunk
 after chunk through CasADi's zero-copy buffer interface; only the per-step records are kept.
+A step that raises (CVODES giving up on a diverging or too stiff loop) can end the run instead
+of the program: the records from that step on are NaN and the failure is reported.
 """
 
 from __future__ import annotations
@@ -20,6 +22,9 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
+DIVERGED = 1e150
+"""A CVODES step starting from a state or held value beyond this magnitude returns NaN (a diverged loop)."""
 
 
 def rk4(rhs: Callable[[Any, Any], Any], s: Any, dt: float, stages: Sequence[Any]) -> Any:
@@ -58,8 +63,8 @@ def plant_step(plant: Any, dt: float) -> ca.Function:
     return ca.Function("plant_rk4", [x, u, d], [x_next], ["x", "u", "d"], ["x_next"])
 
 
-def variable_step(rhs: ca.Function, s: ca.SX, dt: float, stages: Sequence[ca.SX], held: ca.SX,
-                  *, rtol: float, atol: float) -> ca.SX:
+def variable_step(rhs: ca.Function, s: ca.MX, dt: float, stages: Sequence[ca.MX], held: ca.MX,
+                  *, rtol: float, atol: float) -> ca.MX:
     """One CVODES step of ``s' = rhs(s, a(t), held)`` over ``[0, dt]``, as an expression of ``s`` and ``held``.
 
     Parameters
@@ -67,16 +72,23 @@ def variable_step(rhs: ca.Function, s: ca.SX, dt: float, stages: Sequence[ca.SX]
     rhs : casadi.Function
         ``(s, a, h) -> s_dot``: ``a`` the time-varying argument (the reference), ``h`` everything
         held over the step.
-    s : casadi.SX
+    s : casadi.MX
         State at the step's start.
     dt : float
         Step (s).
-    stages : sequence of 3 SX
+    stages : sequence of 3 MX
         ``a`` at ``0, dt/2, dt``; inside the step ``a`` is the quadratic through them.
-    held : casadi.SX
+    held : casadi.MX
         The held values.
     rtol, atol : float
         CVODES tolerances.
+
+    Returns
+    -------
+    casadi.MX
+        State at ``t + dt``; NaN when the state or the held values at the step's start are not
+        finite or sum beyond :data:`DIVERGED` in magnitude (a diverged loop: CVODES is not called,
+        so it cannot fail on an overflowing right-hand side, and the NaN marks the run as diverged).
     """
     a0, am, a1 = stages
     na, nh = rhs.size1_in(1), rhs.size1_in(2)
@@ -87,12 +99,16 @@ def variable_step(rhs: ca.Function, s: ca.SX, dt: float, stages: Sequence[ca.SX]
         + (tau * (tau - h) / (2 * h * h)) * A1
     dae = {"x": xs, "p": ca.vertcat(A0, Am, A1, H), "t": tau, "ode": rhs(xs, a_t, H)}
     opts = {"reltol": rtol, "abstol": atol, "max_num_steps": 100_000}
+    opts.update(show_eval_warnings=False, disable_internal_warnings=True)
     integrator = ca.integrator("cvodes_step", "cvodes", dae, 0.0, dt, opts)
-    return integrator(x0=s, p=ca.vertcat(a0, am, a1, held))["xf"]
+    start = ca.vertcat(s, held)
+    finite = ca.sum1(ca.fabs(start)) < DIVERGED  # False for NaN and inf (a sum propagates NaN; fmax drops it)
+    nan = ca.DM(np.full(rhs.size1_in(0), np.nan))
+    return ca.if_else(finite, integrator(x0=s, p=ca.vertcat(a0, am, a1, held))["xf"], nan, True)
 
 
 def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: int = 200,
-              accumulated: ca.Function | None = None) -> np.ndarray:
+              accumulated: ca.Function | None = None, failure: dict[str, Any] | None = None) -> np.ndarray:
     """Run ``step: (z, w) -> (z_next, record)`` over the columns of ``inputs``.
 
     ``step.mapaccum(chunk)`` is built once and evaluated chunk after chunk through CasADi's
@@ -114,6 +130,11 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
         Steps per ``mapaccum`` evaluation.
     accumulated : casadi.Function, optional
         A ready ``mapaccum`` of ``step`` (e.g. compiled to C); its number of steps replaces ``chunk``.
+    failure : dict, optional
+        When given, a chunk whose evaluation raises (e.g. ``CV_TOO_MUCH_WORK`` from CVODES) is
+        re-run step by step; the records from the failing step on are NaN, and ``failure`` receives
+        ``step`` (its index) and ``error`` (the solver's last message line).  Without it the error
+        propagates.
 
     Returns
     -------
@@ -137,6 +158,31 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
         buf.set_arg(1, memoryview(w_flat[j * m * nw:(j + 1) * m * nw]))
         buf.set_res(0, memoryview(z_out))
         buf.set_res(1, memoryview(records[j]))
-        evaluate()
+        try:
+            evaluate()
+        except RuntimeError as exc:
+            if failure is None:
+                raise
+            k, z = _step_by_step(step, z, padded[:, j * m:(j + 1) * m], records[j].reshape(m, nrec))
+            if k == m:  # every step of the chunk went through on its own
+                continue
+            records[j].reshape(m, nrec)[k:] = np.nan
+            records[j + 1:] = np.nan
+            lines = [line.strip() for line in str(exc).strip().splitlines() if line.strip()]
+            failure.update(step=j * m + k, error=lines[-1] if lines else type(exc).__name__)
+            break
         z = z_out[-nz:].copy()
     return records.reshape(n_chunks * m, nrec)[:n].T
+
+
+def _step_by_step(step: ca.Function, z: np.ndarray, inputs: np.ndarray, out: np.ndarray) -> tuple[int, np.ndarray]:
+    """Run ``step`` over the columns of ``inputs`` from ``z``, writing each record into the rows of ``out``;
+    return the number of steps done before one raised (all of them if none did) and the state reached."""
+    for k in range(inputs.shape[1]):
+        try:
+            z_next, record = step(z, inputs[:, k])
+        except RuntimeError:
+            return k, z
+        out[k] = np.asarray(record, dtype=float).ravel()
+        z = np.asarray(z_next, dtype=float).ravel()
+    return inputs.shape[1], z

@@ -30,7 +30,10 @@ anti-windup gate is evaluated at each step's start; its clamp after each step.  
 disturbance is held per step: a step at ``time`` acts from the first ``t_k >= time``.
 
 Integrators (``numerics.integrator``): ``rk4`` (classical, fixed step) or ``cvodes`` (CasADi's
-variable-step BDF inside every step, for stiff plants).  Either way the steps are rolled by
+variable-step BDF inside every step, for stiff plants).  Without ``numerics.integrator`` the
+integrator is chosen from the poles (:func:`~designkit.simulation.timing.resolve`): RK4, or
+CVODES with an output step set by the non-stiff poles when RK4 would need more steps than the
+bound (``settings["integrator_choice"]`` says why).  Either way the steps are rolled by
 ``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
 
 Compiled evaluation (``numerics.compile``): the rolled RK4 step can be turned into C by CasADi's
@@ -130,7 +133,7 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
     rhs = ca.Function("loop_rhs", [s, a, h], [ca.vertcat(ode(x, u_in, dist, p_true), xc_dot)], ["s", "a", "h"],
                       ["s_dot"])
 
-    sym = ca.MX.sym if numerics.integrator == "cvodes" else ca.SX.sym
+    sym = ca.MX.sym if timing.integrator == "cvodes" else ca.SX.sym
     z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
     x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
     r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)
@@ -151,7 +154,7 @@ def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numer
         u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
     held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold, p)
     s0 = ca.vertcat(x, xc)
-    if numerics.integrator == "cvodes":
+    if timing.integrator == "cvodes":
         s_next = variable_step(rhs, s0, timing.dt, (r0, rm, r1), held, rtol=numerics.rtol, atol=numerics.atol)
     else:
         s_next = rk4(lambda state, ref: rhs(state, ref, held), s0, timing.dt, (r0, rm, r1))
@@ -281,7 +284,16 @@ class Simulator:
             plant = plant.with_params(**parameters)
             if npar:
                 inputs[-npar:] = np.asarray(plant.parameter_vector, dtype=float)[:, None]
-        rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated)
+        failure: dict[str, Any] = {}
+        rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
+        settings = self.settings
+        if parameters:
+            settings = freeze({**settings, "plant": {q.name: q.value for q in plant.parameters}})
+        if failure:
+            t_fail = float(self.time[failure["step"]])
+            settings = freeze({**settings, "integrator_failure": (
+                f"the integrator stopped at t = {t_fail:.6g} s ({failure['error']}): the loop diverged or is too "
+                "stiff for the step; the records are NaN from there")})
         p, law = plant, self.law
         nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
         cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
@@ -297,8 +309,7 @@ class Simulator:
             perturbation=d, measured=y, kind=self.kind, positions=tuple(p.positions), velocities=tuple(p.velocities),
             state_names=tuple(s.name for s in p.states), controller_state_names=law.state_names,
             input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
-            settings=self.settings if not parameters else
-            freeze({**self.settings, "plant": {q.name: q.value for q in plant.parameters}}), **tracked,
+            settings=settings, **tracked,
         )
 
 
@@ -383,8 +394,10 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     Raises
     ------
     SpecError
-        On a per-joint list of the wrong length, or ``simulation.dt`` incompatible with the
-        sampling period, the delay or the poles.
+        On a per-joint list of the wrong length, ``simulation.dt`` incompatible with the
+        sampling period, the delay or the poles, or a run beyond the step bound (naming
+        ``simulation.dt``, ``simulation.duration`` or an explicit ``numerics.integrator: rk4`` on a
+        stiff loop; see :mod:`designkit.simulation.timing`).
     """
     from designkit.simulation.motion import motion_of
 
@@ -396,7 +409,8 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     law = family(design.kind).law(design, sim.anti_windup) if law is None else law
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant, law), reference_rate=ref.rate)
-    timing = resolve(spec, rates, ref.horizon)
+    held_per_step = sim.sampling_period == 0 and (sim.delay > 0 or not element.continuous)
+    timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step)
 
     t = grid(timing)
     if motion is None:  # a task-space path is checked on its joint path (the family's motion)
@@ -423,7 +437,7 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
               "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[kind]
     ignored = [f"simulation.{unused[0]} ({unused[1]})"] if unused[0] in sim.model_fields_set else []
     numerics = spec.numerics
-    integrator = ("rk4 (classical, fixed step)" if numerics.integrator == "rk4" else
+    integrator = ("rk4 (classical, fixed step)" if timing.integrator == "rk4" else
                   f"cvodes (variable-step BDF inside each step, rtol {numerics.rtol:g}, atol {numerics.atol:g})")
     settings = {
         "integrator": integrator,

@@ -1,18 +1,34 @@
-"""Integration step and duration of a simulation: defaults, and checks of the user's values.
+"""Integrator, integration step and duration of a simulation: defaults, and checks of the user's values.
 
-Defaults (``|p|`` over the requested closed-loop poles, the closed-loop poles on the true
-plant, the open-loop plant poles at the operating point and the reference's rate; see
-:func:`rates_of` and :mod:`designkit.simulation.reference`):
+Rates (:func:`rates_of`): ``|p|`` over the requested closed-loop poles, the closed-loop poles on
+the nominal and the true plant and the reference's rate (:mod:`designkit.simulation.reference`);
+``|p|max`` the fastest, ``|Re p|min`` the slowest requested decay, ``|p|med`` and ``|Re p|med``
+the lower medians of the requested poles' moduli and decays (one extreme pole at either end of
+the spectrum does not move them).
 
-* ``dt``: ``min(DT_FACTOR / |p|max, duration / MIN_SAMPLES)`` rounded down to a "round" value
-  ``{1, 2, 2.5, 5} x 10^k`` (so that round event times fall on the grid), then the largest step
-  not above it dividing the sampling period and the delay into whole numbers of steps;
+Defaults:
+
 * ``duration``: ``horizon + settle + delay`` with ``settle = 3 * requirements.settling_time``
-  when given, else ``10 / |Re p|min`` over the requested poles, and ``horizon`` the reference's
-  own duration (0 for a step); extended to ``perturbation.time + settle + delay`` when later.
+  when given, else ``10 / |Re p|min``, and ``horizon`` the reference's own duration (0 for a
+  step); extended to ``perturbation.time + settle + delay`` when later;
+* ``dt``: ``min(DT_FACTOR / rate, duration / MIN_SAMPLES)`` rounded down to a "round" value
+  ``{1, 2, 2.5, 5} x 10^k`` (so that round event times fall on the grid), then the largest step
+  not above it dividing the sampling period and the delay into whole numbers of steps.  ``rate``
+  is ``|p|max`` for RK4; for CVODES it leaves out the *stiff* poles (``|p| > STIFF_RATIO |p|med``),
+  which the BDF integrates inside each output step;
+* integrator (``numerics.integrator`` not given): RK4 unless its grid would need more than
+  :data:`MAX_STEPS` steps (or a user ``dt`` is too coarse for it) because of stiff poles; then
+  CVODES, whose output step follows the other poles and the reference;
+* a default duration whose grid would exceed the integrator's budget (:data:`MAX_STEPS` for RK4,
+  :data:`MAX_VARIABLE_STEPS` for CVODES), e.g. because of a pole near ``-1e-9``, is cut to
+  ``max(CAPPED_STEPS * dt, horizon + 10 / |Re p|med + delay)`` when that fits the budget; the
+  settings then say that the run does not reach steady state.
 
 A user ``dt`` must divide the sampling period and the delay into whole numbers of steps and
-satisfy ``dt * |p|max <= MAX_DT_RATE``, else :class:`SpecError` on ``simulation.dt``.
+satisfy ``dt * rate <= MAX_DT_RATE``, else :class:`SpecError` on ``simulation.dt``.  Any run
+longer than :data:`MAX_STEPS` steps is refused (a resource bound) naming the field to change:
+``simulation.dt`` when the user set it, ``numerics.integrator`` when an explicit ``rk4`` meets a
+stiff loop, else ``simulation.duration``.
 """
 
 from __future__ import annotations
@@ -28,13 +44,19 @@ from designkit.errors import SpecError
 from designkit.spec.schema import Spec
 
 DT_FACTOR = 0.02
-"""Default step as a fraction of the fastest time constant ``1/|p|max``."""
+"""Default step as a fraction of the fastest resolved time constant ``1/rate``."""
 MAX_DT_RATE = 1.0
-"""Largest accepted ``dt * |p|max`` (RK4 is unstable beyond 2.78 and inaccurate well before)."""
+"""Largest accepted ``dt * rate`` (RK4 is unstable beyond 2.78 and inaccurate well before)."""
 MIN_SAMPLES = 200
 """The default step gives at least this many steps over the duration."""
 MAX_STEPS = 2_000_000
-"""Refuse simulations longer than this many steps."""
+"""Resource bound: refuse simulations longer than this many steps (about 2-4 s of RK4 on one link)."""
+MAX_VARIABLE_STEPS = 100_000
+"""A default duration needing more CVODES output steps than this is cut (one CVODES call, about 0.1 ms, per step)."""
+CAPPED_STEPS = 20_000
+"""Steps of a cut default duration."""
+STIFF_RATIO = 100.0
+"""A pole faster than ``STIFF_RATIO * |p|med`` is stiff: left to the BDF inside each CVODES output step."""
 SETTLE_FACTOR, POLE_HORIZON = 3.0, 10.0
 
 
@@ -45,7 +67,7 @@ class Timing:
     Parameters
     ----------
     dt : float
-        Integration step (s).
+        Integration (output) step (s).
     n_samples : int
         Number of recorded instants (``n_samples - 1`` steps cover the duration).
     steps_per_sample : int
@@ -53,7 +75,9 @@ class Timing:
     delay_steps : int
         Integration steps of control delay.
     settings : dict
-        How dt and the duration were chosen, JSON-serialisable.
+        How the integrator, dt and the duration were chosen, JSON-serialisable.
+    integrator : str
+        ``"rk4"`` or ``"cvodes"``: the one chosen (the user's ``numerics.integrator`` when given).
     """
 
     dt: float
@@ -61,6 +85,7 @@ class Timing:
     steps_per_sample: int
     delay_steps: int
     settings: dict[str, Any]
+    integrator: str = "rk4"
 
 
 @dataclass(frozen=True)
@@ -73,20 +98,68 @@ class Rates:
         Fastest rate ``|p|max`` over every relevant pole and the reference (1/s).
     slow : float
         Slowest decay ``|Re p|min`` of the requested (or, without any, the closed-loop) poles (1/s).
+    poles : tuple of float
+        Distinct moduli of the poles considered, ascending (1/s); empty: only ``fast`` is known.
+    median : float
+        Lower median of the requested poles' moduli ``|p|med`` (1/s); 0: unknown.
+    median_decay : float
+        Lower median of the requested poles' decays ``|Re p|med`` (1/s); 0: unknown.
+    reference : float
+        Rate of the reference (1/s), always resolved by the output grid.
     """
 
     fast: float
     slow: float
+    poles: tuple[float, ...] = ()
+    median: float = 0.0
+    median_decay: float = 0.0
+    reference: float = 0.0
+
+    def stiff(self) -> tuple[float, ...]:
+        """Moduli of the stiff poles, ``|p| > STIFF_RATIO |p|med`` (1/s), ascending."""
+        if self.median <= 0:
+            return ()
+        return tuple(r for r in self.poles if r > STIFF_RATIO * self.median)
+
+    def resolved(self) -> float:
+        """Fastest rate a CVODES output grid must follow: the non-stiff poles and the reference (1/s)."""
+        stiff = self.stiff()
+        if not stiff:
+            return self.fast
+        kept = [r for r in self.poles if r not in stiff]
+        return max([*kept, self.reference, self.median])
+
+
+def _lower_median(values: list[float]) -> float:
+    values = sorted(v for v in values if v > 0)
+    return values[(len(values) - 1) // 2] if values else 0.0
 
 
 def rates_of(requested: Any, *pole_sets: Any, reference_rate: float = 0.0) -> Rates:
-    """:class:`Rates` from the requested poles and any further sets of poles (closed and open loop)."""
+    """:class:`Rates` from the requested poles and any further sets of poles (closed and open loop).
+
+    Parameters
+    ----------
+    requested : sequence of complex
+        The requested closed-loop poles (1/s).
+    *pole_sets : array_like of complex
+        Further poles that set time scales (1/s).
+    reference_rate : float
+        Rate of the reference (1/s).
+    """
     requested = [complex(p) for p in requested]
     others = [complex(p) for poles in pole_sets for p in np.asarray(poles).ravel()]
     fast = max([abs(p) for p in (*requested, *others)] + [float(reference_rate)])
     decays = [abs(p.real) for p in requested] or [abs(p.real) for p in others if abs(p.real) > 0]
     slow = min(decays) if decays else 1.0
-    return Rates(fast=fast if fast > 0 else 1.0, slow=slow if slow > 0 else 1.0)
+    base = requested or others
+    moduli: list[float] = []
+    for r in sorted(abs(p) for p in (*requested, *others) if abs(p) > 0):
+        if not moduli or r > moduli[-1] * (1 + 1e-6):  # one entry per distinct rate (requested = closed loop)
+            moduli.append(r)
+    return Rates(fast=fast if fast > 0 else 1.0, slow=slow if slow > 0 else 1.0, poles=tuple(moduli),
+                 median=_lower_median([abs(p) for p in base]), median_decay=_lower_median(decays),
+                 reference=float(reference_rate))
 
 
 def _nice_floor(value: float) -> float:
@@ -114,58 +187,160 @@ def _rational_gcd(values: list[float]) -> float | None:
     return math.gcd(*(f.numerator * (den // f.denominator) for f in fracs)) / den
 
 
-def _duration(spec: Spec, slow: float, horizon: float) -> tuple[float, str]:
+def _default_dt(rate: float, duration: float, g: float | None) -> float:
+    """Default step (s) for the fastest resolved ``rate`` (1/s): see the module docstring."""
+    target = _nice_floor(min(DT_FACTOR / rate, duration / MIN_SAMPLES))
+    return target if g is None else g / math.ceil(g / target - 1e-9)
+
+
+def _count(n: float) -> str:
+    """A step count for a message: the integer up to 1e9, else three significant digits."""
+    return f"{n:.0f}" if n < 1e9 else f"{n:.3g}"
+
+
+def _duration(spec: Spec, slow: float, horizon: float) -> tuple[float, str, float]:
+    """``(duration, why, start)``: ``start`` (s) is where the settling allowance begins, plus the delay."""
     sim, req = spec.simulation, spec.requirements
+    start = max(horizon, sim.perturbation.time) if sim.perturbation is not None else horizon
     if sim.duration is not None:
-        return float(sim.duration), "simulation.duration"
+        return float(sim.duration), "simulation.duration", start + sim.delay
     if req is not None and req.settling_time is not None:
         settle, why = SETTLE_FACTOR * req.settling_time, f"{SETTLE_FACTOR:g} x requirements.settling_time"
     else:
         settle, why = POLE_HORIZON / slow, f"{POLE_HORIZON:g} / |Re p|min"
-    start = horizon
-    if sim.perturbation is not None:
-        start = max(start, sim.perturbation.time)
-    return start + settle + sim.delay, f"default: max(reference horizon, perturbation time) + {why} + delay"
+    return (start + settle + sim.delay, f"default: max(reference horizon, perturbation time) + {why} + delay",
+            start + sim.delay)
 
 
-def resolve(spec: Spec, rates: Rates, ref_horizon: float) -> Timing:
-    """Integration step, number of samples, sampling and delay steps for ``spec.simulation``."""
+def _choose_integrator(spec: Spec, rates: Rates, stiff: tuple[float, ...], duration: float,
+                       rk4_dt: float) -> tuple[str, str]:
+    """``(integrator, why)``: the user's, else RK4 unless stiff poles make its grid too fine."""
+    numerics, sim = spec.numerics, spec.simulation
+    if "integrator" in numerics.model_fields_set:
+        return numerics.integrator, "numerics.integrator"
+    steps = duration / rk4_dt
+    too_coarse = sim.dt is not None and rk4_dt * rates.fast > MAX_DT_RATE
+    if not stiff or (steps <= MAX_STEPS and not too_coarse):
+        return "rk4", "default (RK4 resolves every pole within the step bound)"
+    if too_coarse:
+        need = (f"simulation.dt = {rk4_dt:g} s is too coarse for RK4 "
+                f"(dt*|p| = {rk4_dt * rates.fast:.3g} > {MAX_DT_RATE:g})")
+    else:
+        need = f"would need {_count(steps)} RK4 steps of {rk4_dt:.3g} s over {duration:.4g} s (more than {MAX_STEPS})"
+    return "cvodes", (f"chosen: cvodes because the fastest pole |p| = {rates.fast:.4g} 1/s {need}; stiff poles "
+                      f"(|p| > {STIFF_RATIO:g} |p|med = {STIFF_RATIO * rates.median:.4g} 1/s: "
+                      f"{', '.join(f'{r:.4g}' for r in stiff)} 1/s) are integrated by the BDF inside each output "
+                      f"step, which follows the other poles and the reference (|p| <= {rates.resolved():.4g} 1/s)")
+
+
+def _bound_error(spec: Spec, duration: float, dt: float, steps: float, *, integrator: str, stiff_hint: bool,
+                 held: bool) -> SpecError:
+    """The resource-bound refusal, naming the field to change."""
     sim = spec.simulation
-    fast, slow = rates.fast, rates.slow
-    duration, duration_source = _duration(spec, slow, ref_horizon)
+    what = f"{duration:.4g} s at dt = {dt:.3g} s needs {_count(steps)} steps, more than {MAX_STEPS} (resource bound)"
+    if stiff_hint and integrator == "rk4" and "integrator" in spec.numerics.model_fields_set:
+        return SpecError("numerics.integrator", f"rk4: {what}: the loop is stiff; use numerics.integrator: cvodes "
+                         "(variable-step BDF, output step set by the slow poles) or leave it out, or shorten "
+                         "simulation.duration")
+    note = "" if not (held and stiff_hint) else (
+        " (the control is held over each step -- a delay or a discontinuous element without a sampling "
+        "period -- so the step must follow the fastest pole whatever the integrator; with "
+        "simulation.sampling_period the plant is integrated by cvodes between samples)")
+    if sim.dt is not None:
+        return SpecError("simulation.dt", f"{what}{note}; enlarge simulation.dt or shorten simulation.duration")
+    return SpecError("simulation.duration", f"{what}{note}; shorten simulation.duration (or set a coarser "
+                                            "simulation.dt)")
+
+
+def resolve(spec: Spec, rates: Rates, ref_horizon: float, *, held_per_step: bool = False) -> Timing:
+    """Integrator, step, number of samples, sampling and delay steps for ``spec.simulation``.
+
+    Parameters
+    ----------
+    spec : Spec
+        Its ``simulation``, ``numerics`` and ``requirements.settling_time`` are used.
+    rates : Rates
+        Time scales of the loop (1/s), see :func:`rates_of`.
+    ref_horizon : float
+        The reference's own duration (s; 0 for a step).
+    held_per_step : bool
+        The control is evaluated once per step and held (a delay or a discontinuous element with a
+        continuous controller): the step is then the control's update period and must follow every
+        pole, so CVODES cannot take larger steps over stiff poles.
+
+    Raises
+    ------
+    SpecError
+        ``simulation.dt`` incompatible with the sampling period, the delay, the poles or the
+        duration; or a run beyond :data:`MAX_STEPS` steps (see the module docstring).
+    """
+    sim = spec.simulation
+    fast = rates.fast
+    duration, duration_source, start = _duration(spec, rates.slow, ref_horizon)
     periods = {"simulation.sampling_period": sim.sampling_period, "simulation.delay": sim.delay}
-    if sim.dt is None:
-        target = _nice_floor(min(DT_FACTOR / fast, duration / MIN_SAMPLES))
-        g = _rational_gcd(list(periods.values()))
-        dt = target if g is None else g / math.ceil(g / target - 1e-9)
-        dt_source = (f"default: min({DT_FACTOR:g}/|p|max, duration/{MIN_SAMPLES}) rounded down to "
+    g = _rational_gcd(list(periods.values()))
+    stiff = () if held_per_step else rates.stiff()
+    default_dt = sim.dt is None
+    rk4_dt = _default_dt(fast, duration, g) if default_dt else float(sim.dt)
+    integrator, integrator_source = _choose_integrator(spec, rates, stiff, duration, rk4_dt)
+    rate = rates.resolved() if integrator == "cvodes" and stiff else fast
+    if default_dt:
+        dt = _default_dt(rate, duration, g)
+        dt_source = (f"default: min({DT_FACTOR:g}/|p|, duration/{MIN_SAMPLES}) rounded down to "
                      "{1, 2, 2.5, 5} x 10^k, then the largest step not above it that divides the "
-                     "sampling period and the delay")
+                     "sampling period and the delay; |p| = "
+                     + ("|p|max" if rate == fast else "the fastest non-stiff pole or the reference rate")
+                     + f" = {rate:.4g} 1/s")
     else:
         dt, dt_source = float(sim.dt), "simulation.dt"
-        if dt * fast > MAX_DT_RATE:
-            raise SpecError("simulation.dt", f"{dt:g} s is too coarse for the fastest pole |p| = {fast:.4g} 1/s "
-                            f"(need dt*|p| <= {MAX_DT_RATE:g}, i.e. dt <= {MAX_DT_RATE / fast:.3g} s; "
-                            f"the default would be {DT_FACTOR / fast:.3g} s)")
+        if dt * rate > MAX_DT_RATE:
+            hint = (" (the loop is stiff: numerics.integrator: cvodes takes this step)"
+                    if integrator == "rk4" and rates.stiff() and not held_per_step else "")
+            raise SpecError("simulation.dt", f"{dt:g} s is too coarse for the fastest pole |p| = {rate:.4g} 1/s "
+                            f"(need dt*|p| <= {MAX_DT_RATE:g}, i.e. dt <= {MAX_DT_RATE / rate:.3g} s; "
+                            f"the default would be {DT_FACTOR / rate:.3g} s){hint}")
         for key, period in periods.items():
             if period > 0 and _whole_steps(period, dt) is None:
                 raise SpecError("simulation.dt", f"{dt:g} s must divide {key} = {period:g} s into a whole "
                                 f"number of steps (got {period / dt:.6g}); try dt = "
                                 f"{period / math.ceil(period / dt):.6g} s or leave dt out")
+    requested = duration
+    steady: str | None = None
+    budget = MAX_VARIABLE_STEPS if integrator == "cvodes" else MAX_STEPS
+    if default_dt and sim.duration is None and not duration / dt <= budget:
+        needed = start + POLE_HORIZON / (rates.median_decay if rates.median_decay > 0 else rates.slow)
+        cut = max(CAPPED_STEPS * dt, needed)
+        if cut / dt <= budget:
+            duration = cut
+            duration_source = (f"default cut to max({CAPPED_STEPS} steps, horizon + 10/|Re p|med + delay): "
+                               f"{duration_source.removeprefix('default: ')}"
+                               f" = {requested:.4g} s would need {_count(requested / dt)} steps (more than {budget} "
+                               f"with {integrator})")
+            steady = (f"not reached: the slowest requested pole decays at {rates.slow:.3g} 1/s and the default "
+                      f"duration ({requested:.4g} s) was cut to {duration:.4g} s (covers horizon + 10/|Re p|med + "
+                      f"delay = {needed:.4g} s); checks that need the steady state (settling time, steady-state error) "
+                      "are measured at the end of this run; set simulation.duration to simulate longer")
+    steps = duration / dt
+    if not steps <= MAX_STEPS:
+        raise _bound_error(spec, duration, dt, steps, integrator=integrator, stiff_hint=bool(rates.stiff()),
+                           held=held_per_step)
     if dt >= duration:
         raise SpecError("simulation.dt", f"{dt:g} s must be smaller than the duration {duration:g} s")
-    n_samples = round(duration / dt) + 1
-    if n_samples > MAX_STEPS:
-        raise SpecError("simulation.dt", f"{duration:g} s at dt = {dt:g} s needs {n_samples} steps, more than "
-                        f"{MAX_STEPS}; shorten simulation.duration or enlarge dt")
+    n_samples = round(steps) + 1
     steps_per_sample = _whole_steps(sim.sampling_period, dt) or 0
     delay_steps = _whole_steps(sim.delay, dt) or 0
-    settings = {
-        "dt": dt, "dt_source": dt_source, "duration": (n_samples - 1) * dt, "duration_requested": duration,
+    settings: dict[str, Any] = {
+        "integrator_choice": integrator_source,
+        "dt": dt, "dt_source": dt_source, "duration": (n_samples - 1) * dt,
+        "duration_requested": requested if math.isfinite(requested) else str(requested),
         "duration_source": duration_source, "n_steps": n_samples - 1, "fastest_rate": fast,
-        "slowest_rate": slow, "steps_per_sample": steps_per_sample, "delay_steps": delay_steps,
+        "slowest_rate": rates.slow, "steps_per_sample": steps_per_sample, "delay_steps": delay_steps,
     }
-    return Timing(dt, n_samples, steps_per_sample, delay_steps, settings)
+    if integrator == "cvodes" and stiff:
+        settings["stiff_rates"] = list(stiff)
+    if steady is not None:
+        settings["steady_state"] = steady
+    return Timing(dt, n_samples, steps_per_sample, delay_steps, settings, integrator)
 
 
 def grid(timing: Timing) -> np.ndarray:

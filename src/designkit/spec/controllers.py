@@ -4,6 +4,9 @@ A family's spec model (a member of the ``controller`` union) is declared in its 
 (:mod:`designkit.families`); the pieces several families share -- a list of closed-loop poles
 with conjugate pairs, the rule deriving poles from overshoot and settling-time requirements --
 live here.
+
+Poles are checked with :func:`designkit.spec.ranges.check_poles`: every ``|p|`` between 1e-12 and
+1e12 1/s, and ``max |p| / min |Re p|`` at most 1e12 (what double precision can honour).
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from pydantic import Field, field_validator
 
 from designkit.spec.fields import Finite, Pole, PositiveFinite, Section, check_conjugates
 from designkit.spec.plants import Payload
+from designkit.spec.ranges import PARAMETER, Ranged, check_poles
 
 __all__ = ["ControllerModel", "PoleRequirementsController", "three_poles"]
 
@@ -21,19 +25,22 @@ class ControllerModel(Section):
 
     Without this section the controller knows the true plant exactly.  With it, the controller's
     model is the plant's nominal robot (without the true plant's payload) changed as written:
-    ``parameters`` (named parameter values, e.g. mass errors), ``payload`` (a payload it assumes),
-    ``friction`` (false: the model leaves the joint friction out).
+    ``parameters`` (named parameter values, e.g. mass errors; each within 1e6 of its SI unit),
+    ``payload`` (a payload it assumes), ``friction`` (false: the model leaves the joint friction out).
     """
 
-    parameters: dict[str, Finite] = Field(default_factory=dict)
+    parameters: dict[str, Ranged(PARAMETER.low, PARAMETER.high, PARAMETER.unit, base=Finite)] = Field(
+        default_factory=dict)
     payload: Payload | None = None
     friction: bool | None = None
 
 
 def three_poles(poles: list[complex]) -> list[complex]:
-    """Validate a set of three closed-loop poles (complex ones in conjugate pairs)."""
+    """Validate a set of three closed-loop poles (1/s): complex ones in conjugate pairs, moduli and spread
+    within :func:`~designkit.spec.ranges.check_poles`."""
     if len(poles) != 3:
         raise ValueError(f"must list exactly 3 poles, got {len(poles)}")
+    check_poles(poles)
     check_conjugates(poles)
     return poles
 
@@ -41,22 +48,23 @@ def three_poles(poles: list[complex]) -> list[complex]:
 class PoleRequirementsController(Section):
     """A controller placed by three closed-loop poles, given or derived from requirements.
 
-    ``poles`` (1/s): three values, real or a complex-conjugate pair plus a real pole; without
-    them, ``requirements.overshoot`` and ``requirements.settling_time`` give a dominant pair
-    (tightened by ``design_margin``) and a real pole ``third_pole_factor`` times further left.
+    ``poles`` (1/s): three values, real or a complex-conjugate pair plus a real pole (``|p|`` 1e-12 to
+    1e12, spread at most 1e12); without them, ``requirements.overshoot`` and
+    ``requirements.settling_time`` give a dominant pair (tightened by ``design_margin``, 0 to 0.9) and
+    a real pole ``third_pole_factor`` (1 to 100) times further left.
     """
 
     poles: list[Pole] | None = Field(
         default=None,
         description="Closed-loop poles (1/s): three values, real or a complex-conjugate pair plus a real pole.",
     )
-    third_pole_factor: PositiveFinite = Field(
+    third_pole_factor: Ranged(1, 100, "", base=PositiveFinite) = Field(
         default=5.0,
         description="When poles come from requirements: the real pole is placed this many times further "
         "left than the real part of the dominant pair.",
     )
-    design_margin: float = Field(
-        default=0.1, ge=0, lt=1,
+    design_margin: Ranged(0, 0.9, "") = Field(
+        default=0.1,
         description="When poles come from requirements: the derived pair meets overshoot and settling time "
         "tightened by this fraction, so the verified loop keeps a margin.",
     )

@@ -3,15 +3,27 @@
 Every section forbids unknown keys and is frozen; numbers must be finite.  Sections of the
 spec (plant kinds, simulation, requirements, numerics) and every controller family's model are
 built from these, so that one rule (and one error message) holds everywhere.
+
+Booleans are not numbers: wherever a field (or an item of a list or mapping field) holds an
+``int`` or a ``float``, ``true`` / ``yes`` is refused (pydantic's lax mode would read it as 1),
+and an integer beyond the floating-point range is refused where a ``float`` is meant.  The rule
+is read from each field's annotation by :class:`Section`, so it holds for every section without
+restating it per field.
 """
 
 from __future__ import annotations
 
 import cmath
 import math
-from typing import Annotated
+import sys
+import types
+from collections import abc
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+
+from designkit.errors import short_repr
 
 __all__ = [
     "Finite", "NonNegativeFinite", "PerJoint", "Pole", "PositiveFinite", "Section", "check_conjugates", "fmt_pole",
@@ -19,10 +31,119 @@ __all__ = [
 ]
 
 
+_NOT_BOOLEAN = "not a boolean (true/false, yes/no, on/off)"
+
+FLOAT_MAX = sys.float_info.max
+"""Largest finite float (about 1.8e308): a larger integer cannot be a float."""
+
+
+@dataclass(frozen=True)
+class _NumberRule:
+    """What a field's annotation says about numbers, at one level of nesting.
+
+    ``scalar`` is ``"float"`` or ``"int"`` when a number may stand here (None otherwise), ``bool_ok``
+    when a boolean may; ``items`` / ``values`` are the rules for list items and mapping values.
+    """
+
+    scalar: str | None = None
+    bool_ok: bool = False
+    items: _NumberRule | None = None
+    values: _NumberRule | None = None
+
+
+_ANYTHING = _NumberRule(bool_ok=True)
+
+
+def _merge(rules: list[_NumberRule | None]) -> _NumberRule | None:
+    rules_ = [r for r in rules if r is not None]
+    if not rules_:
+        return None
+    scalars = {r.scalar for r in rules_}
+    return _NumberRule(
+        scalar="float" if "float" in scalars else "int" if "int" in scalars else None,
+        bool_ok=any(r.bool_ok for r in rules_),
+        items=_merge([r.items for r in rules_]),
+        values=_merge([r.values for r in rules_]),
+    )
+
+
+def _rule(tp: Any) -> _NumberRule | None:
+    """The number rule of a type annotation; None where nothing is to check (models, strings, poles)."""
+    origin = get_origin(tp)
+    if origin is Annotated:
+        return _rule(get_args(tp)[0])
+    if tp is bool:
+        return _ANYTHING
+    if tp is float or tp is int:
+        return _NumberRule(scalar=tp.__name__)
+    if tp is Any or tp is object:
+        return _ANYTHING
+    if origin in (Union, types.UnionType):
+        return _merge([_rule(m) for m in get_args(tp) if m is not type(None)])
+    if origin is Literal:
+        return _ANYTHING if any(isinstance(a, bool) for a in get_args(tp)) else None
+    if origin in (list, tuple, set, frozenset, abc.Sequence):
+        items = _merge([_rule(a) for a in get_args(tp) if a is not Ellipsis])
+        return None if items is None else _NumberRule(items=items)
+    if origin in (dict, abc.Mapping):
+        args = get_args(tp)
+        values = _rule(args[1]) if len(args) == 2 else None
+        return None if values is None else _NumberRule(values=values)
+    return None  # nested sections validate themselves; str, complex (poles) and others need nothing here
+
+
+def _number_problem(rule: _NumberRule, value: object, where: str = "") -> tuple[str, str] | None:
+    """``(inner key path, message)`` of the first boolean or out-of-range integer standing for a number."""
+    if isinstance(value, bool):
+        if rule.scalar is not None and not rule.bool_ok:
+            return where, f"must be a number, {_NOT_BOOLEAN}"
+    elif isinstance(value, int):
+        if rule.scalar == "float" and abs(value) > FLOAT_MAX:
+            return where, f"must be within the floating-point range (|x| <= {FLOAT_MAX:.4g}), got {short_repr(value)}"
+    elif isinstance(value, list | tuple) and rule.items is not None:
+        for k, item in enumerate(value):
+            problem = _number_problem(rule.items, item, f"{where}[{k}]")
+            if problem is not None:
+                return problem
+    elif isinstance(value, dict) and rule.values is not None:
+        for key, item in value.items():
+            problem = _number_problem(rule.values, item, f"{where}.{key}" if where else str(key))
+            if problem is not None:
+                return problem
+    return None
+
+
+_RULES: dict[tuple[type, str], _NumberRule | None] = {}
+
+
 class Section(BaseModel):
-    """Base of every spec section: unknown keys are errors, values are frozen, numbers finite."""
+    """Base of every spec section: unknown keys are errors, values are frozen, numbers finite.
+
+    Where a field's annotation holds numbers (``float``, ``int``, lists or mappings of them), a
+    boolean is refused and, for ``float``, so is an integer beyond the floating-point range; the
+    message names the item (``[2]: must be a number, not a boolean (...)``).
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, str_strip_whitespace=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _numbers_are_numbers(cls, data: object) -> object:
+        if not isinstance(data, dict):
+            return data
+        for name, value in data.items():
+            field = cls.model_fields.get(name) if isinstance(name, str) else None
+            if field is None:
+                continue  # an unknown key: the schema's error
+            key = (cls, name)
+            if key not in _RULES:
+                _RULES[key] = _rule(field.annotation)
+            rule = _RULES[key]
+            if rule is not None:
+                problem = _number_problem(rule, value, name)
+                if problem is not None:
+                    raise ValueError(f"{problem[0]}: {problem[1]}")
+        return data
 
 
 def _finite(value: float) -> float:
@@ -34,7 +155,9 @@ def _finite(value: float) -> float:
 def _parse_pole(value: object) -> complex:
     """Accept a real number or a string such as ``"-2+3j"``; return a complex number."""
     if isinstance(value, bool):
-        raise ValueError(f"must be a number or a complex string like '-2+3j', got {value!r}")
+        raise ValueError(f"must be a number or a complex string like '-2+3j', {_NOT_BOOLEAN}")
+    if isinstance(value, int) and abs(value) > FLOAT_MAX:
+        raise ValueError(f"must be within the floating-point range (|x| <= {FLOAT_MAX:.4g}), got {short_repr(value)}")
     if isinstance(value, int | float):
         return complex(float(value), 0.0)
     if isinstance(value, complex):
@@ -43,8 +166,8 @@ def _parse_pole(value: object) -> complex:
         try:
             return complex(value.replace(" ", "").replace("i", "j"))
         except ValueError:
-            raise ValueError(f"must be a number or a complex string like '-2+3j', got {value!r}") from None
-    raise ValueError(f"must be a number or a complex string like '-2+3j', got {value!r}")
+            raise ValueError(f"must be a number or a complex string like '-2+3j', got {short_repr(value)}") from None
+    raise ValueError(f"must be a number or a complex string like '-2+3j', got {short_repr(value)}")
 
 
 def _stable_pole(p: complex) -> complex:
@@ -86,8 +209,13 @@ def check_conjugates(poles: list[complex]) -> None:
 
 
 def _number(value: object, where: str = "") -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{where}must be a number, got {value!r}")
+    if isinstance(value, bool):
+        raise ValueError(f"{where}must be a number, {_NOT_BOOLEAN}")
+    if not isinstance(value, int | float):
+        raise ValueError(f"{where}must be a number, got {short_repr(value)}")
+    if isinstance(value, int) and abs(value) > FLOAT_MAX:
+        raise ValueError(f"{where}must be within the floating-point range (|x| <= {FLOAT_MAX:.4g}), "
+                         f"got {short_repr(value)}")
     value = float(value)
     if not math.isfinite(value):
         raise ValueError(f"{where}must be finite, got {value}")

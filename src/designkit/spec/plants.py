@@ -10,6 +10,12 @@ Every kind takes an optional ``uncertainty``: intervals ``[low, high]`` of named
 parameters (``{Km: [1.5, 2.5], tau: [0.4, 0.6]}``, ``{m2: [2.5, 3.5]}``) over which robustness is
 checked.  Whether the names exist is checked against the built plant (the model layer knows
 them), with the key path ``plant.uncertainty.<name>``.
+
+Every number has a physically meaningful range declared next to its field
+(:mod:`designkit.spec.ranges`; the README's table lists them): e.g. ``Km`` 1e-6 to 1e6
+(rad/s)/(N*m), ``tau`` 1e-6 to 1e6 s, masses 0 to 1e4 kg, lengths within 100 m, any named
+parameter within 1e6 of its SI unit; both ends of an uncertainty interval lie in the
+parameter's range.
 """
 
 from __future__ import annotations
@@ -19,7 +25,16 @@ from typing import Annotated, Any, Literal
 
 from pydantic import ConfigDict, Field, field_validator, model_validator
 
-from designkit.spec.fields import Finite, NonNegativeFinite, PerJoint, PositiveFinite, Section
+from designkit.spec.fields import Finite, NonNegativeFinite, PositiveFinite, Section
+from designkit.spec.ranges import (
+    ANGLE,
+    PARAMETER,
+    Ranged,
+    RangedInt,
+    RangedPerJoint,
+    check_interval,
+    range_of,
+)
 
 __all__ = ["DHLink", "ElasticJointPlantSpec", "Limits", "LinkPlantSpec", "Payload", "PlantSpec", "RobotPlantSpec",
            "Uncertainty"]
@@ -29,17 +44,19 @@ class Uncertainty(Section):
     """Intervals of named plant parameters, and how densely to sample them.
 
     Any key other than ``grid``, ``samples`` and ``seed`` names a plant parameter and takes an
-    interval ``[low, high]`` (``low <= high``, finite).  ``grid`` is the number of lattice points
-    per parameter (the lattice is capped at :data:`MAX_GRID_POINTS` plants; fewer points per
-    axis when there are many parameters), ``samples`` the number of seeded random interior
-    points drawn in addition, ``seed`` their seed.
+    interval ``[low, high]`` (``low <= high``, finite, both within :data:`~designkit.spec.ranges.PARAMETER`
+    of the parameter's SI unit; the plant kinds narrow it to the range of their own fields).
+    ``grid`` is the number of lattice points per parameter (2 to 1001; the lattice is capped at
+    :data:`MAX_GRID_POINTS` plants, fewer points per axis when there are many parameters),
+    ``samples`` the number of seeded random interior points drawn in addition (0 to 100,000),
+    ``seed`` their seed (0 to 2**32 - 1).
     """
 
     model_config = ConfigDict(extra="allow", frozen=True, allow_inf_nan=False)
 
-    grid: int = Field(default=21, ge=2, le=1001)
-    samples: int = Field(default=0, ge=0, le=100_000)
-    seed: int = Field(default=0, ge=0)
+    grid: RangedInt(2, 1001) = 21
+    samples: RangedInt(0, 100_000) = 0
+    seed: RangedInt(0, 2**32 - 1) = 0
 
     @model_validator(mode="after")
     def _intervals(self) -> Uncertainty:
@@ -57,6 +74,15 @@ class Uncertainty(Section):
                 raise ValueError(f"{name}: interval must be [low, high] with low <= high, got [{lo:g}, {hi:g}]")
         return self
 
+    def check_ranges(self, model: type[Section]) -> None:
+        """Every interval inside the range of its parameter: the field's of the plant section ``model`` when
+        the parameter is one of its fields, else :data:`~designkit.spec.ranges.PARAMETER` (``ValueError``
+        naming ``uncertainty.<name>``; the sign is the model layer's to check)."""
+        for name, bounds in self.intervals.items():
+            rng = range_of(model, name)
+            check_interval(f"uncertainty.{name}", bounds, rng or PARAMETER,
+                           f"the range of plant.{name}" if rng is not None else "")
+
     @property
     def intervals(self) -> dict[str, tuple[float, float]]:
         """Parameter name -> ``(low, high)``, in the order written."""
@@ -70,55 +96,68 @@ MAX_GRID_POINTS = 100_000
 class LinkPlantSpec(Section):
     """Simplified link ``x1' = x2, x2' = -x2/tau + (Km/tau)(u + xi)``.
 
-    ``Km`` is the link gain ((rad/s)/(N*m)), ``tau`` the time constant (s).
+    ``Km`` is the link gain ((rad/s)/(N*m), 1e-6 to 1e6), ``tau`` the time constant (s, 1e-6 to 1e6);
+    an ``uncertainty`` interval of either lies in the same range.
     """
 
     kind: Literal["link"]
-    Km: PositiveFinite
-    tau: PositiveFinite
+    Km: Ranged(1e-6, 1e6, "(rad/s)/(N*m)", base=PositiveFinite)
+    tau: Ranged(1e-6, 1e6, "s", base=PositiveFinite)
     uncertainty: Uncertainty | None = None
+
+    @model_validator(mode="after")
+    def _uncertainty_in_range(self) -> LinkPlantSpec:
+        if self.uncertainty is not None:
+            self.uncertainty.check_ranges(LinkPlantSpec)
+        return self
 
 
 class DHLink(Section):
     """One row of a DH table: the joint, its DH parameters (m, rad) and the link's inertial data (SI).
 
-    ``com`` is the centre of mass in the link frame (m), ``inertia`` ``(Ixx, Iyy, Izz, Ixy, Ixz,
-    Iyz)`` about the centre of mass (kg*m^2), ``viscous`` (N*m*s/rad) and ``coulomb`` (N*m) the
-    joint friction, ``motor_inertia`` (kg*m^2) the rotor inertia reflected through ``gear_ratio``.
+    ``a``, ``d`` (m) and ``offset`` (rad or m) within 100; ``alpha``, ``theta`` (rad) within one
+    turn; ``mass`` (kg) 0 to 1e4; ``com`` the centre of mass in the link frame (m, each within 100),
+    ``inertia`` ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` about the centre of mass (kg*m^2, moments 0 to
+    1e4, products within 1e4), ``viscous`` (N*m*s/rad) and ``coulomb`` (N*m) the joint friction (0
+    to 1e6), ``motor_inertia`` (kg*m^2, 0 to 1e4) the rotor inertia reflected through
+    ``gear_ratio`` (within 1e4), ``qlim`` the joint limits (rad or m, within 100).
     """
 
     joint: Literal["revolute", "prismatic"] = "revolute"
-    a: Finite = 0.0
-    alpha: Finite = 0.0
-    d: Finite = 0.0
-    theta: Finite = 0.0
-    offset: Finite = 0.0
-    mass: NonNegativeFinite = 0.0
-    com: tuple[Finite, Finite, Finite] = (0.0, 0.0, 0.0)
-    inertia: tuple[Finite, Finite, Finite, Finite, Finite, Finite] = (0.0,) * 6
-    viscous: NonNegativeFinite = 0.0
-    coulomb: NonNegativeFinite = 0.0
-    motor_inertia: NonNegativeFinite = 0.0
-    gear_ratio: Finite = 1.0
-    qlim: tuple[Finite, Finite] | None = None
+    a: Ranged(-100, 100, "m") = 0.0
+    alpha: Ranged(ANGLE.low, ANGLE.high, "rad") = 0.0
+    d: Ranged(-100, 100, "m") = 0.0
+    theta: Ranged(ANGLE.low, ANGLE.high, "rad") = 0.0
+    offset: Ranged(-100, 100, "rad or m") = 0.0
+    mass: Ranged(0, 1e4, "kg", base=NonNegativeFinite) = 0.0
+    com: tuple[Ranged(-100, 100, "m"), Ranged(-100, 100, "m"), Ranged(-100, 100, "m")] = (0.0, 0.0, 0.0)
+    inertia: tuple[Ranged(0, 1e4, "kg*m^2"), Ranged(0, 1e4, "kg*m^2"), Ranged(0, 1e4, "kg*m^2"),
+                   Ranged(-1e4, 1e4, "kg*m^2"), Ranged(-1e4, 1e4, "kg*m^2"), Ranged(-1e4, 1e4, "kg*m^2")] = (0.0,) * 6
+    viscous: Ranged(0, 1e6, "N*m*s/rad", base=NonNegativeFinite) = 0.0
+    coulomb: Ranged(0, 1e6, "N*m", base=NonNegativeFinite) = 0.0
+    motor_inertia: Ranged(0, 1e4, "kg*m^2", base=NonNegativeFinite) = 0.0
+    gear_ratio: Ranged(-1e4, 1e4, "") = 1.0
+    qlim: tuple[Ranged(-100, 100, "rad or m"), Ranged(-100, 100, "rad or m")] | None = None
     name: str = Field(default="", max_length=100)
 
 
 class Payload(Section):
-    """A payload of ``mass`` (kg) concentrated at the centre of mass of ``link`` (1-based, default the last)."""
+    """A payload of ``mass`` (kg, 0 to 1e4) concentrated at the centre of mass of ``link`` (1-based, default the
+    last)."""
 
-    mass: NonNegativeFinite
+    mass: Ranged(0, 1e4, "kg", base=NonNegativeFinite)
     link: int | None = Field(default=None, ge=1)
 
 
 class Limits(Section):
     """Actuator and motion limits of a robot, per joint (or one value for all): ``velocity`` (rad/s),
     ``acceleration`` (rad/s^2) -- a trajectory exceeding them is refused -- and ``torque`` (N*m), which the
-    simulated commands are checked against.  Position limits come from the robot data (``qlim``)."""
+    simulated commands are checked against; each 1e-6 to 1e6.  Position limits come from the robot data
+    (``qlim``)."""
 
-    velocity: PerJoint | None = None
-    acceleration: PerJoint | None = None
-    torque: PerJoint | None = None
+    velocity: RangedPerJoint(1e-6, 1e6, "rad/s") | None = None
+    acceleration: RangedPerJoint(1e-6, 1e6, "rad/s^2") | None = None
+    torque: RangedPerJoint(1e-6, 1e6, "N*m") | None = None
 
     @field_validator("velocity", "acceleration", "torque")
     @classmethod
@@ -132,8 +171,9 @@ class Limits(Section):
 class RobotPlantSpec(Section):
     """A serial manipulator: exactly one of ``robot`` (built-in name), ``dh`` (table) or ``urdf`` (path).
 
-    ``parameters`` override a built-in robot's named parameters (see ``designkit model NAME``);
-    ``convention`` and ``gravity`` (m/s^2, base frame) describe a DH table; ``base_link`` and
+    ``parameters`` override a built-in robot's named parameters (see ``designkit model NAME``; each
+    within 1e6 of its SI unit, the model checks its sign); ``convention`` and ``gravity`` (m/s^2,
+    base frame, each component within 100) describe a DH table; ``base_link`` and
     ``tip_link`` select the chain of a URDF (``gravity`` also applies).  ``friction`` includes the
     joints' viscous and Coulomb friction in the dynamics; ``motor_inertia`` the reflected rotor
     inertia; ``payload`` a mass carried by a link (part of the true plant); ``limits`` the joints'
@@ -142,10 +182,12 @@ class RobotPlantSpec(Section):
 
     kind: Literal["robot"]
     robot: str | None = Field(default=None, max_length=100)
-    parameters: dict[str, Finite] = Field(default_factory=dict)
+    parameters: dict[str, Ranged(PARAMETER.low, PARAMETER.high, PARAMETER.unit, base=Finite)] = Field(
+        default_factory=dict)
     dh: list[DHLink] | None = Field(default=None, min_length=1, max_length=64)
     convention: Literal["standard", "modified"] = "standard"
-    gravity: tuple[Finite, Finite, Finite] = (0.0, 0.0, -9.81)
+    gravity: tuple[Ranged(-100, 100, "m/s^2"), Ranged(-100, 100, "m/s^2"), Ranged(-100, 100, "m/s^2")] = (
+        0.0, 0.0, -9.81)
     urdf: str | None = Field(default=None, max_length=4096)
     base_link: str | None = None
     tip_link: str | None = None
@@ -170,28 +212,37 @@ class RobotPlantSpec(Section):
             raise ValueError("base_link: only applies to a urdf file")
         if self.robot is not None and tuple(self.gravity) != (0.0, 0.0, -9.81):
             raise ValueError("gravity: a built-in robot sets its gravity with parameters.g")
+        if self.uncertainty is not None:
+            self.uncertainty.check_ranges(RobotPlantSpec)
         return self
 
 
 class ElasticJointPlantSpec(Section):
     """The ROBEL elastic joint (notes appendix B); omitted parameters take the built-in defaults.
 
-    ``J1`` rotor inertia (kg*m^2), ``tau1`` motor time constant (s), ``Km`` motor static gain
-    ((rad/s)/input), ``KR`` stiffness (N*m/rad), ``R1``, ``R2`` transmission ratios, ``J2`` link
-    inertia (kg*m^2), ``tau2`` link time constant (s), ``mgl`` gravity torque amplitude (N*m).
+    ``J1`` rotor inertia (kg*m^2, 1e-9 to 1e4), ``tau1`` motor time constant (s, 1e-6 to 1e6), ``Km``
+    motor static gain ((rad/s)/input, 1e-6 to 1e6), ``KR`` stiffness (N*m/rad, 1e-6 to 1e9), ``R1``,
+    ``R2`` transmission ratios (1e-4 to 1e4), ``J2`` link inertia (kg*m^2, 1e-9 to 1e4), ``tau2``
+    link time constant (s, 1e-6 to 1e6), ``mgl`` gravity torque amplitude (N*m, 0 to 1e6).
     """
 
     kind: Literal["elastic_joint"]
-    J1: PositiveFinite | None = None
-    tau1: PositiveFinite | None = None
-    Km: PositiveFinite | None = None
-    KR: PositiveFinite | None = None
-    R1: PositiveFinite | None = None
-    R2: PositiveFinite | None = None
-    J2: PositiveFinite | None = None
-    tau2: PositiveFinite | None = None
-    mgl: NonNegativeFinite | None = None
+    J1: Ranged(1e-9, 1e4, "kg*m^2", base=PositiveFinite) | None = None
+    tau1: Ranged(1e-6, 1e6, "s", base=PositiveFinite) | None = None
+    Km: Ranged(1e-6, 1e6, "(rad/s)/input", base=PositiveFinite) | None = None
+    KR: Ranged(1e-6, 1e9, "N*m/rad", base=PositiveFinite) | None = None
+    R1: Ranged(1e-4, 1e4, "", base=PositiveFinite) | None = None
+    R2: Ranged(1e-4, 1e4, "", base=PositiveFinite) | None = None
+    J2: Ranged(1e-9, 1e4, "kg*m^2", base=PositiveFinite) | None = None
+    tau2: Ranged(1e-6, 1e6, "s", base=PositiveFinite) | None = None
+    mgl: Ranged(0, 1e6, "N*m", base=NonNegativeFinite) | None = None
     uncertainty: Uncertainty | None = None
+
+    @model_validator(mode="after")
+    def _uncertainty_in_range(self) -> ElasticJointPlantSpec:
+        if self.uncertainty is not None:
+            self.uncertainty.check_ranges(ElasticJointPlantSpec)
+        return self
 
     def given(self) -> dict[str, Any]:
         """The parameters the spec sets (the others keep their defaults)."""

@@ -4,6 +4,12 @@ Values that can differ between joints (``simulation.step``, element levels, pert
 trajectory amplitudes, anti-windup levels) are :data:`~designkit.spec.fields.PerJoint`: one
 number for every joint or a list with one per joint; the list length is checked against the
 plant when it is built (``simulation.step: needs one value per joint (2), got 3``).
+
+Every number has a physically meaningful range declared next to its field
+(:mod:`designkit.spec.ranges`; the README's table lists them): durations and instants 1e-6 s to
+1e9 s (trajectory moves from 1e-3 s), ``dt`` 1e-9 s to 1e3 s, ``delay`` and ``sampling_period`` 0
+or 1e-6 s to 1e3 s, positions and amplitudes within 100 rad (or m), torque levels 1e-6 to 1e6 N*m,
+seeds 0 to 2**32 - 1.
 """
 
 from __future__ import annotations
@@ -12,7 +18,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from designkit.spec.fields import Finite, NonNegativeFinite, PerJoint, PositiveFinite, Section
+from designkit.spec.fields import NonNegativeFinite, PositiveFinite, Section
+from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
 
 __all__ = [
     "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "Noise", "Nonlinearity",
@@ -21,20 +28,16 @@ __all__ = [
 ]
 
 
-def _positive(value: float | list[float]) -> float | list[float]:
-    values = value if isinstance(value, list) else [value]
-    for v in values:
-        if v <= 0:
-            raise ValueError(f"must be positive, got {v:g}")
-    return value
-
-
-def _non_negative(value: float | list[float]) -> float | list[float]:
-    values = value if isinstance(value, list) else [value]
-    for v in values:
-        if v < 0:
-            raise ValueError(f"must be non-negative, got {v:g}")
-    return value
+_TIME = (DURATION.low, DURATION.high, DURATION.unit)
+"""A duration or an instant: 1e-6 s to 1e9 s."""
+_MOVE = (1e-3, DURATION.high, "s")
+"""The duration of a reference move: 1e-3 s to 1e9 s."""
+_TORQUE = (TORQUE.low, TORQUE.high, TORQUE.unit)
+"""A torque level of an element or a limit: 1e-6 to 1e6 N*m."""
+_POSITION = (-100.0, 100.0, "rad or m")
+"""A joint position, displacement or amplitude: within 100 rad (or m for a prismatic joint)."""
+_HOLD = (1e-6, 1e3, "s")
+"""A delay or a sampling period when not 0: 1e-6 s to 1e3 s."""
 
 
 # ----------------------------------------------------------------------------- requirements
@@ -43,61 +46,53 @@ def _non_negative(value: float | list[float]) -> float | list[float]:
 class Requirements(Section):
     """Time-domain requirements, each holding for every joint.
 
-    overshoot (%), settling_time (s, to the ``settling_band``), rise_time (s, 10-90 %),
-    steady_state_error (same unit as the positions, absolute), tracking_error (largest |q - qD| over
-    the run, rad), max_control (peak |u| of every input, N*m, one value or one per input).
+    overshoot (%, 0 to 1000), settling_time (s, to the ``settling_band``; 1e-6 to 1e9), rise_time
+    (s, 10-90 %; 1e-6 to 1e9), steady_state_error (same unit as the positions, absolute; 0 to 100),
+    tracking_error (largest |q - qD| over the run, rad or m; above 0, at most 100), max_control
+    (peak |u| of every input, N*m, one value or one per input; 1e-6 to 1e6), settling_band (a
+    fraction of the step, strictly between 0 and 1).
     """
 
-    overshoot: NonNegativeFinite | None = None
-    settling_time: PositiveFinite | None = None
-    rise_time: PositiveFinite | None = None
-    steady_state_error: NonNegativeFinite | None = None
-    tracking_error: PositiveFinite | None = None
-    max_control: PerJoint | None = None
-    settling_band: float = Field(default=0.02, gt=0, lt=1)
-
-    _check_control = field_validator("max_control")(lambda v: v if v is None else _positive(v))
+    overshoot: Ranged(0, 1000, "%", base=NonNegativeFinite) | None = None
+    settling_time: Ranged(*_TIME, base=PositiveFinite) | None = None
+    rise_time: Ranged(*_TIME, base=PositiveFinite) | None = None
+    steady_state_error: Ranged(0, 100, "rad or m", base=NonNegativeFinite) | None = None
+    tracking_error: Ranged(0, 100, "rad or m", low_open=True, base=PositiveFinite) | None = None
+    max_control: RangedPerJoint(*_TORQUE) | None = None
+    settling_band: Ranged(0, 1, "", low_open=True, high_open=True) = 0.02
 
 
 # ----------------------------------------------------------------------------- nonlinear elements
 
 
 class Saturation(Section):
-    """``u_applied = clip(u, -limit, limit)`` (N*m, per input)."""
+    """``u_applied = clip(u, -limit, limit)`` (N*m, per input; 1e-6 to 1e6)."""
 
     kind: Literal["saturation"]
-    limit: PerJoint
-
-    _check = field_validator("limit")(_positive)
+    limit: RangedPerJoint(*_TORQUE)
 
 
 class DeadZone(Section):
-    """Zero output for ``|u| <= width``, ``u - sign(u) width`` beyond (N*m, per input)."""
+    """Zero output for ``|u| <= width``, ``u - sign(u) width`` beyond (N*m, per input; 1e-6 to 1e6)."""
 
     kind: Literal["dead_zone"]
-    width: PerJoint
-
-    _check = field_validator("width")(_positive)
+    width: RangedPerJoint(*_TORQUE)
 
 
 class Relay(Section):
-    """Relay with hysteresis: ``+amplitude`` once ``u > hysteresis``, ``-amplitude`` once ``u < -hysteresis``."""
+    """Relay with hysteresis: ``+amplitude`` once ``u > hysteresis``, ``-amplitude`` once ``u < -hysteresis``
+    (N*m, per input; amplitude 1e-6 to 1e6, hysteresis 0 to 1e6)."""
 
     kind: Literal["relay"]
-    amplitude: PerJoint
-    hysteresis: PerJoint = 0.0
-
-    _check_amplitude = field_validator("amplitude")(_positive)
-    _check_hysteresis = field_validator("hysteresis")(_non_negative)
+    amplitude: RangedPerJoint(*_TORQUE)
+    hysteresis: RangedPerJoint(0, TORQUE.high, TORQUE.unit) = 0.0
 
 
 class Quantizer(Section):
-    """``u_applied = step * round(u / step)`` (N*m, per input)."""
+    """``u_applied = step * round(u / step)`` (N*m, per input; 1e-6 to 1e6)."""
 
     kind: Literal["quantizer"]
-    step: PerJoint
-
-    _check = field_validator("step")(_positive)
+    step: RangedPerJoint(*_TORQUE)
 
 
 Nonlinearity = Annotated[Saturation | DeadZone | Relay | Quantizer, Field(discriminator="kind")]
@@ -106,75 +101,74 @@ Nonlinearity = Annotated[Saturation | DeadZone | Relay | Quantizer, Field(discri
 class Noise(Section):
     """White Gaussian measurement noise on every measured state, seeded.
 
-    ``std`` is one standard deviation for every state or a list with one per state (state units).
+    ``std`` is one standard deviation for every state or a list with one per state (state units, 0 to
+    100); ``seed`` the generator's seed (0 to 2**32 - 1).
     """
 
-    std: PerJoint = 0.0
-    seed: int = Field(default=0, ge=0)
-
-    _check = field_validator("std")(_non_negative)
+    std: RangedPerJoint(0, 100, "state units") = 0.0
+    seed: RangedInt(0, 2**32 - 1) = 0
 
 
 class Perturbation(Section):
-    """Input-equivalent perturbation (the plant's disturbances, e.g. ``xi`` N*m): ``value`` from ``time`` on."""
+    """Input-equivalent perturbation (the plant's disturbances, e.g. ``xi`` N*m, within 1e6): ``value`` from
+    ``time`` on (s, 0 to 1e9)."""
 
-    value: PerJoint
-    time: NonNegativeFinite = 0.0
+    value: RangedPerJoint(-TORQUE.high, TORQUE.high, TORQUE.unit)
+    time: Ranged(0, DURATION.high, "s", base=NonNegativeFinite) = 0.0
 
 
 class AntiWindup(Section):
     """Limit the integral action.
 
-    ``threshold``: integrate only while ``|x1 - xD| <= value``; ``saturation``: clamp ``|K3 * integral| <= value``.
+    ``threshold``: integrate only while ``|x1 - xD| <= value`` (rad or m); ``saturation``: clamp
+    ``|K3 * integral| <= value`` (N*m); 1e-6 to 1e6 either way.
     """
 
     kind: Literal["threshold", "saturation"]
-    value: PerJoint
-
-    _check = field_validator("value")(_positive)
+    value: RangedPerJoint(1e-6, 1e6, "rad or m (threshold), N*m (saturation)")
 
 
 # ----------------------------------------------------------------------------- trajectories
 
 
 class QuinticTrajectory(Section):
-    """Rest-to-rest quintic move of ``amplitude`` (rad, per joint) over ``duration`` (s)."""
+    """Rest-to-rest quintic move of ``amplitude`` (rad, per joint; within 100) over ``duration`` (s, 1e-3 to 1e9)."""
 
     kind: Literal["quintic"]
-    amplitude: PerJoint = 1.0
-    duration: PositiveFinite = 1.0
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    duration: Ranged(*_MOVE, base=PositiveFinite) = 1.0
 
 
 class SineTrajectory(Section):
-    """``amplitude sin(2 pi frequency t)`` about the initial position (rad per joint, Hz)."""
+    """``amplitude sin(2 pi frequency t)`` about the initial position (rad per joint, within 100; Hz, 1e-6 to 1e3)."""
 
     kind: Literal["sine"]
-    amplitude: PerJoint = 1.0
-    frequency: PositiveFinite = 1.0
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    frequency: Ranged(1e-6, 1e3, "Hz", base=PositiveFinite) = 1.0
 
 
 class TrapezoidalTrajectory(Section):
     """Trapezoidal-velocity move of ``amplitude`` (per joint), all joints synchronised.
 
-    Within ``max_velocity`` (rad/s) and ``max_acceleration`` (rad/s^2) per joint: minimum time
-    when ``duration`` is omitted; with ``duration`` (s), the lowest acceleration that meets it.
+    Within ``max_velocity`` (rad/s, 1e-6 to 1e6) and ``max_acceleration`` (rad/s^2, 1e-6 to 1e6) per
+    joint: minimum time when ``duration`` is omitted; with ``duration`` (s, 1e-3 to 1e9), the lowest
+    acceleration that meets it.  ``amplitude`` within 100 rad (or m).
     """
 
     kind: Literal["trapezoidal"]
-    amplitude: PerJoint = 1.0
-    max_velocity: PerJoint
-    max_acceleration: PerJoint
-    duration: PositiveFinite | None = None
-
-    _check = field_validator("max_velocity", "max_acceleration")(_positive)
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    max_velocity: RangedPerJoint(1e-6, 1e6, "rad/s")
+    max_acceleration: RangedPerJoint(1e-6, 1e6, "rad/s^2")
+    duration: Ranged(*_MOVE, base=PositiveFinite) | None = None
 
 
 class ViaPointsTrajectory(Section):
-    """A C2 path from rest through displacements ``points`` (per joint) at ``times`` (s), at rest at the last."""
+    """A C2 path from rest through displacements ``points`` (per joint, within 100 rad or m) at ``times``
+    (s, 1e-3 to 1e9, strictly increasing), at rest at the last."""
 
     kind: Literal["via_points"]
-    times: list[PositiveFinite] = Field(min_length=1, max_length=1000)
-    points: list[PerJoint] = Field(min_length=1, max_length=1000)
+    times: list[Ranged(*_MOVE, base=PositiveFinite)] = Field(min_length=1, max_length=1000)
+    points: list[RangedPerJoint(*_POSITION)] = Field(min_length=1, max_length=1000)
 
     @model_validator(mode="after")
     def _aligned(self) -> ViaPointsTrajectory:
@@ -185,22 +179,22 @@ class ViaPointsTrajectory(Section):
         return self
 
 
-Point3 = Annotated[list[Finite], Field(min_length=3, max_length=3)]
-"""A point or direction in the robot's base frame (m): ``[x, y, z]``."""
+Point3 = Annotated[list[Ranged(-100, 100, "m")], Field(min_length=3, max_length=3)]
+"""A point or direction in the robot's base frame (m): ``[x, y, z]``, each within 100."""
 
 
 class LineTrajectory(Section):
     """Straight line of the end effector, rest to rest with a quintic time law, orientation held.
 
     From the end effector's position at ``simulation.initial_position`` to ``to`` (m, base frame),
-    or by ``displacement`` (m), over ``duration`` (s).  For task-space controllers (resolved
+    or by ``displacement`` (m), over ``duration`` (s, 1e-3 to 1e9).  For task-space controllers (resolved
     acceleration).
     """
 
     kind: Literal["line"]
     to: Point3 | None = None
     displacement: Point3 | None = None
-    duration: PositiveFinite = 1.0
+    duration: Ranged(*_MOVE, base=PositiveFinite) = 1.0
 
     @model_validator(mode="after")
     def _one_end(self) -> LineTrajectory:
@@ -214,15 +208,15 @@ class CircleTrajectory(Section):
     rest to rest with a quintic time law on the angle, orientation held.
 
     It starts at the end effector's position at ``simulation.initial_position`` (the radius is its
-    distance from the axis) and turns ``turns`` times (positive: counter-clockwise about ``normal``)
-    over ``duration`` (s).  For task-space controllers (resolved acceleration).
+    distance from the axis) and turns ``turns`` times (positive: counter-clockwise about ``normal``;
+    within 100) over ``duration`` (s, 1e-3 to 1e9).  For task-space controllers (resolved acceleration).
     """
 
     kind: Literal["circle"]
     center: Point3
     normal: Point3 = Field(default_factory=lambda: [0.0, 0.0, 1.0])
-    turns: Finite = 1.0
-    duration: PositiveFinite = 1.0
+    turns: Ranged(-100, 100, "turns") = 1.0
+    duration: Ranged(*_MOVE, base=PositiveFinite) = 1.0
 
     @field_validator("normal")
     @classmethod
@@ -242,18 +236,19 @@ JOINT_TRAJECTORIES = ("quintic", "sine", "trapezoidal", "via_points")
 class Simulation(Section):
     """Closed-loop simulation scenario on the full nonlinear plant.
 
-    duration (s), step (commanded displacement of each joint from its initial position, rad),
-    initial_position (rad per joint, default 0), dt (integration step, s; default from the
-    fastest closed-loop pole), delay (s), sampling_period (s, 0 = continuous).
+    duration (s, 1e-6 to 1e9), step (commanded displacement of each joint from its initial position,
+    rad, within 100), initial_position (rad per joint, within 100; default 0), dt (integration step,
+    s, 1e-9 to 1e3; default from the fastest closed-loop pole), delay (s, 0 or 1e-6 to 1e3),
+    sampling_period (s, 0 = continuous, else 1e-6 to 1e3).
     """
 
-    duration: PositiveFinite | None = None
-    step: PerJoint = 1.0
-    initial_position: PerJoint | None = None
-    dt: PositiveFinite | None = None
+    duration: Ranged(*_TIME, base=PositiveFinite) | None = None
+    step: RangedPerJoint(*_POSITION) = 1.0
+    initial_position: RangedPerJoint(*_POSITION) | None = None
+    dt: Ranged(1e-9, 1e3, "s", base=PositiveFinite) | None = None
     nonlinearity: Nonlinearity | None = None
-    delay: NonNegativeFinite = 0.0
-    sampling_period: NonNegativeFinite = 0.0
+    delay: Ranged(*_HOLD, zero=True, base=NonNegativeFinite) = 0.0
+    sampling_period: Ranged(*_HOLD, zero=True, base=NonNegativeFinite) = 0.0
     noise: Noise | None = None
     perturbation: Perturbation | None = None
     anti_windup: AntiWindup | None = None
@@ -264,14 +259,15 @@ class Numerics(Section):
     """How the numbers are computed (not what is designed).
 
     integrator: ``rk4`` (fixed step, default) or ``cvodes`` (CasADi's variable-step BDF, for
-    stiff plants such as the elastic joint) with tolerances ``rtol``, ``atol``; ``compile``:
+    stiff plants such as the elastic joint) with tolerances ``rtol`` (1e-14 to 0.1) and ``atol``
+    (1e-20 to 1, state units); ``compile``:
     ``auto`` (compile the simulation step to C when it is cached or pays for itself), ``always``
     or ``never``; ``solver``: the cvxpy solver of the LMIs and LPs.
     """
 
     integrator: Literal["rk4", "cvodes"] = "rk4"
     compile: Literal["auto", "always", "never"] = "auto"
-    rtol: float = Field(default=1e-8, gt=0, lt=1)
-    atol: float = Field(default=1e-10, gt=0, lt=1)
+    rtol: Ranged(1e-14, 0.1, "") = 1e-8
+    atol: Ranged(1e-20, 1.0, "state units") = 1e-10
     solver: Literal["CLARABEL", "SCS"] = "CLARABEL"
 

@@ -278,8 +278,22 @@ def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearS
     return closed, input_loop, point
 
 
-def with_closed_loop(design: Design, law: Law, r0: Any, *, z0: Any = None) -> Design:
+def with_closed_loop(design: Design, law: Law, r0: Any, *, z0: Any = None, field: str = "controller",
+                     hint: str = "") -> Design:
     """``design`` with ``closed_loop``, ``input_loop`` and ``operating_point`` from :func:`linearize`
-    (``z0``: Newton's starting guess, see there)."""
-    closed, input_loop, point = linearize(design.plant, law, r0, z0=z0)
+    (``z0``: Newton's starting guess, see there).
+
+    Raises
+    ------
+    SpecError
+        On ``field`` (the spec key that sets the operating point), followed by ``hint``, when the
+        closed loop has no equilibrium there: nothing can be linearized or certified.
+    """
+    from designkit.errors import SpecError
+
+    try:
+        closed, input_loop, point = linearize(design.plant, law, r0, z0=z0)
+    except ValueError as exc:
+        raise SpecError(field, f"{exc} at the operating point: the control law is not defined there or the "
+                               f"closed loop has a pole at 0{hint}") from None
     return dataclasses.replace(design, closed_loop=closed, input_loop=input_loop, operating_point=point)

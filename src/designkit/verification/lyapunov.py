@@ -66,6 +66,7 @@ __all__ = [
     "common_lyapunov",
     "coordinates",
     "cross_check",
+    "equation_certificate",
     "lyapunov_equation",
     "lyapunov_lmi",
     "recheck",
@@ -142,6 +143,20 @@ def _common_check(name: str, As: Sequence[np.ndarray], eps: float, solver: str, 
             detail=f"undecided: solver status {sol.status!r} (no {what} certified; not a proof that none exists)",
             certificate=cert,
         )
+    if not rc.ok and sol.t is not None and sol.t < eps and len(As) == 1:
+        eq = equation_certificate(As[0])
+        if eq is not None:  # a stiff loop: the relative margin is small, the certificate is not
+            cert["equation_route"] = eq
+            return Check(
+                name=name, passed=True, target="P > 0 and A'P + PA < 0 beyond their rounding bounds",
+                achieved=eq["min_eig_Q_minus_bound"], margin=eq["min_eig_Q_minus_bound"], unit="1 (Q = I scale)",
+                detail=f"{what} found by the Lyapunov equation and re-checked with rounding bounds: the LMI's relative "
+                f"margin t* = {sol.t:.3g} is below eps = {eps:g} because the loop's poles span "
+                f"{eq['pole_spread']:.3g} (stiff), but Ab'Pb + Pb Ab = -Q with min eig Q = {eq['min_eig_Q']:.4g} "
+                f"(rounding bound {eq['Q_bound']:.2g}) and min eig Pb = {eq['min_eig_P']:.3g} "
+                f"(rounding bound {eq['P_bound']:.2g})",
+                certificate=cert,
+            )
     if not rc.ok and sol.t is not None and sol.t < eps:
         return Check(
             name=name, passed=None, target=target, achieved=sol.t, margin=sol.t - eps, unit="1 (normalised)",
@@ -163,6 +178,56 @@ def _common_check(name: str, As: Sequence[np.ndarray], eps: float, solver: str, 
         f"max eig(Ah'Pb + Pb Ah) = {max(float(e[-1]) for e in rc.eig_lyap):.3g}",
         certificate=cert,
     )
+
+
+ROUNDING_SAFETY = 10.0
+"""Factor on the first-order rounding bounds of :func:`equation_certificate`."""
+
+
+def equation_certificate(A: np.ndarray) -> dict[str, float] | None:
+    """A Lyapunov certificate for a stiff ``A`` from the Lyapunov equation, judged by rounding bounds.
+
+    The LMI's margin is relative to ``||A||``: a loop whose poles span six decades can never reach
+    ``eps = 1e-6`` there, although it is plainly stable.  Here ``Pb`` solves
+    ``Ab'Pb + Pb Ab = -I`` in balanced coordinates (Bartels-Stewart), and the computed
+    ``Q = -(Ab'Pb + Pb Ab)`` and ``Pb`` are accepted when their smallest eigenvalues exceed what
+    rounding can move: for the product, ``2 n u || |Ab| ||_2 || |Pb| ||_2`` (the elementwise error
+    bound of a floating-point matrix product), and for a symmetric eigenvalue ``n u ||M||_2``
+    (backward stability of ``eigh``), both times :data:`ROUNDING_SAFETY` (``u`` the unit
+    roundoff).  Then ``x'Pb x`` is a Lyapunov function of the exact ``Ab`` (so of ``A``) whatever
+    the rounding in its computation.
+
+    Returns
+    -------
+    dict or None
+        The figures of the certificate, or None when the bounds are not met (or ``A`` is not Hurwitz).
+    """
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    c = coordinates([A])
+    Ab = A * c.d[None, :] / c.d[:, None]
+    try:
+        Pb = scipy.linalg.solve_continuous_lyapunov(Ab.T, -np.eye(n))
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    Pb = 0.5 * (Pb + Pb.T)
+    if not np.all(np.isfinite(Pb)):
+        return None
+    u = np.finfo(float).eps / 2
+    Q = -(Ab.T @ Pb + Pb @ Ab)
+    Q = 0.5 * (Q + Q.T)
+    normP = float(np.linalg.norm(Pb, 2))
+    q_bound = ROUNDING_SAFETY * (2 * n * u * float(np.linalg.norm(np.abs(Ab), 2)) * float(np.linalg.norm(np.abs(Pb), 2))
+                                 + n * u * float(np.linalg.norm(Q, 2)))
+    p_bound = ROUNDING_SAFETY * n * u * normP
+    eig_Q, eig_P = float(np.linalg.eigvalsh(Q)[0]), float(np.linalg.eigvalsh(Pb)[0])
+    if eig_Q - q_bound <= 0 or eig_P - p_bound <= 0:
+        return None
+    lam = np.abs(np.linalg.eigvals(A))
+    return {"min_eig_Q": eig_Q, "Q_bound": q_bound, "min_eig_Q_minus_bound": eig_Q - q_bound,
+            "min_eig_P": eig_P, "P_bound": p_bound, "norm_P": normP,
+            "pole_spread": float(np.max(lam) / max(np.min(lam), 1e-300)),
+            "P": (Pb / c.d[None, :] / c.d[:, None]).tolist()}
 
 
 def lyapunov_lmi(A: np.ndarray, *, eps: float = LMI_EPS, solver: str = "CLARABEL") -> Check:

@@ -74,7 +74,10 @@ def _task_error_matrices(plant: Any, law: Any, motion: Any, t: np.ndarray, R: np
     out = np.empty((t.size, m, m))
     for k in range(t.size):
         Ek, Edk = Es[:, k * m:(k + 1) * m], Eds[:, k * m:(k + 1) * m]
-        out[k] = np.linalg.solve(Ek.T, Edk.T).T
+        try:
+            out[k] = np.linalg.solve(Ek.T, Edk.T).T
+        except np.linalg.LinAlgError:  # a singular configuration: no task-error coordinates there
+            out[k] = np.nan
     return out
 
 
@@ -153,6 +156,11 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
                   f"the decoupled form e'' + K2 e' + K1 e = 0 with the requested poles (largest deviation "
                   f"{worst:.2g} of its largest entry, t = {t[k_worst]:.3g} s; eigenvalues within "
                   f"{np.max(moves):.2g} 1/s)")
+    elif not np.isfinite(worst):
+        singular = t[~np.array([np.all(np.isfinite(Ak)) for Ak in A])]
+        detail = (f"the {space} is not defined at {singular.size} of {t.size} instants along the path "
+                  f"(first at t = {singular[0]:.3g} s): the task Jacobian is singular there (or the loop "
+                  "is not finite), so the error dynamics cannot have the requested poles")
     else:
         detail = (f"the {space} leaves the decoupled form with the requested poles along the path: deviation "
                   f"{worst:.3g} of its largest entry (tolerance {ERROR_DYNAMICS_REL:g}) at t = {t[k_worst]:.3g} s, "
@@ -160,7 +168,8 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
     if plant is not None and plant is not design.plant:
         At = (_task_error_matrices(plant, law, motion, t, R) if motion is not None
               else _path_jacobians(plant, law, t, R, n))
-        shifts = np.array([pole_move(np.linalg.eigvals(Ak), requested) for Ak in At])
+        shifts = np.array([pole_move(np.linalg.eigvals(Ak), requested) if np.all(np.isfinite(Ak)) else np.inf
+                           for Ak in At])
         k = int(np.argmax(shifts))
         cert["true_plant"] = {"largest_pole_move_1_per_s": float(shifts[k]), "at_s": float(t[k])}
         detail += (f"; on the true plant the model mismatch moves them by up to {shifts[k]:.3g} 1/s "
@@ -168,7 +177,9 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
     damping = design.extra.get("damping")
     if damping:  # damped least squares trades the exact poles for bounded joint accelerations: evidence only
         k = int(np.argmax(moves))
-        unstable = [float(t[j]) for j, Ak in enumerate(A) if np.max(np.linalg.eigvals(Ak).real) > 0]
+        defined = np.array([bool(np.all(np.isfinite(Ak))) for Ak in A])
+        unstable = [float(t[j]) for j, Ak in enumerate(A) if defined[j] and np.max(np.linalg.eigvals(Ak).real) > 0]
+        k = int(np.argmax(np.where(defined, moves, -1.0))) if defined.any() else 0
         cert["damped_least_squares"] = {"damping": damping, "largest_pole_move_1_per_s": float(moves[k]),
                                         "at_s": float(t[k]), "unstable_instants_s": unstable}
         detail = (f"damped least squares (lambda = {damping:g}) moves the task-error poles by up to {moves[k]:.3g} 1/s "
@@ -176,6 +187,8 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
                   + (f"; the frozen linearization has a pole in the right half plane at {len(unstable)} of {t.size} "
                      f"instants ({unstable[0]:.3g}-{unstable[-1]:.3g} s): the damping gives up the error dynamics "
                      "near the singularity, the simulation shows what that costs" if unstable else "")
+                  + (f"; the task-error coordinates are undefined at {int((~defined).sum())} instants on the "
+                     f"singularity (first at t = {t[~defined][0]:.3g} s)" if not defined.all() else "")
                   + " [informational]")
         return Check(name="error_poles", passed=True, target="reported (damped least squares)",
                      achieved=float(moves[k]), margin=None, unit="1/s", detail=detail, certificate=cert,

@@ -1,0 +1,222 @@
+"""The Python API's exception family: every user mistake is a DesignkitError (issue 8, part 5), and the
+CLI answers every DesignkitError with exit 2 and one line, anything else with exit 3."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+import designkit as dk
+from designkit import errors
+from designkit.cli import main
+from tests.problems import POSSPEED_GAINS, POSSPEED_YAML
+
+
+@pytest.fixture(scope="module")
+def loaded() -> dk.LoadedSpec:
+    return dk.parse_spec(POSSPEED_YAML)
+
+
+@pytest.fixture(scope="module")
+def result(loaded) -> dk.PipelineResult:
+    return dk.run(loaded, simulate=False)
+
+
+def test_one_family_with_its_attributes():
+    for cls in (dk.SpecError, dk.ModelError, dk.OutputError):
+        assert issubclass(cls, dk.DesignkitError)
+    spec_error = dk.SpecError("plant.Km", "must be positive")
+    assert (spec_error.path, spec_error.message, str(spec_error)) == ("plant.Km", "must be positive",
+                                                                        "plant.Km: must be positive")
+    model_error = dk.ModelError("links[1].mass", "must be positive")
+    assert (model_error.field, model_error.path, model_error.message) == ("links[1].mass", "links[1].mass",
+                                                                          "must be positive")
+    assert dk.ModelError("no such robot").path == ""
+    output_error = dk.OutputError("out_dir", "x is a file")
+    assert isinstance(output_error, OSError) and str(output_error) == "out_dir: x is a file"
+    for name in ("DesignkitError", "SpecError", "ModelError", "OutputError"):
+        assert name in errors.__doc__ and name in dk.__all__
+
+
+@pytest.mark.parametrize("path", [None, 123, 1.5, b"specs/posspeed-link.yaml", ["specs/posspeed-link.yaml"]])
+def test_load_spec_refuses_what_is_not_a_path(path):
+    with pytest.raises(dk.SpecError) as info:
+        dk.load_spec(path)
+    assert info.value.path == "path"
+    assert f"got {type(path).__name__}" in info.value.message
+    assert "\n" not in str(info.value)
+
+
+def test_load_spec_takes_str_and_pathlike(tmp_path):
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(POSSPEED_YAML)
+    assert dk.load_spec(str(spec)).spec == dk.load_spec(spec).spec
+
+
+@pytest.mark.parametrize(("path", "words"), [("missing.yaml", "not found"), (".", "cannot read")])
+def test_load_spec_of_a_missing_or_unreadable_file(tmp_path, path, words):
+    with pytest.raises(dk.SpecError, match=words):
+        dk.load_spec(tmp_path / path)
+
+
+def test_load_spec_of_a_file_that_is_not_utf8(tmp_path):
+    spec = tmp_path / "spec.yaml"
+    spec.write_bytes(POSSPEED_YAML.encode() + b"# \xff\xfe\n")
+    with pytest.raises(dk.SpecError, match="not UTF-8"):
+        dk.load_spec(spec)
+
+
+@pytest.mark.parametrize("text", [None, 123, ["name: x"], {"name": "x"}])
+def test_parse_spec_refuses_what_is_not_text(text):
+    with pytest.raises(dk.SpecError) as info:
+        dk.parse_spec(text)
+    assert info.value.path == "text"
+    assert f"got {type(text).__name__}" in info.value.message
+
+
+def test_parse_spec_decodes_utf8_bytes():
+    from_bytes = dk.parse_spec(POSSPEED_YAML.encode())
+    from_text = dk.parse_spec(POSSPEED_YAML)
+    assert from_bytes.spec == from_text.spec and from_bytes.sha256 == from_text.sha256
+    with pytest.raises(dk.SpecError, match="not UTF-8"):
+        dk.parse_spec(b"name: \xff")
+
+
+def test_run_accepts_a_spec_and_gives_the_same_gains(loaded, result):
+    from_spec = dk.run(loaded.spec, simulate=False)
+    assert dict(from_spec.design.gains) == pytest.approx(POSSPEED_GAINS)
+    assert dict(from_spec.design.gains) == dict(result.design.gains)
+    assert [c.status for c in from_spec.checks] == [c.status for c in result.checks]
+    canonical = json.dumps(loaded.spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+    assert from_spec.loaded.text == canonical
+    assert from_spec.loaded.sha256 == hashlib.sha256(canonical.encode()).hexdigest()
+    assert from_spec.loaded.path == "<Spec>"
+    assert dk.parse_spec(from_spec.loaded.text).spec == loaded.spec  # the canonical JSON is a valid spec
+
+
+@pytest.mark.parametrize("argument", [None, 42, "specs/posspeed-link.yaml", Path("specs/posspeed-link.yaml"),
+                                      {"name": "x"}])
+def test_run_refuses_anything_else(argument):
+    with pytest.raises(dk.DesignkitError) as info:
+        dk.run(argument)
+    assert isinstance(info.value, dk.SpecError) and info.value.path == "loaded"
+    assert f"got {type(argument).__name__}" in info.value.message
+
+
+def test_write_report_to_an_existing_file_is_refused_and_nothing_overwritten(result, tmp_path):
+    blocker = tmp_path / "report-here"
+    blocker.write_text("precious")
+    for out in (blocker, blocker / "below"):
+        with pytest.raises(dk.OutputError) as info:
+            dk.write_report(result, out)
+        assert info.value.path == "out_dir"
+        assert "is an existing file" in info.value.message and str(blocker) in info.value.message
+    assert blocker.read_text() == "precious"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report-here"]
+
+
+def test_write_report_where_the_report_folder_is_a_file(result, tmp_path):
+    (tmp_path / result.loaded.spec.name).write_text("precious")
+    with pytest.raises(dk.OutputError, match="is an existing file"):
+        dk.write_report(result, tmp_path)
+    assert (tmp_path / result.loaded.spec.name).read_text() == "precious"
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_write_report_into_a_read_only_folder(result, tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        with pytest.raises(dk.OutputError, match="no permission"):
+            dk.write_report(result, locked / "reports")
+    finally:
+        locked.chmod(0o700)
+    assert list(locked.iterdir()) == []
+
+
+@pytest.mark.parametrize("argument", [None, 1, "result"])
+def test_write_report_refuses_what_is_not_a_result(tmp_path, argument):
+    with pytest.raises(dk.SpecError) as info:
+        dk.write_report(argument, tmp_path)
+    assert info.value.path == "result"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_report_refuses_an_out_dir_that_is_not_a_path(result):
+    with pytest.raises(dk.OutputError, match="got NoneType"):
+        dk.write_report(result, None)
+
+
+# ------------------------------------------------------------------------------------ the CLI's mapping
+
+
+def _spec(tmp_path: Path) -> Path:
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(POSSPEED_YAML)
+    return spec
+
+
+def test_synth_out_an_existing_file_is_exit_2_naming_out(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("precious")
+    code = main(["synth", str(_spec(tmp_path)), "--out", str(blocker)])
+    captured = capsys.readouterr()
+    assert code == 2
+    assert captured.err.startswith("designkit: error: --out: cannot write the report: ")
+    assert "is an existing file" in captured.err and captured.err.count("\n") == 1
+    assert blocker.read_text() == "precious"
+
+
+@pytest.mark.parametrize(
+    "error",
+    [dk.ModelError("plant.dh[1].mass", "must be positive"), dk.SpecError("plant.Km", "bad\nsecond line"),
+     dk.OutputError("--out", "cannot"), dk.DesignkitError("a bare one")],
+    ids=["model", "multiline", "output", "base"],
+)
+def test_every_designkit_error_is_exit_2_on_one_line(tmp_path, capsys, monkeypatch, error):
+    import designkit.pipeline
+
+    def fail(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(designkit.pipeline, "run", fail)
+    code = main(["verify", str(_spec(tmp_path))])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.startswith("designkit: error: ") and err.count("\n") == 1 and "Traceback" not in err
+    assert str(error).split("\n")[0] in err
+
+
+def test_anything_else_stays_an_internal_error(tmp_path, capsys, monkeypatch):
+    import designkit.pipeline
+
+    def fail(*args, **kwargs):
+        raise KeyError("a bug")
+
+    monkeypatch.setattr(designkit.pipeline, "run", fail)
+    code = main(["verify", str(_spec(tmp_path))])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert err.startswith("designkit: internal error: KeyError")
+
+
+def test_simulate_csv_into_a_folder_is_exit_2_naming_csv(tmp_path, capsys):
+    code = main(["simulate", str(_spec(tmp_path)), "--csv", str(tmp_path)])
+    captured = capsys.readouterr()
+    assert code == 2
+    assert captured.err.startswith("designkit: error: --csv: cannot write ") and captured.err.count("\n") == 1
+
+
+def test_a_per_input_requirement_of_the_wrong_length_names_its_key(tmp_path, capsys):
+    # found by the fuzzer (issue 8): ten torque limits for a one-input link crashed the time-domain check
+    from tests.cli_input import assert_bad_input
+
+    text = ("name: lengths\nplant: {kind: link, Km: 2.0, tau: 0.5}\n"
+            "controller: {kind: pid_servo, poles: [-4, -5, -20], zero: -3}\n"
+            "requirements: {max_control: [1, 2, 3]}\n")
+    assert_bad_input(tmp_path, capsys, text, "requirements.max_control: needs one value per input (1), got 3")
