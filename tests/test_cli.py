@@ -25,6 +25,7 @@ EXPECTED_EXIT = {
     "posspeed-perturbation": 0,
     "tracking-pid": 0,
     "requirements-driven": 0,
+    "stiff-link": 0,
     "infeasible-requirements": 1,
     "simnog-decentralized-pid": 0,
     "puma560-computed-torque": 0,
