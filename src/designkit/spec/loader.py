@@ -340,9 +340,10 @@ def _construct(loader: Any, node: Node, path: str = "") -> object:
     return out
 
 
-def _load_yaml(text: str) -> object:
+def _load_yaml(text: str, loader_class: type[_Bounds] | None = None) -> object:
     """Parse YAML text within the limits of the spec format; ``SpecError`` for anything else."""
-    loader = _BoundedLoader(text)
+    loader_class = loader_class or _BoundedLoader
+    loader = loader_class(text)
     try:
         node = loader.get_single_node()
         return None if node is None else _construct(loader, node)
@@ -350,6 +351,11 @@ def _load_yaml(text: str) -> object:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        if "maximum nesting depth" in problem and loader_class is not _PyLoader:
+            # libyaml >= 0.2.5 (PyYAML 6.0.4's wheels) scans a flow collection ahead and stops at its own
+            # 1000-level limit before the composer knows where it is: the pure-Python scanner refuses the
+            # same text at MAX_DEPTH levels with the key path (cheap: it stops there)
+            return _load_yaml(text, _PyLoader)
         raise SpecError("", shorten(f"malformed YAML: {where}{problem}", MAX_MESSAGE)) from None
     finally:
         loader.dispose()
