@@ -74,7 +74,12 @@ def test_pipeline_runs_offered_checks_and_their_evidence_rechecks(kind, plant, r
     assert result.verified, [(c.name, c.detail) for c in result.failed]
     files = write_report(result, tmp_path)
     html = files.html.read_text().replace("<wbr>", "")
-    assert all(name in html for name in names)
+    from html import unescape
+
+    from designkit.report.model import check_label
+
+    text = unescape(html)
+    assert all(check_label(name) in text for name in names), [n for n in names if check_label(n) not in text]
     assert files.pdf.read_bytes().startswith(b"%PDF")
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -69,6 +70,22 @@ class PipelineResult:
     def failed(self) -> tuple[Check, ...]:
         """Required checks that failed or are undecided."""
         return not_passed(self.checks)
+
+    @cached_property
+    def _report_model(self) -> Any:
+        from designkit.report.model import build_report_model
+
+        return build_report_model(self)
+
+    def _repr_html_(self) -> str:
+        """Jupyter view of the run, laid out from the same report model as the HTML and PDF reports
+        (verdict, why it failed, requirement compliance, every check, figures inline as SVG).
+
+        The report model (with its figures) is built on first display and kept for later ones.
+        """
+        from designkit.report.notebook import result_html
+
+        return result_html(self._report_model)
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json``."""

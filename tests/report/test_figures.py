@@ -13,7 +13,7 @@ def test_figures_are_valid_and_deterministic(servo_result):
     second = fg.design_figures(servo_result)
     assert [f.filename for f in first] == [
         "fig-pole-zero.svg", "fig-linear-response.svg", "fig-simulation.svg",
-        "fig-robustness-robust_stability.svg", "fig-loop-bode.svg",
+        "fig-robustness-robust_stability.svg", "fig-loop-bode.svg", "fig-loop-sensitivity.svg",
     ]
     for a, b in zip(first, second, strict=True):
         assert_svg(a.svg)
@@ -24,7 +24,8 @@ def test_figures_are_valid_and_deterministic(servo_result):
 def test_optional_figures_are_left_out_without_data():
     res = make_result(checks=(), simulate=False)
     figs = fg.design_figures(res)
-    assert [f.filename for f in figs] == ["fig-pole-zero.svg", "fig-linear-response.svg", "fig-loop-bode.svg"]
+    assert [f.filename for f in figs] == ["fig-pole-zero.svg", "fig-linear-response.svg", "fig-loop-bode.svg",
+                                          "fig-loop-sensitivity.svg"]
     assert fg.simulation_figure(res) is None
 
 

@@ -34,3 +34,14 @@ def test_one_axis_is_a_line():
 
 def test_no_heat_map_without_grid_data():
     assert heatmap.robustness_svg("x", {"P": [[1.0]]}) is None
+
+
+def test_zero_contour_is_drawn_and_tagged_only_when_the_margin_changes_sign():
+    from designkit.report.svg import svg_keys
+
+    mixed = svg_keys(heatmap.robustness_svg("r", _grid([[1.0, -2.0, 3.0], [4.0, 5.0, -6.0]])))
+    positive = svg_keys(heatmap.robustness_svg("r", _grid([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])))
+    assert "zero-contour" in mixed and "margin-map" in mixed
+    assert "zero-contour" not in positive and "margin-map" in positive
+    assert set(svg_keys(heatmap.robustness_svg("r", _grid([0.5, -0.1], axes=(("m2", [1.0, 2.0]),))))) == {
+        "margin-line", "zero-line"}

@@ -53,12 +53,51 @@ def test_html_is_self_contained(servo_html):
         assert href is None or href.startswith(("#", "data:image/png;base64,")), (tag, href[:40])
 
 
-def test_every_check_name_and_status_is_shown(servo_result, servo_html):
+def test_every_check_label_and_status_is_shown(servo_result, servo_model, servo_html):
+    from designkit.report.model import check_label
+
     for check in servo_result.checks:
-        row = re.search(rf'<tr class="check check-{check.status}">.*?</tr>', servo_html, flags=re.S)
+        pattern = rf'<tr class="check check-{check.status}[^"]*" id="check-{re.escape(check.name)}">.*?</tr>'
+        row = re.search(pattern, servo_html, flags=re.S)
         assert row is not None
-        assert check.name.replace("_", "_<wbr>") in servo_html
-    assert servo_html.count('<span class="badge PASS">PASS</span>') == len(servo_result.checks)
+        assert check_label(check.name) in row.group(0)
+    # once in the compliance (or informational) table and once in the appendix
+    assert servo_html.count('<span class="badge PASS">PASS</span>') == 2 * len(servo_result.checks)
+
+
+def test_compliance_table_comes_before_the_details(servo_model, servo_html):
+    compliance = servo_html.index('id="compliance"')
+    assert compliance < servo_html.index('id="design"') < servo_html.index('id="certificates"')
+    table = re.search(r'<table class="compliance stack">.*?</table>', servo_html, flags=re.S).group(0)
+    for row in servo_model.compliance:
+        assert f"<td data-label=\"Requirement\">{row.label}</td>" in table
+        if row.evidence:
+            assert f'<a href="#{row.evidence}">' in table
+            assert f'<figure id="{row.evidence}">' in servo_html
+    informational = re.search(r'<table class="compliance informational stack">.*?</table>', servo_html, flags=re.S)
+    assert informational is not None and '<span class="tag">informational</span>' in informational.group(0)
+    assert "loop_margins" not in table  # the informational check is not among the verdict-deciding ones
+
+
+def test_why_it_failed_comes_first_in_a_failed_report(failed_result):
+    html = render_html(build_report_model(failed_result))
+    why = html.index('id="why"')
+    assert why < html.index('id="compliance"') < html.index('id="certificates"')
+    section = html[why:html.index('id="compliance"')]
+    assert "Overshoot" in section and "≤ 10 %" in section and "Cause:" in section and "Fix:" in section
+
+
+def test_equations_are_mathml(servo_model, servo_html):
+    assert servo_html.count('<math display="block"') == sum(bool(e.nodes) for e in servo_model.equations)
+    assert "<msub><mi>K</mi><mrow><mn>1</mn></mrow></msub>" in servo_html
+    assert "<mfrac>" in servo_html
+
+
+def test_table_of_contents_links_every_section(servo_model, servo_html):
+    nav = re.search(r'<nav class="toc".*?</nav>', servo_html, flags=re.S).group(0)
+    for section in servo_model.contents:
+        assert f'<a href="#{section.anchor}">{section.title}</a>' in nav
+        assert f'id="{section.anchor}"' in servo_html
 
 
 @pytest.mark.parametrize(("fixture", "kind", "verdict"), [
@@ -79,10 +118,11 @@ def test_verdict_banner_matches_result(request, fixture, kind, verdict):
 
 
 def test_all_sections_figures_and_certificates_present(servo_model, servo_html):
-    for anchor in ("summary", "checks", "design", "figures", "simulation", "spec", "versions"):
+    for anchor in ("summary", "compliance", "certificates", "design", "figures", "simulation", "spec", "provenance",
+                   "glossary"):
         assert f'id="{anchor}"' in servo_html
-    assert servo_html.count("<figure>") == len(servo_model.figures) == 5
-    assert servo_html.count("<svg") == 5
+    assert servo_html.count("<figure id=") == len(servo_model.figures) >= 5
+    assert servo_html.count("<svg") == len(servo_model.figures)
     assert '<table class="matrix">' in servo_html and "<td>0.1235</td>" in servo_html
     assert '<table class="cert-table">' in servo_html
     assert servo_model.spec_sha256 in servo_html
@@ -104,8 +144,10 @@ def test_user_text_is_escaped():
         "used by the report tests.", "used by <script>alert(1)</script> & tests.")
     html = render_html(build_report_model(make_result(text, checks=checks, simulate=False)))
     assert "<img" not in html and "<script" not in html
-    assert html.count("<b>") == html.count("<figcaption>")  # only the template's own bold captions
-    assert "<td class=\"num\">&lt;b&gt;</td>" in html
+    template_bold = (html.count("<b>Cause:</b>") + html.count("<b>Fix:</b>") + html.count("<b>Contents</b>")
+                     + html.count("<figcaption><b>") + html.count('<td data-label="Requirement"><b>'))
+    assert html.count("<b>") == template_bold  # only the template's own bold text
+    assert "<td data-label=\"Achieved\" class=\"num\">&lt;b&gt;</td>" in html
     assert "&lt;img src=x onerror=alert(1)&gt;" in html
     assert "&lt;script&gt;alert(1)&lt;/script&gt; &amp; tests" in html
     assert "FAILED: &lt;img" in html

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -51,6 +52,7 @@ def test_no_checks_is_vacuously_verified_and_says_so():
     assert result.verified and model.verdict == "VERIFIED"
     assert "No checks were run" in model.verdict_summary
     assert model.checks == () and model.simulation == ()
+    assert model.compliance == () and model.why == ()
 
 
 def test_spec_echo_hash_path_and_versions(servo_result, servo_model):
@@ -134,12 +136,162 @@ def test_tracking_model(tracking_result):
 
 def test_simulation_settings_rows(servo_model):
     rows = {r.name: r.value for r in servo_model.simulation}
-    assert rows["kind"] == "step"
-    assert rows["integrator"] == "linear (test fixture)"
-    assert rows["samples"].startswith("801 over")
+    assert rows["Kind"] == "step"
+    assert rows["Integrator"] == "linear (test fixture)"
+    assert rows["Samples"] == "801 over 0 s to 4 s"
+    assert rows["Time step"] == "0.005 s"  # labelled in words, with its unit
+    assert rows["Measurement noise"] == "none"  # None in words, not Python
+
+
+def test_simulation_settings_of_nested_values_are_words():
+    from designkit.report.model import _simulation_rows
+    from designkit.simulation.result import SimulationResult
+
+    result = make_result()
+    sim = result.simulation
+    settings = {"dt": 0.001, "ignored": (), "plant": {"Km": 2.0, "tau": 0.5}, "duration_source": "simulation.duration",
+                "controller": {"kind": "pid_servo", "gains": {"K1": 50.0}, "anti_windup": {}}, "fastest_rate": 20.0}
+    sim = SimulationResult(time=sim.time, reference=sim.reference, state=sim.state,
+                           controller_state=sim.controller_state, u_command=sim.u_command, u_applied=sim.u_applied,
+                           perturbation=sim.perturbation, measured=sim.measured, kind="step", settings=settings)
+    rows = {r.name: r.value for r in _simulation_rows(sim, result.design.plant)}
+    assert rows["Time step"] == "0.001 s"
+    assert rows["Spec settings ignored"] == "none"
+    assert rows["Simulated plant"] == "Km = 2 (rad/s)/(N·m), τ = 0.5 s"
+    assert rows["Duration taken from"] == "simulation › duration"
+    assert rows["Controller"] == "kind = pid_servo, gains = (K1 = 50), anti windup = none"
+    assert rows["Fastest closed-loop rate |p|max"] == "20 1/s"
+    for value in rows.values():
+        assert "{" not in value and "[" not in value and "_" not in value.replace("pid_servo", "")
+
+
+def test_why_it_failed_rows_have_the_shortfall(failed_result):
+    model = build_report_model(failed_result)
+    (row,) = model.why
+    assert (row.check, row.label, row.status) == ("overshoot", "Overshoot", "FAIL")
+    assert row.requirement == "≤ 10 %"
+    # the fixture's check says 4.2 % achieved with margin +5.8 even though it failed: no shortfall to report
+    assert row.shortfall == "not measurable" and row.shortfall_percent == ""
+    assert model.why_note
+    assert build_report_model(make_result()).why == ()  # a verified design has no such section
+
+
+def test_why_row_shortfall_absolute_and_percent():
+    checks = (Check("max_control", False, target="<= 5 N*m", achieved=13386.2, margin=-13381.2, unit="N*m"),
+              Check("overshoot", None, target="<= 5 %", achieved=None, margin=None, unit="%"))
+    model = build_report_model(make_result(checks=checks, simulate=False, margins=False))
+    rows = {r.check: r for r in model.why}
+    assert rows["max_control"].requirement == "≤ 5 N·m"
+    assert rows["max_control"].achieved == "1.339e+04 N·m"
+    assert rows["max_control"].shortfall == "1.338e+04 N·m"
+    assert rows["max_control"].shortfall_percent == "267624 %"
+    assert rows["overshoot"].status == "UNDECIDED" and rows["overshoot"].shortfall == "not decided"
+    assert [s.anchor for s in model.contents][:2] == ["why", "compliance"]
+
+
+def test_compliance_and_informational_rows(servo_result, servo_model):
+    required = [c.name for c in servo_result.checks if c.required]
+    assert [r.name for r in servo_model.compliance] == required
+    assert [r.name for r in servo_model.informational] == [c.name for c in servo_result.checks if not c.required]
+    over = next(r for r in servo_model.compliance if r.name == "overshoot")
+    assert (over.label, over.limit, over.achieved, over.margin, over.margin_percent) == (
+        "Overshoot", "≤ 10 %", "4.2 %", "+5.8 %", "+58 %")
+    for row in (*servo_model.compliance, *servo_model.informational):
+        assert "_" not in row.label
+        if row.evidence:
+            assert row.evidence in servo_model.figure_anchors
+            fig = servo_model.figures[servo_model.figure_anchors.index(row.evidence)]
+            assert row.name in fig.evidence and row.evidence_title == fig.title
+
+
+def test_figure_anchors_follow_the_file_names(servo_model):
+    stems = tuple(f.filename.rsplit(".", 1)[0] for f in servo_model.figures)
+    assert all(s.startswith("fig-") for s in stems)  # the file names carry the prefix: anchors are the stems
+    assert servo_model.figure_anchors == stems
+
+
+def test_glossary_explains_the_words_of_the_tables(servo_model):
+    terms = dict(servo_model.glossary)
+    for word in ("margin", "scaled", "informational", "UNDECIDED"):
+        assert terms[word]
+
+
+def test_equations_are_typeset_from_the_formulas(servo_model):
+    from designkit.report.model import MathFrac
+
+    labels = [e.label for e in servo_model.equations]
+    assert labels[:3] == ["Plant", "Plant", "Control law"]
+    assert "Closed loop" in labels and labels[-1] == "Loop transfer (Bode plot)"
+    loop = servo_model.equations[-1]
+    assert "1 + L(s) = 0" in loop.note and "u = −C(s)" in loop.note
+    assert isinstance(loop.nodes[-1], MathFrac)  # Km (K2 s² + K1 s + K3) / (s² (τ s + 1))
+    law = servo_model.equations[2]
+    k1 = law.nodes[3]
+    assert (k1.kind, k1.text, k1.sub) == ("mi", "K", "1")
+    assert law.nodes[2].text == "−"  # a minus sign, as in the law: u = −K1 (x1 − xD) ...
+
+
+def test_equation_splits_words_and_subscripts():
+    from designkit.report.model import equation
+
+    text = "L(s) = ((Km K2 − 1) s² + Km K1 s + Km K3) / (s² (τ s + 1))  (x2/Km cancels the link damping)"
+    eq = equation("Loop", text)
+    assert eq.note == "x2/Km cancels the link damping"
+    assert eq.nodes[0].text == "L"
+    frac = eq.nodes[-1]
+    assert frac.den[0].text == "s" and frac.den[0].sup == "2"
+    eq = equation("Law", "u_i = -K1_i (q_i - qD_i) on joint i's simplified link; the margins are measured")
+    assert eq.note.startswith("on joint i's simplified link")
+    assert eq.nodes[0].sub == "i" and eq.nodes[3].sub == "1,i"
+    assert equation("Plant", "2 joints: puma560").nodes == ()  # words only
+
+
+def test_provenance_rows_are_in_the_model(servo_result):
+    rows = (("designkit", "9.9"), ("command line", "designkit synth x.yaml"))
+    model = build_report_model(servo_result, provenance=rows)
+    assert model.provenance == rows
 
 
 def test_failed_check_detail_kept_verbatim():
     result = make_result(checks=servo_checks(overshoot_passed=False, detail_extra=" <b>&"), simulate=False)
     model = build_report_model(result)
     assert model.checks[2].detail.endswith(" <b>&")  # escaping is the renderers' job
+
+
+def test_a_failed_diagnosis_is_reported_not_raised(failed_result, monkeypatch):
+    import designkit.report.model as model
+
+    def broken(result):
+        raise ValueError("no simulation")
+
+    monkeypatch.setattr(model, "_diagnose", lambda result: model_diagnose(broken, result))
+    built = build_report_model(failed_result)
+    assert [r.check for r in built.why] == ["overshoot"]
+    assert "diagnosis of this run failed (ValueError: no simulation)" in built.why_note
+    assert built.divergence == "" and built.linear_vs_nonlinear == ()
+
+
+def model_diagnose(fn, result):
+    try:
+        return fn(result)
+    except Exception as exc:  # noqa: BLE001 - mirrors model._diagnose
+        return exc
+
+
+def test_findings_of_the_diagnosis_fill_cause_and_fix(failed_result, monkeypatch):
+    import designkit.report.model as model
+
+    finding = SimpleNamespace(check="overshoot", status="FAIL", requirement="overshoot <= 10 %", achieved="4.2 %",
+                              shortfall="", shortfall_percent="", cause="the loop diverges", fix="add anti-windup")
+    diagnosis = SimpleNamespace(findings=(finding,), diverged=True, divergence="The loop diverges at t = 1 s.",
+                                limit_cycle=SimpleNamespace(sentence="x1 oscillates at 3 rad/s."),
+                                linear_vs_nonlinear=(SimpleNamespace(metric="overshoot", unit="%", linear="4.5",
+                                                                     nonlinear=""),))
+    monkeypatch.setattr(model, "_diagnose", lambda result: diagnosis)
+    built = build_report_model(failed_result)
+    (row,) = built.why
+    assert (row.cause, row.fix) == ("the loop diverges", "add anti-windup")
+    assert built.divergence == "The loop diverges at t = 1 s."
+    assert built.limit_cycle == "x1 oscillates at 3 rad/s."
+    assert [(m.metric, m.linear, m.nonlinear) for m in built.linear_vs_nonlinear] == [("overshoot", "4.5", "undefined")]
+    assert [s.anchor for s in built.contents][:3] == ["why", "compliance", "engineering"]

@@ -124,7 +124,8 @@ def test_pdf_embeds_typst_default_fonts_only(servo_pdf):
     """Compiled with system fonts ignored: every font is one Typst ships, embedded."""
     fonts = set(re.findall(rb"/BaseFont\s*/(?:[A-Z]{6}\+)?([\w-]+)", servo_pdf))
     assert fonts
-    assert all(f.startswith((b"LibertinusSerif", b"DejaVuSansMono", b"NewCM")) for f in fonts), fonts
+    # Typst's own fonts, plus DejaVu Sans of the figures' SVG text (shipped with matplotlib, see svg.py)
+    assert all(f.startswith((b"LibertinusSerif", b"DejaVuSans", b"NewCM")) for f in fonts), fonts
     assert servo_pdf.count(b"/FontFile") >= len({f.split(b"-Identity")[0] for f in fonts})
 
 
@@ -145,13 +146,55 @@ def test_pdf_text_shows_verdict_and_checks(servo_result, servo_pdf, tmp_path):
     path.write_bytes(servo_pdf)
     text = subprocess.run(["pdftotext", "-layout", str(path), "-"], capture_output=True, text=True,
                           check=True).stdout
+    from designkit.report.model import check_label
+
     assert "VERIFIED" in text
+    raw = subprocess.run(["pdftotext", str(path), "-"], capture_output=True, text=True, check=True).stdout
+    flat = " ".join(raw.split())
     for check in servo_result.checks:
-        assert check.name.replace("_", "") in text.replace("_", "").replace("\u200b", "")
+        assert check_label(check.name) in flat
     assert "Spec SHA-256" in text
+    assert flat.index("Requirement compliance") < flat.index("Appendix A: check details")
 
 
 def test_compile_errors_are_reported_with_the_typst_diagnostic(monkeypatch, servo_model):
     monkeypatch.setattr("designkit.report.pdf.render_typst", lambda model: "#let x = (\n")
     with pytest.raises(RuntimeError, match="typst could not compile"):
         compile_pdf(servo_model)
+
+
+def test_typst_source_layout(servo_model):
+    source = render_typst(servo_model)
+    assert "#outline(" in source  # table of contents
+    assert "sticky: true" in source  # headings kept with what follows them
+    # every table opens with a header row that Typst repeats on each page
+    assert source.count("table(") <= source.count("table.header(") + source.count("table.cell(") + 40
+    for anchor in servo_model.figure_anchors:
+        assert f"<{anchor}>" in source
+    for row in servo_model.compliance:
+        if row.evidence:
+            assert f'#link(label("{row.evidence}"))' in source
+
+
+def test_pdf_metadata_lists_the_versions_of_the_versions_table(servo_model, servo_pdf):
+    keywords = re.search(rb"/Keywords\s*\((.*?)\)\s*/", servo_pdf, flags=re.S)
+    if keywords is None:  # XMP only
+        keywords = re.search(rb"<pdf:Keywords>(.*?)</pdf:Keywords>", servo_pdf, flags=re.S)
+    assert keywords is not None
+    text = keywords.group(1).decode("latin-1")
+    for name, version in servo_model.versions:
+        assert f"{name} {version}" in text
+
+
+@pytest.mark.parametrize("formula", [
+    "u = -K1 (x1 - xD) - K2 x2 - K3 ∫(x1 - xD) dt + K3 K4 xD",
+    "x1/xD = Km((K1 + K3 K4) s + K3) / (τ s³ + (1 + Km K2) s² + Km K1 s + Km K3)",
+    "u = M̂(q) (q̈D + K1 (qD − q) + K2 (q̇D − q̇)) + ĥ(q, q̇)",
+    "a* = qD'' + K1 (qD - q) + K2 (qD' - qd);  u = M^(q) a* + h^(q, qd) (model's Newton-Euler at a*)",
+    "weird = #x $y$ \\ [a] {b} \"q\" <l> @r ) ( // ⁻¹ ᵀ",
+])
+def test_typeset_formulas_compile(formula):
+    from designkit.report.model import equation
+    from designkit.report.pdf import typst_math
+
+    typst.compile(str(typst_math(equation("f", formula))).encode("utf-8"))

@@ -142,7 +142,7 @@ def test_stiff_example_through_the_cli_is_designed_and_verified(tmp_path, capsys
     x = (4 / 3 - np.sqrt((4 / 3) ** 2 - 4 / 3 * 0.02)) / (2 / 3)
     assert settling["achieved"] == pytest.approx(-np.log(x), abs=2e-3)
     html = (out / "spec" / "report.html").read_text()
-    assert "integrator_choice" in html and "chosen: cvodes because the fastest pole" in html
+    assert "Integrator choice" in html and "chosen: cvodes because the fastest pole" in html
 
 
 def test_a_design_with_one_fast_pole_that_meets_its_requirements_is_verified(tmp_path, capsys):

@@ -189,8 +189,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
         q0 = np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
     design = Design(
         kind=KIND, plant=model, gains=gains, poles=tuple(p for pair in pairs for p in pair), reference="trajectory",
-        formulas=("a* = qD'' + K1 (qD - q) + K2 (qD' - qd);  u = M^(q) a* + h^(q, qd) (model's Newton-Euler at a*)",
-                  "e'' + K2 e' + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = -(p1 + p2)"),
+        formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
+                  "u = M̂(q) a* + ĥ(q, q̇)  (the model's Newton–Euler at a*)",
+                  "ë + K2 ė + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)"),
         notes=tuple(notes),
         extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"]},
     )

@@ -135,10 +135,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
                      "checks run on the true plant.")
     design = Design(
         kind=KIND, plant=model, gains=gains, poles=tuple(p for pair in pairs for p in pair), reference="trajectory",
-        formulas=("a* = xD'' + K1 (xD - x) + K2 (xD' - J qd);  qdd* = J^-1 (a* - Jdot qd)"
-                  + (f" [damped: (J^T J + {damping:g}^2 I)^-1 J^T]" if damping else ""),
-                  "u = M^(q) qdd* + h^(q, qd) (model's Newton-Euler at qdd*)",
-                  "e'' + K2 e' + K1 e = 0 per task coordinate on an exact model:  K1 = p1 p2,  K2 = -(p1 + p2)"),
+        formulas=("a* = ẍD + K1 (xD − x) + K2 (ẋD − J q̇)",
+                  ("q̈* = (Jᵀ J + λ² I)⁻¹ Jᵀ (a* − J̇ q̇)  (damped least squares, λ = " + f"{damping:g})"
+                   if damping else "q̈* = J⁻¹ (a* − J̇ q̇)"),
+                  "u = M̂(q) q̈* + ĥ(q, q̇)  (the model's Newton–Euler at q̈*)",
+                  "ë + K2 ė + K1 e = 0 per task coordinate on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)"),
         notes=tuple(notes),
         extra={"task": {**space.to_json(), "rows": list(space.rows),
                         "orientation_target": list(space.orientation_target)},

@@ -40,6 +40,64 @@ class CertificateEntry:
     text: str = ""
     matrix: tuple[tuple[str, ...], ...] | None = None
     header: tuple[str, ...] | None = None
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.label:
+            object.__setattr__(self, "label", human_key(self.key))
+
+
+# Certificate and settings keys in words (the report never shows an internal key with underscores or dots).
+LABELS: dict[str, str] = {
+    "P": "P", "Pb": "balanced P (Pb)", "D": "balancing scale D", "t": "decay-rate bound t", "eps": "strictness ε",
+    "A_scale": "scale of A", "eig_P": "eigenvalues of P", "eig_Pb": "eigenvalues of Pb",
+    "eig_AtP_PA": "eigenvalues of AᵀP + PA", "eig_A": "eigenvalues of A", "solver": "solver",
+    "solver_status": "solver status", "normalisation": "normalisation", "status": "status",
+    "poles": "achieved poles", "requested_poles": "requested poles", "pole_scale": "pole scale",
+    "pole_matching": "pole matching", "coefficient_error": "coefficient error", "tolerance": "tolerance",
+    "zeros": "achieved zeros", "requested_zeros": "requested zeros", "zero_matching": "zero matching",
+    "infinite_zeros_discarded": "zeros at infinity discarded", "dc_gain": "DC gain", "dc_gain_error": "DC-gain error",
+    "reference_transfer": "reference transfer", "disturbance_zeros": "zeros of the disturbance transfer",
+    "error_over_tolerance": "error over tolerance",
+    "coefficients": "characteristic coefficients", "labels": "coefficient names", "frequency_scale": "frequency scale",
+    "first_column": "Routh first column", "first_column_tolerance": "first-column tolerance",
+    "right_half_plane_roots": "right-half-plane roots", "decided_by_shift": "decided by a shift", "shift": "shift",
+    "plant": "plant", "coefficient_conditions": "coefficient conditions", "conditions": "conditions",
+    "loops": "loops", "convention": "sign convention", "input": "plant input",
+    "gain_crossover_rad_s": "gain crossover (rad/s)", "phase_crossover_rad_s": "phase crossover (rad/s)",
+    "phase_margin_deg": "phase margin (deg)", "gain_margin": "gain margin", "modulus_margin": "modulus margin",
+    "kind": "kind", "amplitude": "amplitude", "duration": "duration", "settling_band": "settling band",
+    "overshoot_percent": "overshoot (%)", "rise_time": "rise time", "settling_time": "settling time",
+    "steady_state_error": "steady-state error", "max_tracking_error": "largest tracking error",
+    "peak_u_command": "peak commanded |u|", "peak_u_applied": "peak applied |u|",
+    "steady_state_window": "steady-state window", "parameters": "parameters", "A": "A", "b": "b",
+    "box": "parameter box", "vertices": "corners", "points_per_axis": "points per axis",
+    "lattice_plants": "lattice plants", "random_samples": "random samples", "seed": "seed", "plants": "plants",
+    "stable": "stable", "unstable": "unstable", "undecided": "undecided", "worst_abscissa": "slowest pole (Re)",
+    "failing_points": "failing points", "grid": "robustness grid", "condition": "condition", "value": "value",
+    "threshold": "threshold", "margin": "margin", "unit": "unit", "requested": "requested", "achieved": "achieved",
+    "error": "error", "largest_deviation_from_decoupled_form": "largest deviation from the decoupled form",
+}
+_UNIT_STAR = re.compile(r"(?<=[A-Za-z)])\*(?=[A-Za-z(])")
+_SUFFIX_UNITS = {"rad_s": " (rad/s)", "deg": " (deg)", "percent": " (%)", "rad": " (rad)", "s": " (s)"}
+
+
+def human_key(key: str) -> str:
+    """An internal key (``gain_crossover_rad_s``, ``loops.0.gain_margin``) in words, without dots or underscores."""
+    parts = []
+    for seg in str(key).split("."):
+        if seg in LABELS:
+            parts.append(LABELS[seg])
+        elif seg.isdigit():
+            parts.append(f"no. {int(seg) + 1}")
+        else:
+            words, suffix = seg, ""
+            for tail, text in _SUFFIX_UNITS.items():
+                if words.endswith("_" + tail) and len(words) > len(tail) + 1:
+                    words, suffix = words[: -len(tail) - 1], text
+                    break
+            parts.append(re.sub(r"\s+", " ", words.replace("_", " ")).strip() + suffix)
+    return " › ".join(p for p in parts if p)
 
 
 def fmt_number(value: Any, digits: int = 4) -> str:
@@ -53,7 +111,9 @@ def fmt_number(value: Any, digits: int = 4) -> str:
         if abs(z.imag) <= 1e-12 * max(1.0, abs(z)):
             return fmt_number(z.real, digits)
         sign = "+" if z.imag >= 0 else "-"
-        return f"{fmt_number(z.real, digits)} {sign} {fmt_number(abs(z.imag), digits)}j"
+        if abs(z.real) <= 1e-12 * abs(z):
+            return f"{'-' if z.imag < 0 else ''}j{fmt_number(abs(z.imag), digits)}"
+        return f"{fmt_number(z.real, digits)} {sign} j{fmt_number(abs(z.imag), digits)}"
     if isinstance(value, int | float | np.integer | np.floating):
         x = float(value)
         if math.isnan(x):
@@ -131,26 +191,50 @@ def format_matrix(value: Any, digits: int = 4) -> tuple[tuple[str, ...], ...]:
 
 
 def fmt_compact(value: Any, digits: int = 4) -> str:
-    """``value`` on one line: numbers as :func:`fmt_number`, mappings as ``{k: v}``, sequences as
-    ``[...]`` (cut after :data:`_LIST_MAX` items, with their count)."""
+    """``value`` on one line, in words rather than Python notation.
+
+    Numbers as :func:`fmt_number`; an empty mapping or sequence as ``"none"``; a mapping as
+    ``"name = value, ..."`` with its keys in words (:func:`human_key`), nested ones in parentheses;
+    a sequence as its items separated by commas (rows of a nested sequence in parentheses,
+    separated by ``;``), cut after :data:`_LIST_MAX` items with their count.
+    """
     if isinstance(value, str):
-        return value
-    if _is_number(value) or isinstance(value, complex | bool) or value is None:
+        return _UNIT_STAR.sub("·", value)  # units written one way: N·m, not N*m
+    if isinstance(value, bool | np.bool_):
+        return "yes" if value else "no"
+    if _is_number(value) or isinstance(value, complex | np.complexfloating) or value is None:
         return fmt_number(value, digits)
     if isinstance(value, Mapping):
-        return "{" + ", ".join(f"{k}: {fmt_compact(v, digits)}" for k, v in value.items()) + "}"
+        if not value:
+            return "none"
+        items = []
+        for k, v in value.items():
+            text = fmt_compact(v, digits)
+            if isinstance(v, Mapping) and v or (isinstance(v, Sequence | np.ndarray) and not isinstance(v, str)
+                                                and len(v) > 1):
+                text = f"({text})"
+            items.append(f"{human_key(str(k))} = {text}")
+        return ", ".join(items)
     if isinstance(value, Sequence | np.ndarray):
-        items = [fmt_compact(v, digits) for v in value]
-        return "[" + ", ".join(_elide(items, _LIST_MAX)) + (f"] ({len(items)} items)" if len(items) > _LIST_MAX
-                                                          else "]")
+        seq = list(value)
+        if not seq:
+            return "none"
+        nested = [v for v in seq if isinstance(v, Sequence | np.ndarray | Mapping) and not isinstance(v, str)]
+        if len(seq) == 1 and nested:
+            return fmt_compact(seq[0], digits)
+        items = [fmt_compact(v, digits) for v in seq]
+        if nested:
+            items = [f"({t})" for t in items]
+        shown = _elide(items, _LIST_MAX)
+        return ("; " if nested else ", ").join(shown) + (f" ({len(items)} items)" if len(items) > _LIST_MAX else "")
     return str(value)
 
 
 def render_certificate(certificate: Mapping[str, Any], digits: int = 4) -> tuple[CertificateEntry, ...]:
     """A certificate as compact entries: matrices as string grids, everything else as one line.
 
-    Nested mappings are flattened to dotted keys; a ``grid`` entry (robustness sweep) is
-    summarised (its full data goes to a figure).
+    Nested mappings are flattened to dotted keys (``key``; ``label`` says it in words); a ``grid``
+    entry (robustness sweep) is summarised (its full data goes to a figure).
     """
     out: list[CertificateEntry] = []
 
@@ -174,7 +258,7 @@ def render_certificate(certificate: Mapping[str, Any], digits: int = 4) -> tuple
             rows = tuple(tuple(cell(rec.get(h)) for h in header) for rec in shown)
             if len(value) > len(shown):
                 rows += (tuple("…" for _ in header),)
-            out.append(CertificateEntry(prefix, f"{len(value)} rows", rows, tuple(str(h) for h in header)))
+            out.append(CertificateEntry(prefix, f"{len(value)} rows", rows, tuple(human_key(str(h)) for h in header)))
         elif _COMPLEX_KEYS.search(leaf) and _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None):
             z = _as_complex(value, single=_SINGLE_KEYS.search(leaf) is not None)
             out.append(CertificateEntry(prefix, fmt_compact(z, digits)))
@@ -196,7 +280,7 @@ def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
         except (TypeError, ValueError, KeyError):
             continue
         if arr.size:
-            unit = f" {axis.get('unit', '')}".rstrip()
+            unit = _UNIT_STAR.sub("·", f" {axis.get('unit', '')}".rstrip())
             parts.append(f"{axis.get('name', '?')} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}]"
                          f"{unit} ({arr.size} points)")
     with contextlib.suppress(TypeError, ValueError):  # values that are not numbers are simply not summarised

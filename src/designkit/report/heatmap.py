@@ -3,7 +3,9 @@
 A check opts in by putting a ``"grid"`` mapping in its certificate (see :func:`robustness_grid`):
 its ``axes`` (name, unit, values of each varying parameter -- one or two) and the margin at every
 lattice point.  Two axes give a heat map, green where robust and red where not, with the zero
-contour; one axis a line.  The axes are the certificate's: nothing here knows which plant
+contour; one axis a line.  Artists are tagged (:func:`designkit.report.svg.tag`: ``margin-map``,
+``zero-contour``, ``margin-line``, ``zero-line``) so a caption can name what is drawn.
+The axes are the certificate's: nothing here knows which plant
 parameters exist.
 """
 
@@ -15,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.report.svg import BLUE, GREY, new_figure, render
+from designkit.report.svg import BLUE, GREY, new_figure, render, tag
 
 __all__ = ["GridData", "robustness_grid", "robustness_svg"]
 
@@ -78,12 +80,12 @@ def _axis_label(axis: tuple[str, str, np.ndarray]) -> str:
 
 
 def _draw(name: str, data: GridData) -> Any:
-    fig, (ax,) = new_figure(6.4, 4.0)
+    fig, (ax,) = new_figure(6.4, 4.0, layout="constrained")  # colour bar and title
     finite = data.values[np.isfinite(data.values)]
     if len(data.axes) == 1:
         x = data.axes[0][2]
-        ax.plot(x, data.values, color=BLUE)
-        ax.axhline(0.0, color=GREY, lw=0.8)
+        tag(fig, "margin-line", *ax.plot(x, data.values, color=BLUE))
+        tag(fig, "zero-line", ax.axhline(0.0, color=GREY, lw=0.8))
         ax.set_xlabel(_axis_label(data.axes[0]))
         ax.set_ylabel(data.label)
     else:
@@ -91,8 +93,9 @@ def _draw(name: str, data: GridData) -> Any:
         vmax = vmax if vmax > 0 else 1.0
         x, y = data.axes[0][2], data.axes[1][2]
         mesh = ax.pcolormesh(x, y, data.values, shading="nearest", cmap="RdYlGn", vmin=-vmax, vmax=vmax)
+        tag(fig, "margin-map", mesh)
         if finite.size and np.min(finite) < 0 < np.max(finite):
-            ax.contour(x, y, data.values, levels=[0.0], colors="black", linewidths=1.2)
+            tag(fig, "zero-contour", ax.contour(x, y, data.values, levels=[0.0], colors="black", linewidths=1.2))
         fig.colorbar(mesh, ax=ax, label=data.label)
         ax.set_xlabel(_axis_label(data.axes[0]))
         ax.set_ylabel(_axis_label(data.axes[1]))

@@ -13,7 +13,7 @@ import re
 import jinja2
 from markupsafe import Markup, escape
 
-from designkit.report.model import ReportModel
+from designkit.report.model import Equation, MathFrac, MathToken, ReportModel
 
 _TEMPLATE = "report.html.j2"
 
@@ -46,6 +46,45 @@ def breakable(text: object) -> Markup:
     return Markup(str(escape(text)).replace("_", "_<wbr>").replace(".", ".<wbr>"))
 
 
+def _mathml_token(t: MathToken) -> str:
+    if t.kind == "sep":
+        return f'<mo separator="true">{escape(t.text)}</mo><mspace width="1.5em"></mspace>'
+    tag = {"mi": "mi", "mn": "mn", "mo": "mo"}.get(t.kind, "mtext")
+    core = f"<{tag}>{escape(t.text)}</{tag}>"
+    sub = f"<mrow>{''.join(_mathml_piece(x) for x in t.sub.split(','))}</mrow>" if t.sub else ""
+    sup = f"<mo>{escape(t.sup)}</mo>" if t.sup and set(t.sup) <= {"′"} else (
+        f"<mn>{escape(t.sup)}</mn>" if t.sup else "")
+    if sub and sup:
+        return f"<msubsup>{core}{sub}{sup}</msubsup>"
+    if sub:
+        return f"<msub>{core}{sub}</msub>"
+    if sup:
+        return f"<msup>{core}{sup}</msup>"
+    return core
+
+
+def _mathml_piece(text: str) -> str:
+    return f"<mn>{escape(text)}</mn>" if text.isdigit() else f"<mi>{escape(text)}</mi>"
+
+
+def _mathml_nodes(nodes) -> str:
+    out = []
+    for n in nodes:
+        if isinstance(n, MathFrac):
+            out.append(f"<mfrac><mrow>{_mathml_nodes(n.num)}</mrow><mrow>{_mathml_nodes(n.den)}</mrow></mfrac>")
+        else:
+            out.append(_mathml_token(n))
+    return "".join(out)
+
+
+def mathml(eq: Equation) -> Markup:
+    """An :class:`~designkit.report.model.Equation` as presentation MathML (no script, no web font)."""
+    if not eq.nodes:
+        return Markup("")
+    alt = escape(eq.text)
+    return Markup(f'<math display="block" alttext="{alt}"><mrow>{_mathml_nodes(eq.nodes)}</mrow></math>')
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("designkit.report", "templates"),
@@ -56,13 +95,16 @@ def _environment() -> jinja2.Environment:
         keep_trailing_newline=True,
     )
     env.filters["breakable"] = breakable
+    env.filters["mathml"] = mathml
     return env
 
 
 def render_html(model: ReportModel) -> str:
     """The report as one HTML document (UTF-8 text)."""
+    anchors = model.figure_anchors or tuple(f"figure-{k}" for k in range(1, len(model.figures) + 1))
     figures = [
-        {"title": f.title, "caption": f.caption, "svg": Markup(inline_svg(f.svg, f"f{k}-", title=f.title))}
-        for k, f in enumerate(model.figures, start=1)
+        {"title": f.title, "caption": f.caption, "anchor": anchor,
+         "svg": Markup(inline_svg(f.svg, f"f{k}-", title=f.title))}
+        for k, (f, anchor) in enumerate(zip(model.figures, anchors, strict=True), start=1)
     ]
     return _environment().get_template(_TEMPLATE).render(m=model, figures=figures)

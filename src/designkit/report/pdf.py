@@ -8,17 +8,24 @@ filter (trusted Typst written by this module).  Figures are written as SVG files
 ``.typ`` source in a temporary directory and included with ``image(...)``.
 
 Typst embeds its default fonts (Libertinus Serif, New Computer Modern, DejaVu Sans Mono);
-system fonts are ignored so that the PDF is the same on every machine.
+system fonts are ignored so that the PDF is the same on every machine.  The figures' text is SVG
+``<text>`` set in DejaVu Sans (:mod:`designkit.report.svg`): the DejaVu Sans files that ship
+with matplotlib are copied into a ``fonts`` folder of the temporary directory and passed to Typst
+as its only font path, so the figure text stays text in the PDF (searchable, selectable) and
+the font is embedded (only those files: matplotlib's other fonts, e.g. its own DejaVu Sans Mono,
+must not shadow Typst's).
 """
 
 from __future__ import annotations
 
+import shutil
 import tempfile
+import unicodedata
 from pathlib import Path
 
 import jinja2
 
-from designkit.report.model import ReportModel
+from designkit.report.model import Equation, MathFrac, MathToken, ReportModel
 
 _TEMPLATE = "report.typ.j2"
 # Every ASCII punctuation character: Typst markup accepts a backslash before any character, so
@@ -90,6 +97,56 @@ def _breakable(text: object) -> TypstCode:
     return TypstCode(escape_typst(text).replace("\\_", "\\_\u200b").replace("\\.", "\\.\u200b"))
 
 
+_MATH_OPS = {"−": "-", "-": "-", "+": "+", "=": "=", "(": "\\(", ")": "\\)", "∫": "integral", "·": "dot.op"}
+_ACCENTS = {"\u0302": "hat", "\u0307": "dot", "\u0308": "dot.double", "\u0303": "tilde"}
+
+
+def _math_letter(text: str) -> str:
+    """A Typst math identifier: one letter as itself (italic), a word as an upright string, accents as functions."""
+    decomposed = unicodedata.normalize("NFD", text)
+    base = "".join(c for c in decomposed if not unicodedata.combining(c))
+    accents = [c for c in decomposed if unicodedata.combining(c)]
+    if len(base) == 1 and unicodedata.category(base).startswith("L") and all(a in _ACCENTS for a in accents):
+        out = base
+        for a in accents:
+            out = f"{_ACCENTS[a]}({out})"
+        return out
+    return typst_string(text)
+
+
+def _math_token(t: MathToken) -> str:
+    if t.kind == "sep":
+        return f"{typst_string(t.text)} wide"
+    if t.kind == "mi":
+        core = _math_letter(t.text)
+    elif t.kind == "mn" and t.text.replace(".", "", 1).isdigit():
+        core = t.text
+    elif t.kind == "mo" and t.text in _MATH_OPS:
+        core = _MATH_OPS[t.text]
+    else:
+        core = typst_string(t.text)
+    primes = t.sup.count("′")
+    sup = t.sup.replace("′", "")
+    out = core + "'" * primes
+    if t.sub:
+        out += f"_({typst_string(t.sub)})"
+    if sup:
+        out += f"^({typst_string(sup)})"
+    return out
+
+
+def _math_nodes(nodes) -> str:
+    return " ".join(f"frac({_math_nodes(n.num)}, {_math_nodes(n.den)})" if isinstance(n, MathFrac) else _math_token(n)
+                    for n in nodes)
+
+
+def typst_math(eq: Equation) -> TypstCode:
+    """An :class:`~designkit.report.model.Equation` as inline Typst math (every word quoted, so any text compiles)."""
+    if not eq.nodes:
+        return TypstCode("")
+    return TypstCode(f"$display({_math_nodes(eq.nodes)})$")
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("designkit.report", "templates"),
@@ -110,6 +167,7 @@ def _environment() -> jinja2.Environment:
     env.filters["raw"] = TypstCode
     env.filters["matrix"] = _matrix
     env.filters["breakable"] = _breakable
+    env.filters["math"] = typst_math
     return env
 
 
@@ -118,19 +176,33 @@ def render_typst(model: ReportModel) -> str:
     return _environment().get_template(_TEMPLATE).render(m=model)
 
 
+def figure_font_dir(root: Path) -> Path:
+    """Copy the figures' font files (:func:`designkit.report.svg.font_files`) into ``root / "fonts"``
+    and return that folder (the font path given to Typst)."""
+    from designkit.report.svg import font_files
+
+    folder = root / "fonts"
+    folder.mkdir(exist_ok=True)
+    for path in font_files():
+        shutil.copyfile(path, folder / path.name)
+    return folder
+
+
 def compile_pdf(model: ReportModel) -> bytes:
-    """Compile the report to PDF bytes (Typst default fonts only, no system fonts)."""
+    """Compile the report to PDF bytes (Typst default fonts and the figures' DejaVu Sans, no system fonts)."""
     import typst
 
     source = render_typst(model)
     with tempfile.TemporaryDirectory(prefix="designkit-report-") as tmp:
         root = Path(tmp)
+        fonts = figure_font_dir(root)
         for fig in model.figures:
             (root / fig.filename).write_text(fig.svg, encoding="utf-8")
         main = root / "report.typ"
         main.write_text(source, encoding="utf-8")
         try:
-            pdf = typst.compile(str(main), root=str(root), font_paths=[], ignore_system_fonts=True)
+            pdf = typst.compile(str(main), root=str(root), font_paths=[str(fonts)],
+                                ignore_system_fonts=True)
         except typst.TypstError as exc:  # user text is escaped, so this is a designkit bug
             detail = getattr(exc, "diagnostic", "") or str(exc)
             raise RuntimeError(f"typst could not compile the report source: {detail}") from exc

@@ -3,8 +3,14 @@
 Figures are built with :class:`matplotlib.figure.Figure` directly, never through ``pyplot``, so
 no GUI backend is selected and no global figure registry is touched (the SVG canvas renders
 them; the interactive backend setting is irrelevant).  Output is reproducible byte for byte:
-ids are salted with a fixed ``svg.hashsalt``, the date metadata is dropped and text is drawn as
-paths (no font is needed to view the SVG).  The options are applied with
+ids are salted with a fixed ``svg.hashsalt`` and the date metadata is dropped.
+
+Text is written as SVG ``<text>`` elements (``svg.fonttype: none``), not as glyph outlines: it is
+searchable and selectable in the HTML report and in the PDF, and rendering is several times
+faster.  The font is DejaVu Sans, which ships with matplotlib (:func:`font_dir`), so the text is
+laid out with the same metrics on every machine; the SVG names the CSS stack ``'DejaVu Sans',
+'Arial', sans-serif`` so a browser without DejaVu Sans falls back sensibly, and the PDF compiler
+is given :func:`font_dir` so the PDF embeds DejaVu Sans itself.  The options are applied with
 :func:`matplotlib.rc_context`, so matplotlib's global state is left as it was.  matplotlib is
 imported lazily, inside the functions.
 """
@@ -12,13 +18,22 @@ imported lazily, inside the functions.
 from __future__ import annotations
 
 import io
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+FONT_FAMILY = "DejaVu Sans"
+"""The family every figure's text is set in (shipped with matplotlib, embedded in the PDF)."""
+FONT_FILES = ("DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSans-Oblique.ttf", "DejaVuSans-BoldOblique.ttf")
+"""The files of :data:`FONT_FAMILY` in :func:`font_dir` (regular, bold, oblique, bold oblique)."""
+
 RC_PARAMS = {
     "svg.hashsalt": "designkit-report",
-    "svg.fonttype": "path",
+    "svg.fonttype": "none",
+    "font.family": ["sans-serif"],
+    "font.sans-serif": [FONT_FAMILY, "Arial"],
+    "mathtext.fontset": "dejavusans",
     "font.size": 9.0,
     "axes.titlesize": 10.0,
     "axes.labelsize": 9.0,
@@ -33,6 +48,14 @@ RC_PARAMS = {
 """matplotlib options under which every report figure is drawn."""
 
 BLUE, ORANGE, RED, GREEN, GREY, PURPLE = "#1f5fa8", "#e07b00", "#c0282d", "#2e8b57", "#666666", "#7b3fa0"
+REFERENCE_STYLE = {"ls": "-.", "lw": 1.0}
+"""Line style of references (commanded positions, trajectories): dash-dot."""
+LIMIT_STYLE = {"ls": "--", "lw": 1.0}
+"""Line style of limits (requirement levels, actuator output levels, stability limits): dashed."""
+EVENT_STYLE = {"ls": ":", "lw": 1.0}
+"""Line style of event markers (a perturbation's onset, a crossover frequency): dotted, vertical."""
+TAG_PREFIX = "dk-"
+"""Prefix of the SVG ids (matplotlib ``gid``) naming what an artist shows (:func:`tag`)."""
 MAX_POINTS = 2000
 """Samples per plotted line; longer signals are min/max decimated."""
 MAX_DRAWN = 1e300
@@ -41,13 +64,82 @@ largest double (about 1.8e308); samples beyond (a diverging run, inf, NaN) are l
 line, which then stops where the signal leaves the drawable range."""
 
 
-def new_figure(width: float, height: float, rows: int = 1, sharex: bool = True):
-    """A constrained-layout figure of ``width`` x ``height`` inches and its ``rows`` axes (one column)."""
+def font_dir() -> Path:
+    """The folder of the TrueType fonts that ship with matplotlib (holds :data:`FONT_FILES`)."""
+    import matplotlib
+
+    return Path(matplotlib.get_data_path()) / "fonts" / "ttf"
+
+
+def font_files() -> tuple[Path, ...]:
+    """The files of :data:`FONT_FAMILY` (those of :data:`FONT_FILES` that exist in :func:`font_dir`)."""
+    folder = font_dir()
+    return tuple(folder / name for name in FONT_FILES if (folder / name).is_file())
+
+
+MARGINS = {"left": 0.85, "right": 0.12, "bottom": 0.48, "top": 0.1, "gap": 0.14}
+"""Fixed margins (inches) of a ``layout="fixed"`` figure: room for 8-character tick labels and an axis label
+on the left, the tick labels and x label below, and between stacked axes (which share x, so their inner tick
+labels are hidden)."""
+
+
+def new_figure(width: float, height: float, rows: int = 1, sharex: bool = True, layout: str = "fixed"):
+    """A ``width`` x ``height`` inch figure and its ``rows`` axes (one column).
+
+    ``layout="fixed"`` places the axes with the fixed :data:`MARGINS` (one text layout pass when the
+    figure is saved); ``"constrained"`` lets matplotlib's constrained layout fit colour bars, titles and
+    outside legends, at about twice the rendering cost (it measures every text twice more).
+    """
     from matplotlib.figure import Figure as MplFigure
 
-    fig = MplFigure(figsize=(width, height), layout="constrained")
-    axes = fig.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
-    return fig, axes
+    if layout != "fixed":
+        fig = MplFigure(figsize=(width, height), layout=layout)
+        return fig, fig.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
+    fig = MplFigure(figsize=(width, height))
+    m = MARGINS
+    axes_height = (height - m["bottom"] - m["top"] - (rows - 1) * m["gap"]) / rows
+    fig.subplots_adjust(left=m["left"] / width, right=1.0 - m["right"] / width, bottom=m["bottom"] / height,
+                        top=1.0 - m["top"] / height, hspace=m["gap"] / axes_height)
+    return fig, fig.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
+
+
+def tag(fig, key: str, *artists: Any) -> None:
+    """Name what ``artists`` show: each gets the SVG id ``dk-<key>`` (``dk-<key>--<n>`` for the n-th
+    artist with that key in ``fig``, ids being unique).  Captions are written from these names
+    (:func:`drawn_keys`), so a caption names exactly what is drawn; tests read them from the SVG.
+    ``key`` is lower-case letters, digits and single hyphens."""
+    counts = fig.__dict__.setdefault("_dk_tag_counts", {})
+    for artist in artists:
+        n = counts.get(key, 0)
+        counts[key] = n + 1
+        artist.set_gid(f"{TAG_PREFIX}{key}" + (f"--{n}" if n else ""))
+
+
+def tag_key(gid: str | None) -> str | None:
+    """The key of a tagged artist's id (``dk-<key>`` or ``dk-<key>--<n>``), else None.
+
+    Examples
+    --------
+    >>> tag_key("dk-control-limit--1"), tag_key("dk-reference"), tag_key("line2d_3")
+    ('control-limit', 'reference', None)
+    """
+    if not gid or not gid.startswith(TAG_PREFIX):
+        return None
+    return gid[len(TAG_PREFIX):].split("--", 1)[0]
+
+
+def drawn_keys(fig) -> tuple[str, ...]:
+    """The keys (:func:`tag`) of the visible artists of ``fig``, each once, in drawing order."""
+    keys = (tag_key(a.get_gid()) for a in fig.findobj(lambda a: a.get_gid() is not None and a.get_visible()))
+    return tuple(dict.fromkeys(k for k in keys if k is not None))
+
+
+def svg_keys(svg: str) -> tuple[str, ...]:
+    """The keys (:func:`tag`) found in an SVG document's ids, each once, in document order."""
+    import re
+
+    found = (tag_key(m) for m in re.findall(r'\bid="([^"]+)"', svg))
+    return tuple(dict.fromkeys(k for k in found if k is not None))
 
 
 def to_svg(fig) -> str:
@@ -64,6 +156,21 @@ def render(draw, *args: Any) -> str | None:
     with matplotlib.rc_context(RC_PARAMS):
         fig = draw(*args)
         return None if fig is None else to_svg(fig)
+
+
+def render_tagged(draw, *args: Any) -> tuple[str | None, tuple[str, ...], dict[str, Any]]:
+    """Like :func:`render` for ``draw(*args) -> figure or (figure, info) or None``: the SVG text, the keys
+    of what was drawn (:func:`drawn_keys`, read after the layout) and ``info`` (what the drawing measured
+    for the caption, e.g. an axis scale; empty when ``draw`` returns a figure alone)."""
+    import matplotlib
+
+    with matplotlib.rc_context(RC_PARAMS):
+        out = draw(*args)
+        if out is None:
+            return None, (), {}
+        fig, info = out if isinstance(out, tuple) else (out, {})
+        svg = to_svg(fig)
+        return svg, drawn_keys(fig), dict(info)
 
 
 def column(values: np.ndarray, index: int = 0) -> np.ndarray:

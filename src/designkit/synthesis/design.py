@@ -298,3 +298,135 @@ class Design:
             object.__setattr__(self, name, freeze(dict(getattr(self, name))))
         if self.reference not in ("step", "trajectory"):
             raise ValueError(f"reference must be 'step' or 'trajectory', got {self.reference!r}")
+
+    # ------------------------------------------------------------------ python-control interop
+
+    def _require_closed_loop(self) -> LinearSystem:
+        if self.closed_loop is None:
+            raise ValueError(f"this {self.kind} design has no nominal closed loop")
+        return self.closed_loop
+
+    def to_control(self, form: str = "ss"):
+        """The nominal closed loop as a python-control system (imports python-control lazily).
+
+        Parameters
+        ----------
+        form : {"ss", "tf"}
+            ``"ss"``: :class:`control.StateSpace` with ``closed_loop``'s matrices and its state,
+            input and output names (inputs the references ``xD, xDd, xDdd`` per joint, in rad,
+            rad/s, rad/s^2, then the disturbances in N*m; outputs the joint positions in rad and the
+            plant inputs in N*m); its poles are the closed-loop poles (1/s).  ``"tf"``:
+            :class:`control.TransferFunction` of the same system, one entry per output/input pair
+            (:meth:`LinearSystem.to_transfer`).  Both are deviations about
+            ``operating_point``.
+
+        Returns
+        -------
+        control.StateSpace or control.TransferFunction
+            Named ``"<kind>_closed_loop"``.
+
+        Raises
+        ------
+        ValueError
+            When the design has no closed loop, or ``form`` is unknown.
+
+        Examples
+        --------
+        >>> from designkit.families.pid_servo import design
+        >>> from designkit.models.link import LinkPlant
+        >>> sys = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).to_control()
+        >>> sys.input_labels[:1], sys.output_labels
+        (['xD'], ['x1', 'u'])
+        """
+        cl = self._require_closed_loop()
+        name = f"{self.kind}_closed_loop"
+        if form == "ss":
+            return cl.to_control(name=name)
+        if form == "tf":
+            return cl.to_transfer(name=name)
+        raise ValueError(f"form must be 'ss' or 'tf', got {form!r}")
+
+    def loop_system(self, channel: int | str = 0) -> LinearSystem:
+        """The loop broken at plant input ``channel``, the other inputs' loops closed.
+
+        The convention is the ``loop_margins`` check's (:mod:`designkit.verification.loop`):
+        with ``input_loop`` (``A`` the closed loop, ``B`` where the plant inputs enter,
+        ``C = -du/dz``), ``A_i = A + B_i C_i`` and ``L_i(s) = C_i (sI - A_i)^-1 B_i``.  Its input is
+        the signal injected at the broken plant input (named as the plant input, ``"u"``), its
+        output the *negated* controller output (``"-u"``), so the loop is closed by **negative**
+        feedback, ``v = -L v``: the closed-loop poles are the roots of ``1 + L_i(s) = 0``, the
+        input sensitivity is ``S = 1/(1 + L_i)``, and ``control.stability_margins(L_i)`` gives the
+        check's gain and phase margins.  For the PID servo on the link,
+        ``L(s) = Km (K2 s^2 + K1 s + K3) / (s^2 (tau s + 1))``.
+
+        Parameters
+        ----------
+        channel : int or str
+            Index or name of the plant input (``0`` or ``"u"``).
+
+        Returns
+        -------
+        LinearSystem
+            ``(A_i, B_i, C_i, 0)`` with the closed loop's state names.
+
+        Raises
+        ------
+        ValueError
+            When the design has no ``input_loop`` or no such input.
+        """
+        from designkit.verification.loop import loop_matrices
+
+        lp = self.input_loop
+        if lp is None:
+            raise ValueError(f"this {self.kind} design has no loop at the plant input")
+        i = channel
+        if isinstance(channel, str):
+            if channel not in lp.inputs:
+                raise ValueError(f"no plant input {channel!r}; the inputs are {list(lp.inputs)}")
+            i = lp.inputs.index(channel)
+        if not 0 <= i < len(lp.inputs):
+            raise ValueError(f"channel must be in 0..{len(lp.inputs) - 1}, got {channel}")
+        A, b, c = loop_matrices(self, i)
+        return LinearSystem(A=A, B=b, C=c, D=np.zeros((1, 1)), states=lp.states, inputs=(lp.inputs[i],),
+                            outputs=(lp.outputs[i],))
+
+    def loop_transfer(self, channel: int | str = 0, form: str = "tf"):
+        """The loop transfer ``L_i(s)`` at plant input ``channel`` as a python-control system.
+
+        See :meth:`loop_system` for the sign convention (negative feedback: ``1 + L_i = 0``).
+
+        Parameters
+        ----------
+        channel : int or str
+            Index or name of the plant input.
+        form : {"tf", "ss"}
+            :class:`control.TransferFunction` (numerator and denominator from
+            :meth:`LinearSystem.transfer_coefficients`, no cancellation) or
+            :class:`control.StateSpace`.
+
+        Returns
+        -------
+        control.TransferFunction or control.StateSpace
+            Dimensionless (input and output in the plant input's unit), named ``"<kind>_L_<input>"``.
+
+        Examples
+        --------
+        >>> from designkit.families.pid_servo import design
+        >>> from designkit.models.link import LinkPlant
+        >>> L = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).loop_transfer()
+        >>> [round(float(c), 9) for c in L.num_array[0][0]], [round(float(c), 9) for c in L.den_array[0][0]]
+        ([27.0, 200.0, 400.0], [1.0, 2.0, 0.0, 0.0])
+        """
+        loop = self.loop_system(channel)
+        name = f"{self.kind}_L_{loop.inputs[0]}"
+        if form == "tf":
+            return loop.to_transfer(name=name)
+        if form == "ss":
+            return loop.to_control(name=name)
+        raise ValueError(f"form must be 'tf' or 'ss', got {form!r}")
+
+    def _repr_html_(self) -> str:
+        """Jupyter view: gains with units, poles and the closed-loop summary (no check is run)."""
+        from designkit.report.notebook import design_html
+
+        return design_html(self)

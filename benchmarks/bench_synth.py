@@ -1,0 +1,181 @@
+"""`designkit synth specs/posspeed-link.yaml --out DIR` (HTML + PDF) end to end, against a 3 s budget.
+
+Run apart from the tests:  python benchmarks/bench_synth.py [--repeat N] [--phases] [--imports] [--before REF]
+
+The whole CLI is timed in fresh subprocesses (median of N runs), with `python -c pass` timed in
+the same run as the baseline, so the result is also quoted as a ratio that is less sensitive to
+a loaded machine; the children's CPU time (user + system) is reported next to it.  Every synth
+run must exit 0 and write both reports, else the benchmark fails: a broken command is not timed.
+``--phases`` adds one in-process breakdown (imports, design + simulation + checks, report model
+with its figures, HTML, PDF); ``--imports`` lists the modules whose import costs the most in a
+synth run (``python -X importtime``, cumulative); ``--before REF`` times the ``src/`` of a git
+revision too, interleaved with the working tree.  Writes benchmarks/results/synth.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = ROOT / "specs" / "posspeed-link.yaml"
+BUDGET_S = 3.0
+SYNTH = [sys.executable, "-m", "designkit.cli", "synth", str(SPEC)]
+
+_PHASES = r"""
+import json, sys, tempfile, time
+t = [time.perf_counter()]
+from designkit.pipeline import run
+from designkit.report.html import render_html
+from designkit.report.model import build_report_model
+from designkit.report.pdf import compile_pdf
+from designkit.spec import load_spec
+t.append(time.perf_counter())
+result = run(load_spec(sys.argv[1]))
+t.append(time.perf_counter())
+model = build_report_model(result)
+t.append(time.perf_counter())
+render_html(model)
+t.append(time.perf_counter())
+compile_pdf(model)
+t.append(time.perf_counter())
+names = ["import designkit (pipeline, report)", "run: design, simulation, checks (lazy imports included)",
+         "report model (figures rendered to SVG)", "HTML", "PDF (Typst)"]
+print(json.dumps({n: b - a for n, a, b in zip(names, t, t[1:])}))
+"""
+
+
+def _cpu_children() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _checkout(ref: str, into: Path) -> Path:
+    """``src/`` of git revision ``ref`` extracted under ``into`` (for a before/after comparison)."""
+    into.mkdir(parents=True, exist_ok=True)
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", ref, "src"], check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(into)], input=archive, check=True)
+    return into / "src"
+
+
+def _times(cmd: list[str], repeat: int, *, check_reports: Path | None = None,
+           cpu: list[float] | None = None, env: dict[str, str] | None = None) -> list[float]:
+    """Wall times (s) of ``repeat`` runs; CPU times (user + system, s) appended to ``cpu``."""
+    out = []
+    for _ in range(repeat):
+        if check_reports is not None:
+            shutil.rmtree(check_reports, ignore_errors=True)
+        start, cpu0 = time.perf_counter(), _cpu_children()
+        proc = subprocess.run(cmd, check=False, capture_output=True, text=True, env=env)
+        out.append(time.perf_counter() - start)
+        if cpu is not None:
+            cpu.append(_cpu_children() - cpu0)
+        if proc.returncode != 0:
+            tail = (proc.stderr or proc.stdout).strip().splitlines()[-3:]
+            raise SystemExit(f"{' '.join(cmd)} exited {proc.returncode}: " + " | ".join(tail))
+        if check_reports is not None:
+            written = sorted({p.suffix for p in check_reports.rglob("*") if p.suffix in (".html", ".pdf")})
+            if written != [".html", ".pdf"]:
+                raise SystemExit(f"designkit synth --out wrote {written}, expected an HTML and a PDF report")
+    return out
+
+
+def _phases() -> dict[str, float]:
+    proc = subprocess.run([sys.executable, "-c", _PHASES, str(SPEC)], check=True, capture_output=True, text=True)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _imports(out: Path, top: int = 15) -> list[tuple[str, float]]:
+    """Modules with the largest cumulative import time (s) in one synth run (top-level imports first)."""
+    proc = subprocess.run([sys.executable, "-X", "importtime", *SYNTH[1:], "--out", str(out)], check=False,
+                          capture_output=True, text=True)
+    rows = []
+    for line in proc.stderr.splitlines():
+        if not line.startswith("import time:") or "|" not in line[12:]:
+            continue
+        _self, cumulative, name = (part.strip() for part in line[12:].split("|"))
+        if cumulative.isdigit():
+            rows.append((name, int(cumulative) / 1e6))
+    rows.sort(key=lambda r: -r[1])
+    return rows[:top]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5, help="runs per command (median reported)")
+    parser.add_argument("--phases", action="store_true", help="add an in-process breakdown by phase")
+    parser.add_argument("--imports", action="store_true", help="list the most expensive imports of a synth run")
+    parser.add_argument("--before", metavar="REF", help="also time the src/ of git revision REF (e.g. HEAD), "
+                        "interleaved with the working tree, for a before/after comparison")
+    args = parser.parse_args()
+    env_note = os.environ.get("MPLBACKEND", "")
+    out = Path(tempfile.mkdtemp())
+    try:
+        base_cpu: list[float] = []
+        synth_cpu: list[float] = []
+        before_src = _checkout(args.before, out.parent / f"{out.name}-before") if args.before else None
+        before: list[float] = []
+        before_cpu: list[float] = []
+        base = _times([sys.executable, "-c", "pass"], max(args.repeat, 5), cpu=base_cpu)
+        synth = []
+        for _ in range(args.repeat):  # interleaved, so both see the same load
+            synth += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=synth_cpu)
+            if before_src is not None:
+                env = {**os.environ, "PYTHONPATH": str(before_src)}
+                before += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=before_cpu, env=env)
+        phases = _phases() if args.phases else None
+        imports = _imports(out) if args.imports else None
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+        shutil.rmtree(out.parent / f"{out.name}-before", ignore_errors=True)
+    b, s = statistics.median(base), statistics.median(synth)
+    bc, sc = statistics.median(base_cpu), statistics.median(synth_cpu)
+    print("| command | median wall time (s) | runs (s) | ratio to `python -c pass` | median CPU time (s) |")
+    print("|---|---|---|---|---|")
+    print(f"| python -c pass (baseline) | {b:.3f} | {', '.join(f'{x:.2f}' for x in base)} | 1.0 | {bc:.3f} |")
+    print(f"| designkit synth posspeed-link --out DIR (HTML + PDF) | {s:.3f} | "
+          f"{', '.join(f'{x:.2f}' for x in synth)} | {s / b:.1f} | {sc:.3f} |")
+    if before:
+        bs, bsc = statistics.median(before), statistics.median(before_cpu)
+        print(f"| same, src/ of {args.before} (before) | {bs:.3f} | {', '.join(f'{x:.2f}' for x in before)} | "
+              f"{bs / b:.1f} | {bsc:.3f} |")
+    print("\nCPU time (user + system of the child) is less sensitive than wall time to other load on the machine.")
+    verdict = "within" if s < BUDGET_S else "OVER"
+    load = os.getloadavg() if hasattr(os, "getloadavg") else None
+    print(f"\nbudget {BUDGET_S:.1f} s: {verdict} ({s:.2f} s); load average at the end "
+          f"{', '.join(f'{x:.2f}' for x in load) if load else 'n/a'} on {os.cpu_count()} cores")
+    if phases:
+        print("\n| phase (one in-process run) | seconds |\n|---|---|")
+        for name, sec in phases.items():
+            print(f"| {name} | {sec:.3f} |")
+    if imports:
+        print("\n| module (synth run, -X importtime) | cumulative import (s) |\n|---|---|")
+        for name, sec in imports:
+            print(f"| {name} | {sec:.3f} |")
+    (ROOT / "benchmarks" / "results").mkdir(exist_ok=True)
+    record = {
+        "python -c pass (baseline)": b, "designkit synth posspeed-link (HTML + PDF)": s,
+        "runs": {"baseline": base, "synth": synth}, "cpu_s": {"baseline": bc, "synth": sc},
+        "cpu_runs": {"baseline": base_cpu, "synth": synth_cpu}, "ratio_to_python_c_pass": s / b,
+        "before": {"ref": args.before, "runs": before, "cpu_runs": before_cpu} if before else None,
+        "budget_s": BUDGET_S,
+        "within_budget": s < BUDGET_S, "phases": phases, "imports": imports,
+        "machine": {"python": platform.python_version(), "platform": platform.platform(),
+                    "cpu_count": os.cpu_count(), "load_average_end": list(load) if load else None,
+                    "MPLBACKEND": env_note},
+    }
+    (ROOT / "benchmarks" / "results" / "synth.json").write_text(json.dumps(record, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
