@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.analysis import diagnosis as dg
 from designkit.analysis.diagnosis import (
     Diagnosis,
     Finding,
@@ -167,15 +166,6 @@ def test_harmonic_balance_and_exact_solution_against_a_simulated_low_pass_loop()
     assert exact is not None
     assert exact.input_amplitude == pytest.approx(meas.amplitude, rel=1e-3)
     assert exact.frequency == pytest.approx(meas.frequency, rel=1e-3)
-
-
-def test_matrix_exponential_matches_scipy():
-    from scipy.linalg import expm
-
-    A = np.array([[0.0, 1.0, 0.0, 0.0], [-200.0, -29.0, -400.0, 4.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]])
-    for t in (1e-4, 0.04, 1.0, 5.0):
-        ref = expm(A * t)
-        assert np.max(np.abs(dg._expm(A * t) - ref)) <= 1e-12 * np.max(np.abs(ref))
 
 
 # ----------------------------------------------------------------------------- actuator-limited settling time

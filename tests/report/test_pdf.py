@@ -197,4 +197,17 @@ def test_typeset_formulas_compile(formula):
     from designkit.report.model import equation
     from designkit.report.pdf import typst_math
 
-    typst.compile(str(typst_math(equation("f", formula))).encode("utf-8"))
+    source = str(typst_math(equation("f", formula)))
+    pdf = typst.compile(source.encode("utf-8"))
+    assert pdf.startswith(b"%PDF")
+    import io
+    import unicodedata
+
+    import pypdf
+
+    text = " ".join(page.extract_text() or "" for page in pypdf.PdfReader(io.BytesIO(pdf)).pages)
+    flat = "".join(unicodedata.normalize("NFKC", text).split())  # math italic letters -> plain ones
+    # what the formula names survives typesetting (hostile text is quoted, not dropped)
+    for token in ("K1", "xD", "weird"):
+        if token in formula:
+            assert token in flat, (token, text)

@@ -504,23 +504,6 @@ def relay_harmonic_balance(loop: Callable[[np.ndarray], np.ndarray], amplitude: 
     return out
 
 
-def _expm(M: np.ndarray) -> np.ndarray:
-    """Matrix exponential of a stack of small matrices ``(..., n, n)``: scaling and squaring of an
-    order-18 Taylor series (vectorized; double precision for the norms met here)."""
-    M = np.asarray(M, dtype=float)
-    norm = float(np.max(np.sum(np.abs(M), axis=-2))) if M.size else 0.0
-    squarings = max(0, math.ceil(math.log2(norm)) + 1) if norm > 0.5 else 0
-    X = M / 2.0**squarings
-    eye = np.broadcast_to(np.eye(M.shape[-1]), M.shape)
-    out, term = eye.copy(), eye.copy()
-    for k in range(1, 19):
-        term = term @ X / k
-        out = out + term
-    for _ in range(squarings):
-        out = out @ out
-    return out
-
-
 def relay_periodic_solution(A: np.ndarray, b: np.ndarray, c: np.ndarray, amplitude: float, hysteresis: float,
                             output: np.ndarray, w_guess: float | None = None, delay: float = 0.0,
                             samples: int = 2001) -> PeriodicSolution | None:
@@ -567,7 +550,9 @@ def relay_periodic_solution(A: np.ndarray, b: np.ndarray, c: np.ndarray, amplitu
     eye = np.eye(n)
 
     def pieces(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        E = _expm(aug[None, :, :] * np.asarray(times, float)[:, None, None])
+        from scipy.linalg import expm  # batched over the leading axis
+
+        E = expm(aug[None, :, :] * np.asarray(times, float)[:, None, None])
         return E[:, :n, :n], E[:, :n, n:] * M
 
     def g_many(halves: np.ndarray) -> np.ndarray:

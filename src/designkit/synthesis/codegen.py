@@ -348,14 +348,12 @@ def _header_comment(code: LawCode, design: Design, law: Law) -> str:
              + (f" of spec {code.spec_name!r}" if code.spec_name else "") + ".",
              f"spec sha256: {code.spec_sha256 or 'unknown (not generated from a spec file)'}",
              f"plant: {design.plant.kind}; CasADi {ca.__version__}; see docs/codegen.md for the calling convention."]
-    try:
-        from designkit.families import FAMILIES
+    from designkit.families import FAMILIES
 
-        display = FAMILIES[design.kind].display
-        lines.append(f"family: {display.label}")
-        lines += [f"  law: {line}" for line in display.law]
-    except KeyError:
-        pass
+    family = FAMILIES.get(design.kind)  # None for a design built outside the registry (a user's own law)
+    if family is not None:
+        lines.append(f"family: {family.display.label}")
+        lines += [f"  law: {line}" for line in family.display.law]
     lines += ["", "Gains:"]
     for k in design.gains:
         unit, meaning = design.gains.unit(k), design.gains.meaning(k)
