@@ -82,8 +82,16 @@ def _exit_for(result) -> int:
     return EXIT_OK if result.verified else EXIT_CHECK_FAILED
 
 
+def _start_solver_process() -> None:
+    """Let a second core import cvxpy while this process works (:mod:`designkit.verification.solver_process`)."""
+    from designkit.verification.solver_process import start
+
+    start()
+
+
 def cmd_synth(args: argparse.Namespace) -> int:
     """Synthesise, verify, simulate and write the HTML + PDF report."""
+    _start_solver_process()
     from designkit.pipeline import run
     from designkit.report import write_report
     from designkit.spec import load_spec
@@ -112,6 +120,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
 
 def cmd_verify(args: argparse.Namespace) -> int:
     """Synthesise and verify; print the checks; write nothing."""
+    _start_solver_process()
     from designkit.pipeline import run
     from designkit.spec import load_spec
 

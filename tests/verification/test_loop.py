@@ -5,6 +5,8 @@ from __future__ import annotations
 import control
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from designkit.families import synthesize
 from designkit.spec.loader import parse_spec
@@ -68,3 +70,37 @@ def test_siso_zeros_of_a_known_transfer():
     sys = control.ss(control.tf([1, 3, 2], [1, 6, 11, 6]))  # zeros -1, -2
     z = loop.siso_zeros(np.asarray(sys.A), np.asarray(sys.B)[:, 0], np.asarray(sys.C)[0], float(sys.D[0, 0]))
     np.testing.assert_allclose(np.sort(z.real), [-2.0, -1.0], atol=1e-9)
+
+
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 5))
+def test_margins_agree_with_python_control_on_random_loops(seed, n):
+    """Exact crossovers (polynomial roots) against python-control's ``stability_margins``."""
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(n, n)) * rng.uniform(0.2, 5.0)
+    b, c = rng.normal(size=(n, 1)), rng.normal(size=(1, n)) * rng.uniform(0.5, 20.0)
+    gm, pm, _sm, wpc, wgc, _ = control.stability_margins(control.ss(A, b, c, 0.0))
+    ours = loop.classical_margins(A, b, c)
+    for mine, ref in zip(ours, (gm, pm, wpc, wgc), strict=True):
+        if np.isfinite(ref):
+            assert mine == pytest.approx(ref, rel=1e-6, abs=1e-9)
+        else:
+            assert not np.isfinite(mine) or (np.isnan(ref) and np.isnan(mine))
+
+
+def test_random_siso_zeros_and_dc_gain_agree_with_python_control():
+    from designkit.verification.pole_zero import Siso, dc_gain, finite_zeros
+
+    rng = np.random.default_rng(7)
+    for n in range(1, 6):
+        for _ in range(20):
+            A = rng.normal(size=(n, n)) - 2.0 * np.eye(n)
+            B, C, D = rng.normal(size=(n, 1)), rng.normal(size=(1, n)), rng.normal(size=(1, 1)) * rng.integers(0, 2)
+            sys = control.ss(A, B, C, D)
+            z, _ = finite_zeros(Siso(A, B, C, D))
+            ref = np.asarray(control.zeros(sys))
+            ref = ref[np.isfinite(ref) & (np.abs(ref) < 1e8)]
+            assert len(z) == len(ref)
+            if len(ref):
+                np.testing.assert_allclose(np.sort_complex(z), np.sort_complex(ref), rtol=1e-7, atol=1e-9)
+            assert dc_gain(Siso(A, B, C, D)) == pytest.approx(complex(control.dcgain(sys)), rel=1e-9, abs=1e-12)

@@ -32,6 +32,21 @@ What is diagnosed (SI units: s, rad, rad/s, N·m; derivations in ``docs/diagnosi
 * **Instability of the linear loop**: closed-loop poles with ``Re >= 0``.
 * **A solver that did not converge**: an undecided or failed check whose certificate holds a
   ``solver_status`` other than ``"optimal"``.
+* **A model mismatch of a model-based law** (:func:`model_error_prediction`; gains ``K1``, ``K2``, an
+  ``error_poles`` check, joints tracked, a controller model that differs from the true plant): the
+  model-error torque ``tau_plant - tau_model`` along the run
+  (:func:`designkit.analysis.experiment1.model_error_torque`) drives
+  ``e'' + K2 e' + K1 e = M^^-1 (tau_plant - tau_model)``; its quasi-static response
+  ``(M^ K1)^-1 (tau_plant - tau_model)`` against the measured error (joint and instant of the worst),
+  ``(M^ K1)^-1 (g - g^)`` at rest at the final configuration (:func:`static_model_error`), the worst
+  corner or sample of ``tracking_bounds`` (its certificate); fixes: the factor on ``K1`` that brings
+  the predicted error to the limit (the error scales as ``1/K1``; poles scale as its square root at
+  the same damping), or the plant's payload or parameter values in ``controller.model``.
+* **A path near a singular configuration** (``singularity`` check, from its certificate): condition
+  number, instant, configuration, the joint whose motion raises ``1/kappa`` fastest; fixes: damped
+  least squares with ``lambda = sigma_max / (2 kappa_max)`` (:func:`damping_for_condition`: the
+  check's bound ``1/(2 lambda)`` is then the ``1/sigma_min`` the exact inverse has at the allowed
+  condition number), or the first-order move of that joint that brings the condition to the limit.
 * **Linear versus nonlinear**: the metrics of :func:`~designkit.verification.time_domain.response_metrics`
   on the ideal linear response (:func:`~designkit.simulation.linear.linear_response`, same instants,
   reference and perturbation, no nonlinear element, noise, delay or sampling) and on the simulation.
@@ -61,7 +76,9 @@ __all__ = [
     "Oscillation",
     "PeriodicSolution",
     "TAIL_FRACTION",
+    "ModelErrorPrediction",
     "bang_bang_trajectory",
+    "damping_for_condition",
     "diagnose",
     "divergence_of",
     "full_thrust_time",
@@ -70,10 +87,12 @@ __all__ = [
     "measure_oscillation",
     "minimum_move_time",
     "minimum_settling_time",
+    "model_error_prediction",
     "relay_describing_function",
     "relay_harmonic_balance",
     "relay_periodic_solution",
     "shortfall",
+    "static_model_error",
 ]
 
 TAIL_FRACTION = 0.25
@@ -125,7 +144,10 @@ class Finding:
     cause : str
         Diagnosed cause (one or two sentences), ``""`` when the run shows none.
     fix : str
-        What would fix it, with numbers where computable, or ``""``.
+        What would fix it, with numbers where computable, or ``""``: the sentences of ``fixes`` joined.
+    fixes : tuple of str
+        The distinct fixes ``fix`` is made of, each a sentence of its own (capitalized, ending with a
+        period), in order; a report shows a fix shared by several findings once.
     """
 
     check: str
@@ -136,6 +158,7 @@ class Finding:
     shortfall_percent: str
     cause: str
     fix: str
+    fixes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -787,6 +810,460 @@ def _num(x: float | None, digits: int = 4) -> str:
     return "" if x is None else fmt_number(x, digits)
 
 
+# ----------------------------------------------------------------------------- model mismatch (model-based laws)
+
+MODEL_PATH_SAMPLES = 2001
+"""At most this many instants of the run at which the model-error torque is evaluated."""
+PREDICTION_AGREEMENT = 0.5
+"""The model-error torque "explains" a measured error when its prediction is within this relative gap."""
+
+
+@dataclass(frozen=True)
+class ModelErrorPrediction:
+    """The tracking error the model-error torque of a model-based law predicts along the run.
+
+    With the true plant ``M q'' + h = u`` and the law ``u = M^ (qD'' + K1 e + K2 e') + h^``
+    (``e = qD - q``), the errors obey ``e'' + K2 e' + K1 e = M^^-1 (tau_plant - tau_model)``, where
+    ``tau_plant - tau_model = ID_plant(q, q', q'') - ID_model(q, q', q'')`` is the model-error torque
+    (:func:`designkit.analysis.experiment1.model_error_torque`).  Its quasi-static response is
+    ``e = (M^ K1)^-1 (tau_plant - tau_model)``; at rest ``(M^ K1)^-1 (g - g^)``.
+
+    Parameters
+    ----------
+    time : ndarray, shape (N,)
+        Instants of the run (s) at which the prediction is evaluated.
+    torque : ndarray, shape (N, n)
+        Model-error torque ``tau_plant - tau_model`` (N·m, N for a prismatic joint).
+    predicted : ndarray, shape (N, n)
+        Quasi-static error ``(M^ K1)^-1 (tau_plant - tau_model)`` (rad or m), sign of ``qD - q``.
+    measured : ndarray, shape (N, n)
+        Simulated ``|q - qD|`` at the same instants (rad or m).
+    static_error : ndarray, shape (n,)
+        ``(M^ K1)^-1 (g - g^)`` at the final configuration (rad or m).
+    gravity_error : ndarray, shape (n,)
+        ``g(q_f) - g^(q_f)`` at the final configuration (N·m).
+    """
+
+    time: np.ndarray
+    torque: np.ndarray
+    predicted: np.ndarray
+    measured: np.ndarray
+    static_error: np.ndarray
+    gravity_error: np.ndarray
+
+    @property
+    def joint(self) -> int:
+        """0-based joint of the largest measured error."""
+        return int(np.unravel_index(int(np.argmax(self.measured)), self.measured.shape)[1])
+
+    @property
+    def measured_peak(self) -> float:
+        """Largest measured ``|q - qD|`` (rad or m)."""
+        return float(np.max(self.measured))
+
+    @property
+    def predicted_peak(self) -> float:
+        """Largest predicted ``|e|`` over every joint (rad or m)."""
+        return float(np.max(np.abs(self.predicted)))
+
+
+def _model_based(result: Any) -> bool:
+    """A model-based joint-space law whose controller model differs from the true plant (gains K1, K2, the
+    ``error_poles`` check of ``e'' + K2 e' + K1 e = 0``, joints tracked), both plants robots."""
+    from designkit.families import family
+
+    design, plant = result.design, result.plant
+    if plant is None or plant is design.plant or not (design.extra or {}).get("model_differs"):
+        return False
+    if not all(hasattr(p, "robot") for p in (plant, design.plant)) or result.simulation is None:
+        return False
+    if "K1" not in design.gains or "K2" not in design.gains or result.simulation.task_space:
+        return False
+    try:
+        fam = family(design.kind)
+    except Exception:  # noqa: BLE001 -- an unregistered kind: no claim on its error dynamics
+        return False
+    return fam.motion is None and "error_poles" in fam.checks
+
+
+def static_model_error(plant: Any, model: Any, K1: Any, q: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The error at rest ``(M^(q) K1)^-1 (g(q) - g^(q))`` a model-based law leaves at configuration ``q``.
+
+    Parameters
+    ----------
+    plant, model : RobotPlant
+        The true plant and the controller's model.
+    K1 : array_like, shape (n,)
+        Position error gains (1/s²).
+    q : array_like, shape (n,)
+        Configuration (rad or m).
+
+    Returns
+    -------
+    error, gravity_error : ndarray, shape (n,)
+        ``qD - q`` at rest (rad or m) and ``g(q) - g^(q)`` (N·m or N).
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[1]
+    g = np.asarray(plant.robot.gravity_torque(q, p=plant.model_parameters()), dtype=float).reshape(n)
+    g_hat = np.asarray(model.robot.gravity_torque(q, p=model.model_parameters()), dtype=float).reshape(n)
+    M_hat = np.asarray(model.robot.mass_matrix(q, p=model.model_parameters()), dtype=float).reshape(n, n)
+    k1 = np.broadcast_to(np.asarray(K1, dtype=float), (n,))
+    return np.linalg.solve(M_hat * k1[None, :], g - g_hat), g - g_hat
+
+
+def _quasi_static(plant: Any, model: Any, K1: np.ndarray, q: np.ndarray, qd: np.ndarray,
+                  qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Model-error torque and ``(M^ K1)^-1`` of it at a batch of states (shapes (N, n))."""
+    from designkit.analysis.experiment1 import model_error_torque
+
+    torque = model_error_torque(plant, model, q, qd, qdd)
+    n = q.shape[1]
+    M_hat = np.asarray(model.robot.mass_matrix(q, p=model.model_parameters()), dtype=float).reshape(-1, n, n)
+    return torque, np.linalg.solve(M_hat * K1[None, None, :], torque[..., None])[..., 0]
+
+
+def _run_path(sim: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(t, q, qd, qdd, |q - qD|)`` of the run, at most :data:`MODEL_PATH_SAMPLES` instants (None if not finite)."""
+    t = np.asarray(sim.time, dtype=float)
+    state = np.asarray(sim.state, dtype=float)
+    q, qd = state[:, list(sim.positions)], state[:, list(sim.velocities)]
+    err = np.abs(np.asarray(sim.tracking_errors, dtype=float))
+    if t.size < 3 or not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(err))):
+        return None
+    qdd = np.gradient(qd, t, axis=0)
+    stride = max(1, math.ceil(t.size / MODEL_PATH_SAMPLES))
+    keep = np.unique(np.append(np.arange(0, t.size, stride), np.argmax(np.max(err, axis=1))))
+    return t[keep], q[keep], qd[keep], qdd[keep], err[keep]
+
+
+def model_error_prediction(result: Any, plant: Any = None, model: Any = None) -> ModelErrorPrediction | None:
+    """The quasi-static error the model-error torque predicts along the run (see :class:`ModelErrorPrediction`).
+
+    Parameters
+    ----------
+    result : designkit.pipeline.PipelineResult
+        A run of a model-based joint-space law (its ``simulation``, ``design`` and ``plant``).
+    plant : RobotPlant, optional
+        The true plant (default ``result.plant``), e.g. one corner of the uncertainty box: its
+        torque is evaluated along the simulated path of ``result`` (the error is small, so the path
+        barely depends on it).
+    model : RobotPlant, optional
+        The controller's model (default ``result.design.plant``), e.g. a corrected one.
+
+    Returns
+    -------
+    ModelErrorPrediction or None
+        None when the design is not a model-based joint-space law with a model that differs from
+        the plant, or the run is not finite.
+    """
+    if not _model_based(result):
+        return None
+    path = _run_path(result.simulation)
+    if path is None:
+        return None
+    t, q, qd, qdd, err = path
+    plant = result.plant if plant is None else plant
+    model = result.design.plant if model is None else model
+    n = q.shape[1]
+    K1 = np.broadcast_to(np.asarray(result.design.gains["K1"], dtype=float), (n,)).copy()
+    torque, predicted = _quasi_static(plant, model, K1, q, qd, qdd)
+    static, gravity = static_model_error(plant, model, K1, q[-1])
+    return ModelErrorPrediction(time=t - float(np.asarray(result.simulation.time)[0]), torque=torque,
+                                predicted=predicted, measured=err, static_error=static, gravity_error=gravity)
+
+
+def _differences(plant: Any, model: Any) -> list[str]:
+    """``"m6 2.59 (model 2.09)"`` for every parameter on which the model differs from the plant, and friction."""
+    out = []
+    for p in plant.parameters:
+        try:
+            believed = model.parameter(p.name).value
+        except Exception:  # noqa: BLE001 -- a parameter the model does not have
+            continue
+        if believed != p.value:
+            out.append(f"{p.name} = {_q(p.value, p.unit)} (model {fmt_number(believed)})")
+    if plant.robot.friction != model.robot.friction:
+        out.append("friction " + ("left out of the model" if plant.robot.friction else "assumed by the model only"))
+    return out
+
+
+def _payload_words(plant: Any, model: Any) -> str:
+    """``"the plant carries a 2.5 kg payload on link 6, the model assumes 2 kg"``, ``""`` when the payloads agree."""
+    true, believed = getattr(plant, "payload", None), getattr(model, "payload", None)
+    if true == believed or true is None:
+        return ""
+    mass, link = true
+    assumed = (f"the model assumes {_q(believed[0], 'kg')}" + (f" on link {believed[1]}" if believed[1] != link
+                                                                 else "")) if believed else "the model none"
+    return f"the plant carries a {_q(mass, 'kg')} payload on link {link}, {assumed}"
+
+
+def _joint_unit(plant: Any, j: int, what: str = "position") -> str:
+    unit = plant.inputs[j].unit
+    return ("m" if what == "position" else "N") if unit == "N" else ("rad" if what == "position" else "N*m")
+
+
+def _corrected_model(result: Any) -> tuple[Any, str] | None:
+    """The controller's model with the true payload (or the true parameter values) and the spec text that gives it."""
+    plant, model = result.plant, result.design.plant
+    true, believed = getattr(plant, "payload", None), getattr(model, "payload", None)
+    if true is not None and true != believed and hasattr(model, "with_payload"):
+        try:
+            fixed = model.with_payload(*true)
+        except Exception:  # noqa: BLE001 -- a payload the model cannot carry: no such fix
+            return None
+        return fixed, f"controller.model.payload: {{mass: {fmt_number(true[0])}, link: {true[1]}}}"
+    changed = {p.name: p.value for p in plant.parameters if model.parameter(p.name).value != p.value}
+    if changed:
+        try:
+            fixed = model.with_params(**changed)
+        except Exception:  # noqa: BLE001
+            return None
+        return fixed, "controller.model.parameters: {" + ", ".join(
+            f"{k}: {fmt_number(v)}" for k, v in changed.items()) + "}"
+    return None
+
+
+def _gain_fix(result: Any, predicted: float, limit: float, what: str) -> str:
+    """Raise K1 (and K2 at the same damping) so that ``predicted`` (scaling as 1/K1) meets ``limit``."""
+    if not (math.isfinite(predicted) and predicted > limit > 0):
+        return ""
+    factor = predicted / limit
+    K1 = np.atleast_1d(np.asarray(result.design.gains["K1"], dtype=float))
+    poles = np.abs(np.asarray(result.design.poles, dtype=complex))
+    k1 = f"{_q(float(K1[0]) * factor, '1/s²')}" if np.all(K1[0] == K1) else \
+        "(" + ", ".join(fmt_number(float(k) * factor) for k in K1) + ") 1/s²"
+    lo, hi = float(np.min(poles)), float(np.max(poles))
+    old = _q(lo, "1/s") if math.isclose(lo, hi) else f"{fmt_number(lo)} to {_q(hi, '1/s')}"
+    new = _q(lo * math.sqrt(factor), "1/s") if math.isclose(lo, hi) else \
+        f"{fmt_number(lo * math.sqrt(factor))} to {_q(hi * math.sqrt(factor), '1/s')}"
+    return (f"raise K1 by a factor {fmt_number(factor, 3)} or more (K1 = {k1}; K2 by √{fmt_number(factor, 3)} to keep "
+            f"the damping): for a fixed model-error torque the error scales as 1/K1, so the predicted "
+            f"{_q(predicted, 'rad')} {what} falls to the {_q(limit, 'rad')} limit; the error poles move from "
+            f"|p| = {old} to |p| = {new}, and the commanded torques grow with the gains")
+
+
+def _mismatch_text(result: Any, check: Any) -> tuple[str, str]:
+    """Cause and fix of a tracking check failing under a model mismatch ("" when it does not apply)."""
+    pred = model_error_prediction(result)
+    if pred is None:
+        return "", ""
+    plant, model = result.plant, result.design.plant
+    sim = result.simulation
+    j = pred.joint
+    k = int(np.argmax(pred.measured[:, j]))
+    unit = _joint_unit(plant, j)
+    tq_unit = _joint_unit(plant, j, "torque")
+    kt = np.unravel_index(int(np.argmax(np.abs(pred.torque))), pred.torque.shape)
+    payload = _payload_words(plant, model)
+    diffs = _differences(plant, model)
+    what = payload or ("; ".join(diffs) if diffs else "same parameters")
+    names = sim.coordinate_names
+    jn = names[j] if len(names) > j else f"q{j + 1}"
+    predicted_j = float(np.max(np.abs(pred.predicted[:, j])))
+    gap = _rel(predicted_j, pred.measured_peak)
+    cause = (f"the controller's model differs from the true plant ({what}); the model-error torque "
+             f"τ_plant − τ_model it leaves uncancelled reaches {_q(float(np.abs(pred.torque[kt])), tq_unit)} at joint "
+             f"{kt[1] + 1} ({_t(float(pred.time[kt[0]]))}) and drives ë + K2 ė + K1 e = M̂⁻¹(τ_plant − τ_model); "
+             f"its quasi-static response (M̂ K1)⁻¹(τ_plant − τ_model) predicts a peak |e| of "
+             f"{_q(predicted_j, unit)} at joint {j + 1} against the measured {_q(pred.measured_peak, unit)} "
+             f"(|{jn} − {jn}D| at {_t(float(pred.time[k]))}; {gap}); at rest at the final configuration it is "
+             f"(M̂ K1)⁻¹(g − ĝ) = {_q(float(abs(pred.static_error[j])), unit)} at joint {j + 1} "
+             f"(g − ĝ = {_q(float(pred.gravity_error[j]), tq_unit)} there)")
+    explained = pred.measured_peak > 0 and abs(predicted_j / pred.measured_peak - 1) <= PREDICTION_AGREEMENT
+    limit = _check_limit(check)
+    predicted, what_error = pred.predicted_peak, "error"
+    if check.name == "tracking_bounds":
+        corner = _corner_prediction(result, check)
+        if corner is None:
+            return cause, ""
+        peaks, j, bound, at, kind = corner
+        unit = _joint_unit(plant, j)
+        cause += (f"; the worst run of the uncertainty box is at {kind} ({at}; "
+                  f"{check.certificate.get('runs', '?')} runs): {_q(bound, unit)} at joint {j + 1}"
+                  f"{_worst_instant(check, j)}, where the "
+                  f"model-error torque of that plant along this run predicts {_q(float(peaks[j]), unit)} "
+                  f"({_rel(float(peaks[j]), bound)})")
+        explained = bound > 0 and abs(float(peaks[j]) / bound - 1) <= PREDICTION_AGREEMENT
+        predicted, what_error = float(np.max(peaks)), f"error at {at}"
+    if not explained or limit is None:
+        return cause, ""
+    fixes = [f for f in (_gain_fix(result, predicted, limit, what_error),) if f]
+    corrected = _corrected_model(result)
+    if corrected is not None:
+        fixed, setting = corrected
+        if check.name == "tracking_bounds":
+            after_corner = _corner_prediction(result, check, model=fixed)
+            after = math.nan if after_corner is None else float(np.max(after_corner[0]))
+        else:
+            after_pred = model_error_prediction(result, model=fixed)
+            after = math.nan if after_pred is None else after_pred.predicted_peak
+        text = f"give the controller's model the plant's values ({setting})"
+        if not math.isfinite(after):
+            return cause, "; or ".join(fixes)
+        if after <= 1e-9 * limit:
+            text += ": the model-error torque then vanishes and so does the predicted error"
+        elif after <= limit:
+            text += (f": the predicted {what_error} then falls to {_q(after, 'rad')}, within the "
+                     f"{_q(limit, 'rad')} limit")
+        else:
+            text += (f": the predicted {what_error} then falls to {_q(after, 'rad')}, still above the "
+                     f"{_q(limit, 'rad')} limit, so K1 must then still grow by a factor {fmt_number(after / limit, 3)}")
+        fixes.append(text)
+    return cause, "; or ".join(fixes)
+
+
+def _worst_instant(check: Any, j: int) -> str:
+    """`` (t = 1.93 s)``: when the worst run's error of joint ``j`` peaks (the check's data), ``""`` if unknown."""
+    data = getattr(check, "data", None) or {}
+    t, err = data.get("time"), data.get("errors")
+    if t is None or err is None:
+        return ""
+    err = np.abs(np.asarray(err, dtype=float))
+    t = np.asarray(t, dtype=float)
+    if err.ndim != 2 or err.shape[0] != t.size or j >= err.shape[1] or not np.all(np.isfinite(err[:, j])):
+        return ""
+    return f" ({_t(float(t[int(np.argmax(err[:, j]))] - t[0]))})"
+
+
+def _check_limit(check: Any) -> float | None:
+    m = _TARGET.match(_unit(check.target or ""))
+    return float(m.group(2)) if m is not None and m.group(1) in ("<=", "<", "≤") else None
+
+
+def _corner_prediction(result: Any, check: Any, model: Any = None
+                       ) -> tuple[np.ndarray, int, float, str, str] | None:
+    """The quasi-static error at the worst parameters of ``tracking_bounds`` along this run.
+
+    Returns
+    -------
+    (peaks, joint, bound, at, kind) or None
+        Predicted peak ``|e|`` per joint (rad or m) on the plant at the certificate's
+        ``worst_parameters`` with the controller's ``model`` (default the design's); the 0-based joint of
+        the check's bound and that bound; ``"m6 = 2.84"``; ``"a corner"`` or ``"a sample"``.
+    """
+    cert = check.certificate if hasattr(check.certificate, "get") else {}
+    worst = dict(cert.get("worst_parameters") or {})
+    bound = cert.get("bound_per_joint_rad")
+    path = _run_path(result.simulation)
+    if not worst or bound is None or path is None:
+        return None
+    try:
+        corner = result.plant.with_params(**{k: float(v) for k, v in worst.items()})
+    except Exception:  # noqa: BLE001 -- parameters the plant does not take: no prediction
+        return None
+    box = dict(cert.get("box") or {})
+    kind = "a corner" if all(float(v) in tuple(map(float, box.get(k, ()))) for k, v in worst.items()) else "a sample"
+    _, q, qd, qdd, _ = path
+    n = q.shape[1]
+    K1 = np.broadcast_to(np.asarray(result.design.gains["K1"], dtype=float), (n,)).copy()
+    _, predicted = _quasi_static(corner, result.design.plant if model is None else model, K1, q, qd, qdd)
+    bounds = np.asarray(bound, dtype=float)
+    j = int(np.argmax(bounds))
+    at = ", ".join(f"{k} = {fmt_number(v)}" for k, v in worst.items())
+    return np.max(np.abs(predicted), axis=0), j, float(bounds[j]), at, kind
+
+
+# ----------------------------------------------------------------------------- singular configurations
+
+
+def damping_for_condition(sigma_min: float, condition: float, max_condition: float) -> float:
+    """The damped-least-squares ``lambda`` (units of ``J``'s singular values) whose gain bound ``1/(2 lambda)``
+    equals the ``1/sigma_min`` the exact inverse has at the allowed condition number.
+
+    At the worst point ``sigma_max = condition * sigma_min``; with the condition number at
+    ``max_condition`` the smallest singular value would be ``sigma_max / max_condition``, so
+    ``lambda = sigma_max / (2 max_condition)`` bounds the resolution's gain
+    ``max sigma / (sigma^2 + lambda^2) = 1/(2 lambda)`` by that amplification.
+
+    Parameters
+    ----------
+    sigma_min : float
+        Smallest singular value of ``J`` at the worst point (m/rad).
+    condition : float
+        Condition number of ``J`` there.
+    max_condition : float
+        The design's limit on the condition number.
+
+    Returns
+    -------
+    float
+        ``lambda`` (m/rad).
+    """
+    return condition * sigma_min / (2.0 * max_condition)
+
+
+def _singular_joint(result: Any, q: np.ndarray) -> tuple[int, float] | None:
+    """The joint whose motion raises ``1/kappa`` of ``J`` fastest at ``q``, and ``d(1/kappa)/dq`` (1/rad)."""
+    task = (result.design.extra or {}).get("task")
+    if not task or "rows" not in task:
+        return None
+    import casadi as ca
+
+    from designkit.models.task import TaskSpace, task_functions
+
+    model = result.design.plant
+    try:
+        fns = task_functions(model.robot, model.model_parameters(),
+                             TaskSpace(tuple(task["rows"]), tuple(task["orientation_target"])))
+    except Exception:  # noqa: BLE001 -- no task functions: no joint named
+        return None
+
+    def inv_kappa(x: np.ndarray) -> float:
+        s = np.linalg.svd(np.asarray(fns.jacobian(ca.DM(x)), dtype=float), compute_uv=False)
+        return float(s[-1] / s[0])
+
+    h = 1e-6
+    grad = np.array([(inv_kappa(q + h * e) - inv_kappa(q - h * e)) / (2 * h) for e in np.eye(q.size)])
+    j = int(np.argmax(np.abs(grad)))
+    return j, float(grad[j])
+
+
+def _singularity_text(result: Any, check: Any) -> tuple[str, str]:
+    """Cause and fix of a failing ``singularity`` check, from its certificate."""
+    cert = check.certificate if hasattr(check.certificate, "get") else {}
+    need = ("worst_condition", "sigma_min_at_worst", "max_condition_allowed", "worst_configuration", "worst_at_s")
+    if any(cert.get(k) is None for k in need):
+        return "", ""
+    kappa, s_min = float(cert["worst_condition"]), float(cert["sigma_min_at_worst"])
+    limit = float(cert["max_condition_allowed"])
+    q = np.asarray(cert["worst_configuration"], dtype=float)
+    config = "q = (" + ", ".join(fmt_number(v if abs(v) > 1e-12 else 0.0, 3) for v in q) + ") rad"
+    stretch = cert.get("near_singular_interval_s")
+    cause = (f"the path passes near a singular configuration of J: condition number {fmt_number(kappa)} at "
+             f"{_t(float(cert['worst_at_s']))} ({config}), {fmt_number(kappa / limit, 3)} times the "
+             f"{fmt_number(limit)} allowed; σ_min = {fmt_number(s_min)}, so J⁻¹ amplifies task accelerations by "
+             f"1/σ_min = {fmt_number(1 / s_min)} there")
+    if stretch:
+        share = cert.get("near_singular_fraction")
+        cause += f" (above the limit over {stretch}" + (
+            f", {fmt_number(100 * float(share), 3)} % of the path)" if share is not None else ")")
+    joint = _singular_joint(result, q)
+    move = ""
+    if joint is not None and joint[1] != 0:
+        j, grad = joint
+        cause += (f"; the smallest singular value is set by joint {j + 1} (q{j + 1} = {fmt_number(q[j], 3)} rad; "
+                  f"d(1/κ)/dq{j + 1} = {fmt_number(grad, 3)} 1/rad, the largest of the joints)")
+        step = (1.0 / limit - 1.0 / kappa) / abs(grad)
+        target = q[j] + math.copysign(step, grad)
+        move = (f"; or move the path away from it: to first order the condition number falls to {fmt_number(limit)} "
+                f"about {fmt_number(step, 3)} rad further along joint {j + 1} (q{j + 1} ≈ {fmt_number(target, 3)} "
+                "rad at that point)")
+    if cert.get("damping") is not None:
+        return cause, ""
+    lam = damping_for_condition(s_min, kappa, limit)
+    shown = float(f"{lam * (1 + 5e-4):.3g}")  # rounded up: still within the bound
+    gain = s_min**2 / (s_min**2 + shown**2)
+    fix = (f"resolve with damped least squares (controller.damped_least_squares: {{damping: {fmt_number(shown, 3)}}}): "
+           f"λ ≥ σ_max/(2 κ_max) = {fmt_number(kappa * s_min)}/(2 × {fmt_number(limit)}) = {fmt_number(lam)} m/rad "
+           f"bounds "
+           f"the resolution's gain by 1/(2λ) = {fmt_number(1 / (2 * shown))}, what J⁻¹ has at condition number "
+           f"{fmt_number(limit)}, instead of {fmt_number(1 / s_min)}; the price is a task gain of "
+           f"{fmt_number(gain, 3)} along the weakest direction at the worst point") + move
+    return cause, fix
+
+
 # ----------------------------------------------------------------------------- the diagnosis
 
 
@@ -1165,7 +1642,22 @@ def _context(result: Any) -> _Context:
     return _Context(div, dtext, dfix, cycle, cfix, _unstable(result), _settling_bound(result))
 
 
-def _finding(check: Any, ctx: _Context, demand: dict[str, Any]) -> Finding:
+def _specific(result: Any, check: Any) -> tuple[str, str]:
+    """Cause and fix read from the check's own certificate and the design: a path near a singular configuration,
+    a tracking error under a model mismatch (``""`` when neither applies)."""
+    if check.name == "singularity":
+        return _singularity_text(result, check)
+    if check.name in ("tracking_bounds", "tracking_error"):
+        return _mismatch_text(result, check)
+    return "", ""
+
+
+def _sentence(text: str) -> str:
+    text = text.strip().rstrip(";")
+    return text[0].upper() + text[1:] + ("" if text.endswith(".") else ".") if text else ""
+
+
+def _finding(check: Any, ctx: _Context, demand: dict[str, Any], specific: tuple[str, str] = ("", "")) -> Finding:
     label = _LABELS.get(check.name, check.name.replace("_", " "))
     target = _unit(check.target or "")
     requirement = f"{label} {target}" if _TARGET.match(target) else f"{label}: {target}" if target else label
@@ -1201,6 +1693,10 @@ def _finding(check: Any, ctx: _Context, demand: dict[str, Any]) -> Finding:
             causes.append(ctx.unstable)
     elif check.name in _STABILITY and ctx.unstable:
         causes.append(ctx.unstable)
+    if specific[0]:
+        causes.append(specific[0])
+    if specific[1]:
+        fixes.append(specific[1])
     cause = "; ".join(causes)
     if cause:
         cause = cause[0].upper() + cause[1:]
@@ -1208,8 +1704,9 @@ def _finding(check: Any, ctx: _Context, demand: dict[str, Any]) -> Finding:
     fix = "; ".join(dict.fromkeys(fixes))
     if fix:
         fix = fix[0].upper() + fix[1:] + ("" if fix.endswith(".") else ".")
+    parts = tuple(dict.fromkeys(_sentence(f) for f in fixes if f.strip()))
     return Finding(check=check.name, status=check.status, requirement=requirement, achieved=achieved,
-                   shortfall=absolute, shortfall_percent=relative, cause=cause, fix=fix)
+                   shortfall=absolute, shortfall_percent=relative, cause=cause, fix=fix, fixes=parts)
 
 
 def _demand(result: Any, peak: float | None) -> dict[str, Any]:
@@ -1253,7 +1750,7 @@ def diagnose(result: Any) -> Diagnosis:
     pairs, lin = _compare(result)
     demand = _demand(result, None if lin is None else lin.peak_u_command)
     failing: Sequence[Any] = [c for c in result.checks if c.required and c.passed is not True]
-    findings = tuple(_finding(c, ctx, demand) for c in failing)
+    findings = tuple(_finding(c, ctx, demand, _specific(result, c)) for c in failing)
     div = ctx.divergence
     return Diagnosis(findings=findings, diverged=bool(div is not None and div.diverged),
                      divergence=ctx.divergence_text, limit_cycle=ctx.limit_cycle, linear_vs_nonlinear=pairs)

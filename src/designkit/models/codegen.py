@@ -46,20 +46,12 @@ bound."""
 
 
 def default_cache_dir() -> Path:
-    """Directory of cached shared libraries.
+    """Directory of cached shared libraries: :func:`designkit.cache.cache_dir` ``("codegen")``
+    (``$DESIGNKIT_CACHE_DIR/codegen``, else ``$XDG_CACHE_HOME/designkit/codegen``, else
+    ``~/.cache/designkit/codegen``)."""
+    from designkit.cache import cache_dir
 
-    Returns
-    -------
-    pathlib.Path
-        ``$DESIGNKIT_CACHE_DIR/codegen`` if that variable is set, else
-        ``$XDG_CACHE_HOME/designkit/codegen``, else ``~/.cache/designkit/codegen``.
-    """
-    root = os.environ.get("DESIGNKIT_CACHE_DIR")
-    if root:
-        return Path(root) / "codegen"
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg) if xdg else Path.home() / ".cache"
-    return base / "designkit" / "codegen"
+    return cache_dir("codegen")
 
 
 def find_compiler() -> str | None:

@@ -30,7 +30,6 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import minimize
 
 from designkit.errors import ModelError
 from designkit.models.chain import numeric_value
@@ -296,6 +295,8 @@ def link_range(
         def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
             value, grad = objective(x)
             return sign * float(value), sign * np.array(grad).reshape(-1)
+
+        from scipy.optimize import minimize
 
         result = minimize(fun, start, jac=True, method="L-BFGS-B", bounds=bounds)
         best = sign * float(result.fun)

@@ -86,8 +86,11 @@ def mathml(eq: Equation) -> Markup:
 
 
 def _environment() -> jinja2.Environment:
+    from designkit.report.templates_cache import bytecode_cache
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("designkit.report", "templates"),
+        bytecode_cache=bytecode_cache(),
         autoescape=True,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,

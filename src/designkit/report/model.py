@@ -126,6 +126,26 @@ class WhyRow:
     shortfall_percent: str
     cause: str
     fix: str
+    fix_refs: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True)
+class WhyFix:
+    """A fix shared by several rows of "why it failed", shown once below the table.
+
+    Parameters
+    ----------
+    number : int
+        1-based; rows refer to it as "fix <number>" (their ``fix_refs``).
+    text : str
+        The fix, a sentence with its numbers and units.
+    checks : tuple of str
+        Labels of the rows it applies to, in row order.
+    """
+
+    number: int
+    text: str
+    checks: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -246,7 +266,10 @@ class ReportModel:
         The notes' lab questions of experiment 1 answered from this run
         (:func:`designkit.analysis.experiment1.lab_answers`).
     why : tuple of WhyRow
-        One row per required check that failed or is undecided (empty for a verified design).
+        One row per required check that failed or is undecided (empty for a verified design).  A fix
+        shared by several rows is in ``why_fixes`` and the rows refer to it (``fix_refs``).
+    why_fixes : tuple of WhyFix
+        Fixes shared by several rows, numbered, shown once below the table.
     why_note : str
         Where the causes come from (or why there are none).
     divergence, limit_cycle : str
@@ -294,6 +317,7 @@ class ReportModel:
     lab: tuple[LabSection, ...] = ()
     why: tuple[WhyRow, ...] = ()
     why_note: str = ""
+    why_fixes: tuple[WhyFix, ...] = ()
     divergence: str = ""
     limit_cycle: str = ""
     linear_vs_nonlinear: tuple[MetricRow, ...] = ()
@@ -757,19 +781,21 @@ def _diagnose(result: Any) -> Any:
         return exc
 
 
-def _why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str]:
+def _why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, tuple[WhyFix, ...]]:
+    """The rows of "why it failed", where their causes come from, and the fixes shared by several rows."""
     failing = [c for c in result.checks if getattr(c, "required", True) and c.passed is not True]
     if not failing:
-        return (), ""
+        return (), "", ()
     if isinstance(diagnosis, Exception):
         rows = tuple(_why_from_check(c) for c in failing)
         return rows, (f"The diagnosis of this run failed ({type(diagnosis).__name__}: {diagnosis}); the rows give "
-                      "the requirement, the achieved value and the shortfall only.")
+                      "the requirement, the achieved value and the shortfall only."), ()
     by_name = {f.check: f for f in (diagnosis.findings if diagnosis is not None else ())}
-    rows = []
+    rows, parts = [], []
     for check in failing:
         row = _why_from_check(check)
         found = by_name.get(check.name)
+        parts.append(_fix_parts(found) if found is not None else ())
         if found is not None:
             cause = unit(found.cause)
             if diagnosis.diverged and diagnosis.divergence and cause.strip() == diagnosis.divergence.strip():
@@ -788,9 +814,67 @@ def _why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str]:
     elif not any(r.cause for r in rows):
         note = "The run shows no specific cause for these shortfalls beyond the values themselves."
     else:
-        note = ("Causes are diagnosed from this run (the simulation and the linear analysis of the design); the fixes "
-                "are computed from the same run.")
-    return tuple(rows), note
+        note = ("Causes are diagnosed from this run (the simulation, the linear analysis of the design and the "
+                "checks' certificates); the fixes are computed from the same run.")
+    shared_rows, fixes = _share_fixes(rows, parts)
+    if fixes:
+        note += " A fix that applies to several rows is given once, numbered, below the table."
+    return shared_rows, note, fixes
+
+
+def _fix_parts(finding: Any) -> tuple[str, ...]:
+    """The distinct fixes of a finding (``fixes``; its whole ``fix`` when it does not list them)."""
+    parts = tuple(getattr(finding, "fixes", ()) or ())
+    if not parts and getattr(finding, "fix", ""):
+        parts = (finding.fix,)
+    return tuple(dict.fromkeys(unit(p) for p in parts if p.strip()))
+
+
+def _refs_text(numbers: Sequence[int]) -> str:
+    """``"See fix 1 below."``, ``"See fixes 1 and 2 below."``."""
+    if len(numbers) == 1:
+        return f"See fix {numbers[0]} below."
+    return "See fixes " + ", ".join(map(str, numbers[:-1])) + f" and {numbers[-1]} below."
+
+
+def _share_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]]
+                 ) -> tuple[tuple[WhyRow, ...], tuple[WhyFix, ...]]:
+    """Fixes found under several rows numbered once; those rows keep their own fixes and refer to the shared ones.
+
+    Parameters
+    ----------
+    rows : sequence of WhyRow
+        The rows, their ``fix`` the finding's whole fix.
+    parts : sequence of tuple of str
+        Each row's distinct fixes.
+
+    Returns
+    -------
+    rows, fixes : tuple of WhyRow, tuple of WhyFix
+        A row with no shared fix is returned as is.
+    """
+    count: dict[str, int] = {}
+    for row_parts in parts:
+        for part in row_parts:
+            count[part] = count.get(part, 0) + 1
+    numbers: dict[str, int] = {}
+    for row_parts in parts:
+        for part in row_parts:
+            if count[part] > 1 and part not in numbers:
+                numbers[part] = len(numbers) + 1
+    if not numbers:
+        return tuple(rows), ()
+    out = []
+    for row, row_parts in zip(rows, parts, strict=True):
+        refs = tuple(dict.fromkeys(numbers[p] for p in row_parts if p in numbers))
+        if not refs:
+            out.append(row)
+            continue
+        own = " ".join(p for p in row_parts if p not in numbers)
+        out.append(dataclasses.replace(row, fix=(own + " " if own else "") + _refs_text(refs), fix_refs=refs))
+    fixes = tuple(WhyFix(k, text, tuple(r.label for r, rp in zip(rows, parts, strict=True) if text in rp))
+                  for text, k in numbers.items())
+    return tuple(out), fixes
 
 
 def _metric_rows(diagnosis: Any) -> tuple[MetricRow, ...]:
@@ -1021,7 +1105,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     lab_intro, lab = _lab_sections(lab_answers(result))
     figures = design_figures(result)
     diagnosis = _diagnose(result) if checks else None
-    why, why_note = _why_section(result, diagnosis)
+    why, why_note, why_fixes = _why_section(result, diagnosis)
     if isinstance(diagnosis, Exception):
         diagnosis = None
     rows = [_compliance_row(c, figures) for c in checks]
@@ -1065,6 +1149,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         lab=lab,
         why=why,
         why_note=why_note,
+        why_fixes=why_fixes,
         divergence=(unit(diagnosis.divergence) if diagnosis is not None and diagnosis.diverged else ""),
         limit_cycle=parts["limit_cycle"],
         linear_vs_nonlinear=parts["linear_vs_nonlinear"],
@@ -1087,6 +1172,7 @@ __all__ = [
     "MathToken",
     "MetricRow",
     "Section",
+    "WhyFix",
     "WhyRow",
     "check_label",
     "equation",

@@ -95,7 +95,8 @@ def _label(row: Any) -> str:
 
 def _why_section(model: Any) -> str:
     """Diagnosis sentences (divergence, limit cycle) first -- the causes in the table refer to them -- then
-    one row per failing or undecided check, then where the causes come from."""
+    one row per failing or undecided check, the fixes shared by several rows (numbered, the rows refer to
+    them), then where the causes come from."""
     why = tuple(getattr(model, "why", ()) or ())
     parts = [_heading("Why it failed")] if why else []
     for name in ("divergence", "limit_cycle"):
@@ -106,6 +107,11 @@ def _why_section(model: Any) -> str:
             ([f"{_label(r)} ({r.check})" if _label(r) != r.check else r.check, *_fields(
                 r, ("status", "requirement", "achieved", "shortfall", "shortfall_percent", "cause", "fix"))]
              for r in why), status_column=1))
+        fixes = tuple(getattr(model, "why_fixes", ()) or ())
+        if fixes:
+            parts.append(_table(("Fix", "Applies to", "What to do"),
+                                ([f"Fix {f.number}", ", ".join(f.checks), f.text] for f in fixes),
+                                caption="Fixes shared by several rows"))
         parts.append(_para(str(getattr(model, "why_note", "") or "")))
     return "".join(parts)
 

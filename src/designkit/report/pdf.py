@@ -148,8 +148,11 @@ def typst_math(eq: Equation) -> TypstCode:
 
 
 def _environment() -> jinja2.Environment:
+    from designkit.report.templates_cache import bytecode_cache
+
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("designkit.report", "templates"),
+        bytecode_cache=bytecode_cache(),
         block_start_string="<%",
         block_end_string="%>",
         variable_start_string="<<",

@@ -6,8 +6,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from scipy.optimize import brentq
-
 from designkit.errors import SpecError
 
 
@@ -65,8 +63,11 @@ def normalised_settling_time(zeta: float, band: float = 0.02) -> float:
     last = max((k for k, o in enumerate(outside) if o), default=None)
     if last is None or last == len(grid) - 1:
         return grid[-1] if last is not None else 0.0
+
     def f(x: float) -> float:
         return abs(_step_error(zeta, x)) - band
+
+    from scipy.optimize import brentq
 
     return brentq(f, grid[last], grid[last + 1], xtol=1e-14)
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from designkit.simulation.linear import linear_response
 from designkit.verification.check import Check
@@ -56,6 +55,8 @@ def coupling_check(design: Any, simulation: Any = None) -> Check:
     cert: dict[str, Any] = {"requested_poles": _pairs(requested), "coupled_poles": _pairs(coupled)}
     parts = []
     if coupled.size == requested.size and coupled.size:
+        from scipy.optimize import linear_sum_assignment
+
         cost = np.abs(coupled[:, None] - requested[None, :])
         ci, ri = linear_sum_assignment(cost)
         shift = cost[ci, ri]

@@ -203,7 +203,18 @@ def solve_margin_lmi(
         cvxpy solver name.
     equality : (Bn, Cn) or None
         Adds ``Pb Bn = alpha Cn'`` with ``alpha >= t`` (``Bn`` n x m, ``Cn`` m x n).
+
+    Notes
+    -----
+    Solved in the solver process when the command line started one
+    (:mod:`designkit.verification.solver_process`: the same function, run where cvxpy was imported
+    ahead of time), else here.
     """
+    from designkit.verification import solver_process
+
+    done, remote = solver_process.call("margin_lmi", Ah, solver=solver, equality=equality)
+    if done:
+        return remote
     import cvxpy as cp
 
     n = Ah[0].shape[0]

@@ -9,15 +9,24 @@ breaking input ``i`` with the other loops closed gives ``A_i = A + B_i C_i`` and
 For the PID servo on the link this is ``L(s) = Km (K2 s^2 + K1 s + K3) / (s^2 (tau s + 1))``,
 i.e. ``C(s) P(s)`` with ``C(s) = K1 + K2 s + K3/s`` acting on ``x1`` and ``P(s) = Km / (s (tau s + 1))``;
 for the tracker the ``x2/Km`` term replaces ``K2`` by ``K2 - 1/Km`` (tested against these closed
-forms).  The ``loop_margins`` check reports, per input, the gain and phase margins (python-control
-``stability_margins``) and the modulus margin ``min |1 + L(jw)|``; it is informational (the spec
-states no margin requirement), and its data drives the report's Bode plots.
+forms).  The ``loop_margins`` check reports, per input, the gain and phase margins and the modulus
+margin ``min |1 + L(jw)|``; it is informational (the spec states no margin requirement), and its
+data drives the report's Bode plots.
 
-SciPy and python-control are imported lazily, inside the functions that need them.
+The crossovers are exact, not read off a grid (:func:`crossovers`): with ``L = n(s)/d(s)``,
+``d = det(sI - A_i)`` and ``n = det(sI - A_i + b_i c_i) - d`` (the identity
+``det(sI - A + bc) = det(sI - A)(1 + c (sI - A)^-1 b)``), the phase crossovers are the positive
+real roots of ``Im(n(jw) conj d(jw))`` where ``Re L(jw) < 0`` and the gain crossovers those of
+``|n(jw)|^2 - |d(jw)|^2``; ``L`` itself is evaluated from the state space at those frequencies.
+The tests compare the margins with python-control's ``stability_margins`` (same definitions:
+the gain margin closest to 1 on a log scale, the phase margin smallest in magnitude).
+
+SciPy is imported lazily, inside the functions that need it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -26,7 +35,8 @@ import numpy as np
 
 from designkit.verification.check import Check
 
-__all__ = ["LoopMargins", "achieved_zeros", "frequency_grid", "loop_frequency_response", "loop_margins",
+__all__ = ["LoopMargins", "achieved_zeros", "classical_margins", "crossovers", "frequency_grid",
+           "loop_frequency_response", "loop_margins",
            "loop_margins_check", "loop_matrices", "siso_zeros"]
 
 
@@ -93,8 +103,7 @@ def loop_frequency_response(design: Any, w: np.ndarray, channel: int = 0) -> np.
     if mats is None:
         return None
     A, b, c = mats
-    eye = np.eye(A.shape[0])
-    return np.array([(c @ np.linalg.solve(1j * wk * eye - A, b))[0, 0] for wk in np.asarray(w, dtype=float)])
+    return _response(A, b, c, w)
 
 
 def frequency_grid(design: Any) -> np.ndarray:
@@ -105,21 +114,105 @@ def frequency_grid(design: Any) -> np.ndarray:
     return np.logspace(math.floor(math.log10(lo)) - 1, math.ceil(math.log10(hi)) + 1, 600)
 
 
-def loop_margins(design: Any, channel: int = 0) -> LoopMargins | None:
-    """Gain and phase margins of the loop broken at plant input ``channel`` (python-control
-    ``stability_margins``) and the modulus margin ``inf |1 + L(jw)|``."""
-    import control
+def _real_roots(coeffs: np.ndarray, *, include_zero: bool) -> np.ndarray:
+    """Real roots ``w > 0`` (``w >= 0`` with ``include_zero``) of a real polynomial (highest power first), ascending."""
+    coeffs = np.trim_zeros(np.asarray(coeffs, dtype=float), "f")
+    if coeffs.size < 2:
+        return np.array([])
+    roots = np.roots(coeffs)
+    scale = max(float(np.max(np.abs(roots))), 1.0)
+    w = roots[np.abs(roots.imag) <= 1e-9 * np.maximum(np.abs(roots), 1.0)].real
+    w = np.where(np.abs(w) <= 1e-12 * scale, 0.0, w)  # a root at the origin, as computed
+    return np.sort(w[w >= 0] if include_zero else w[w > 0])
 
+
+def _at_jw(poly: np.ndarray) -> np.ndarray:
+    """Coefficients (in ``w``, highest power first, complex) of ``p(jw)`` for a polynomial ``p(s)``."""
+    poly = np.asarray(poly, dtype=float)
+    return poly * (1j) ** np.arange(poly.size - 1, -1, -1)
+
+
+def crossovers(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Phase and gain crossover frequencies (rad/s) of ``L(s) = c (sI - A)^-1 b`` (module docstring).
+
+    Returns
+    -------
+    w_phase : ndarray
+        ``w >= 0`` where ``L(jw)`` is finite, real and negative (the Nyquist curve crosses the negative real axis;
+        ``w = 0`` counts when ``L(0)`` is finite and negative).
+    w_gain : ndarray
+        ``w > 0`` where ``|L(jw)| = 1``.
+    """
+    den = np.poly(A)
+    num = np.poly(A - b @ c) - den  # the leading coefficients cancel exactly (both monic)
+    n_iw, d_iw = _at_jw(num), _at_jw(den)
+    im_part = np.polysub(np.polymul(n_iw.imag, d_iw.real), np.polymul(n_iw.real, d_iw.imag))
+    mag = np.polysub(np.real(np.polymul(n_iw, n_iw.conj())), np.real(np.polymul(d_iw, d_iw.conj())))
+    w_phase = _real_roots(im_part, include_zero=True)
+    if w_phase.size:
+        with np.errstate(all="ignore"):
+            resp = _response(A, b, c, w_phase)
+        w_phase = w_phase[np.isfinite(resp) & (resp.real < 0)]
+    return w_phase, _real_roots(mag, include_zero=False)
+
+
+def _response(A: np.ndarray, b: np.ndarray, c: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``c (jw I - A)^-1 b`` at the frequencies ``w`` (rad/s), batched."""
+    w = np.asarray(w, dtype=float)
+    n = A.shape[0]
+    Ms = 1j * w[:, None, None] * np.eye(n)[None, :, :] - A[None, :, :]
+    bc = b.astype(complex)
+    try:
+        return (c @ np.linalg.solve(Ms, np.broadcast_to(bc, (w.size, n, 1))))[:, 0, 0]
+    except np.linalg.LinAlgError:
+        pass
+    out = np.full(w.size, complex(np.inf, 0.0))
+    for k, M in enumerate(Ms):
+        with contextlib.suppress(np.linalg.LinAlgError):  # singular: an imaginary-axis pole of L, L = inf
+            out[k] = (c @ np.linalg.solve(M, bc))[0, 0]
+    return out
+
+
+def classical_margins(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[float, float, float, float]:
+    """Gain margin, phase margin (deg) and their crossover frequencies (rad/s) of ``L(s) = c (sI - A)^-1 b``.
+
+    Of several crossovers, the gain margin is the one closest to 1 on a log scale and the phase
+    margin the one smallest in magnitude (python-control's ``stability_margins`` convention); a
+    margin without a crossover is ``inf`` and its frequency ``nan``.
+
+    Returns
+    -------
+    gain_margin, phase_margin, w_phase_crossover, w_gain_crossover : float
+    """
+    A, b, c = (np.atleast_2d(np.asarray(m, dtype=float)) for m in (A, b, c))
+    b, c = b.reshape(-1, 1), c.reshape(1, -1)
+    w_phase, w_gain = crossovers(A, b, c)
+    gm, wpc = math.inf, math.nan
+    if w_phase.size:
+        with np.errstate(divide="ignore"):
+            gms = 1.0 / np.abs(_response(A, b, c, w_phase))
+            k = int(np.argmin(np.abs(np.log(gms))))
+        gm, wpc = float(gms[k]), float(w_phase[k])
+    pm, wgc = math.inf, math.nan
+    if w_gain.size:
+        pms = np.remainder(np.angle(_response(A, b, c, w_gain), deg=True), 360.0) - 180.0
+        k = int(np.argmin(np.abs(pms)))
+        pm, wgc = float(pms[k]), float(w_gain[k])
+    return gm, pm, wpc, wgc
+
+
+def loop_margins(design: Any, channel: int = 0) -> LoopMargins | None:
+    """Margins (:func:`classical_margins`) of the loop broken at plant input ``channel`` and its modulus
+    margin ``inf |1 + L(jw)|`` over :func:`frequency_grid`."""
     mats = loop_matrices(design, channel)
     if mats is None:
         return None
-    A, b, c = mats
-    gm, pm, _sm, wpc, wgc, _wms = control.stability_margins(control.ss(A, b, c, 0.0))
+    gm, pm, wpc, wgc = classical_margins(*mats)
     resp = loop_frequency_response(design, frequency_grid(design), channel)
     return LoopMargins(
-        gain_margin=float(gm), phase_margin=float(pm), w_phase_crossover=float(wpc),
+        gain_margin=gm, phase_margin=pm, w_phase_crossover=wpc, w_gain_crossover=wgc,
         # L is strictly proper, so |1 + L(jw)| -> 1 as w -> inf: the infimum is at most 1
-        w_gain_crossover=float(wgc), modulus_margin=min(float(np.min(np.abs(1.0 + resp))), 1.0),
+        modulus_margin=min(float(np.min(np.abs(1.0 + resp))), 1.0),
     )
 
 

@@ -191,7 +191,16 @@ class LpSolution:
 
 
 def solve_lp(c: np.ndarray, G: np.ndarray, h: np.ndarray, *, solver: str = "CLARABEL") -> LpSolution:
-    """``min c . x`` subject to ``G x <= h`` with cvxpy (the one LP of this module)."""
+    """``min c . x`` subject to ``G x <= h`` with cvxpy (the one LP of this module).
+
+    Solved in the solver process when the command line started one
+    (:mod:`designkit.verification.solver_process`), else here.
+    """
+    from designkit.verification import solver_process
+
+    done, remote = solver_process.call("lp", c, G, h, solver=solver)
+    if done:
+        return remote
     import cvxpy as cp
 
     c, G, h = np.asarray(c, dtype=float), np.asarray(G, dtype=float), np.asarray(h, dtype=float)

@@ -1,9 +1,9 @@
 """Check ``"pole_placement"``: does the synthesised closed loop have the requested poles and zeros?
 
-Computed independently of the synthesis formulas, from the closed loop's state space with
-python-control:
+Computed independently of the synthesis formulas, from the closed loop's state space (NumPy and
+SciPy; the tests compare every quantity with python-control's ``poles``, ``zeros`` and ``dcgain``):
 
-- poles: ``control.poles`` of the closed loop, matched to ``design.poles`` as multisets (optimal
+- poles: eigenvalues of the closed loop's ``A``, matched to ``design.poles`` as multisets (optimal
   assignment); a pole's error is ``|p - p_ref| / R`` with ``R`` the largest requested magnitude.
   Simple poles must agree to ``POLE_REL``; an ``m``-fold cluster of requested poles (e.g. the
   double pole of a critically damped pair) to ``POLE_REL**(1/m)``, the accuracy to which any
@@ -12,11 +12,12 @@ python-control:
 The reference kind is the design's (``design.reference``), never guessed from signal names; the
 first joint's channels are used (the families that place zeros have one joint).
 
-- servo (``reference == "step"``): zeros of the SISO ``xD -> x1`` subsystem by ``control.zeros``, after
-  discarding infinite zeros that the QZ algorithm returns as huge finite numbers
+- servo (``reference == "step"``): zeros of the SISO ``xD -> x1`` subsystem (generalised eigenvalues of
+  its Rosenbrock pencil, QZ), after discarding infinite zeros that the QZ algorithm returns as huge
+  finite numbers
   (``|z| > ZERO_INFINITE_REL * ||[A B; C D]||``), matched to ``design.zeros``.  A zero cancelling a
   pole (zero placed on the third pole) is a genuine root of the numerator and is matched like any
-  other.  DC gain of ``x1/xD`` must be 1.
+  other.  DC gain of ``x1/xD`` (``D - C A^-1 B``) must be 1.
 - tracker (``reference == "trajectory"``): the reference transfer with ``xD' = s xD`` and
   ``xD'' = s^2 xD`` must be identically 1 (perfect tracking, notes F1) -- evaluated at
   ``s = 0, jR/10, jR, 10jR`` -- so it has no zeros (``design.zeros == ()``); and ``xi -> x1`` must have
@@ -28,10 +29,10 @@ first joint's channels are used (the families that place zeros have one joint).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from designkit.verification.check import Check
 from designkit.verification.tolerances import (
@@ -71,6 +72,8 @@ def match_roots(computed: Sequence[complex], ref: Sequence[complex], scale: floa
         return {"ok": False, "ratio": np.inf, "rows": [], "reason": f"{len(computed)} computed vs {len(ref)} requested"}
     if len(ref) == 0:
         return {"ok": True, "ratio": 0.0, "rows": []}
+    from scipy.optimize import linear_sum_assignment
+
     cost = np.abs(computed[:, None] - ref[None, :]) / scale
     ci, ri = linear_sum_assignment(cost)
     sizes = cluster_sizes(ref, scale)
@@ -94,24 +97,54 @@ def coefficient_error(computed: Sequence[complex], ref: Sequence[complex], scale
     return float(np.max(np.abs(c - r) / scale**k))
 
 
+@dataclass(frozen=True)
+class Siso:
+    """A single-input single-output state-space system ``(A, B, C, D)`` (``B`` one column, ``C`` one row)."""
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+
+
 def finite_zeros(sys: Any) -> tuple[np.ndarray, int]:
-    """Zeros of a SISO ``control.StateSpace`` by ``control.zeros``, without spurious infinite ones.
+    """Finite zeros of a SISO state-space system (anything with ``A``, ``B``, ``C``, ``D``, e.g. :class:`Siso`
+    or a ``control.StateSpace``), without spurious infinite ones.
 
-    Returns the finite zeros and how many were discarded as infinite.
+    The zeros are the finite generalised eigenvalues ``s`` of the Rosenbrock pencil
+    ``[[A, B], [C, D]] - s [[I, 0], [0, 0]]`` (QZ, :func:`scipy.linalg.eigvals`); QZ returns the
+    pencil's infinite eigenvalues as ``inf`` or as huge finite numbers, which are discarded when
+    ``|z| > ZERO_INFINITE_REL * ||[A B; C D]||``.
+
+    Returns the finite zeros (1/s) and how many eigenvalues were discarded as infinite.
     """
-    import control
+    from scipy.linalg import eigvals
 
-    z = np.asarray(control.zeros(sys), dtype=complex)
-    L = np.block([[np.asarray(sys.A), np.asarray(sys.B)], [np.asarray(sys.C), np.asarray(sys.D)]])
+    A, B, C, D = (np.atleast_2d(np.asarray(getattr(sys, k), dtype=float)) for k in "ABCD")
+    n = A.shape[0]
+    L = np.block([[A, B], [C, D]])
+    M = np.zeros_like(L)
+    M[:n, :n] = np.eye(n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.asarray(eigvals(L, M), dtype=complex)
     limit = ZERO_INFINITE_REL * max(float(np.linalg.norm(L)), 1.0)
     keep = np.isfinite(z) & (np.abs(z) <= limit)
     return z[keep], int(np.count_nonzero(~keep))
 
 
-def _siso(sys: Any, i: int, j: int) -> Any:
-    import control
+def dc_gain(sys: Any) -> complex:
+    """``D - C A^-1 B`` of a SISO state-space system (NaN when ``A`` is singular: a pole at 0)."""
+    A, B, C, D = (np.atleast_2d(np.asarray(getattr(sys, k), dtype=float)) for k in "ABCD")
+    try:
+        return complex((D - C @ np.linalg.solve(A, B))[0, 0])
+    except np.linalg.LinAlgError:
+        return complex(np.nan)
 
-    return control.ss(sys.A, sys.B[:, j : j + 1], sys.C[i : i + 1, :], sys.D[i : i + 1, j : j + 1])
+
+def _siso(cl: Any, i: int, j: int) -> Siso:
+    """Output ``i`` and input ``j`` of the state-space system ``cl``."""
+    return Siso(np.asarray(cl.A, float), np.asarray(cl.B, float)[:, j : j + 1], np.asarray(cl.C, float)[i : i + 1, :],
+                np.asarray(cl.D, float)[i : i + 1, j : j + 1])
 
 
 def _channels(design: Any) -> tuple[int, int, int, int]:
@@ -147,11 +180,8 @@ def pole_placement(design: Any) -> Check:
     Check
         ``achieved``: worst scaled pole error; ``margin``: ``1 - max(error/tolerance)``.
     """
-    import control
-
     cl = design.closed_loop
-    sys = cl.to_control()
-    poles = np.asarray(control.poles(sys), dtype=complex)
+    poles = np.linalg.eigvals(np.asarray(cl.A, dtype=float)).astype(complex)
     ref = np.asarray(design.poles, dtype=complex)
     R = float(np.max(np.abs(ref))) if len(ref) and np.max(np.abs(ref)) > 0 else 1.0
     pm = match_roots(poles, ref, R)
@@ -168,12 +198,12 @@ def pole_placement(design: Any) -> Check:
     }
     i_pos, _, _, i_dist = _channels(design)
     if design.reference == "step":  # servo: zeros and DC gain of x1/xD
-        sub = _siso(sys, 0, i_pos)
+        sub = _siso(cl, 0, i_pos)
         z, n_inf = finite_zeros(sub)
         zref = np.asarray(design.zeros, dtype=complex)
         Rz = max([R, *np.abs(zref).tolist()])
         zm = match_roots(z, zref, Rz)
-        dc = complex(control.dcgain(sub))
+        dc = dc_gain(sub)
         dc_err = scaled_error(dc, 1.0)
         ratios["zeros"] = zm["ratio"]
         ratios["dc gain"] = dc_err / DC_GAIN_TOL
@@ -195,7 +225,7 @@ def pole_placement(design: Any) -> Check:
         if len(design.zeros):
             failures.append(f"the tracker's reference transfer has no zeros, but the design lists {design.zeros}")
             ratios["requested zeros"] = np.inf
-        dz, n_inf = finite_zeros(_siso(sys, 0, i_dist))
+        dz, n_inf = finite_zeros(_siso(cl, 0, i_dist))
         if design.extra.get("integral_action", False):  # the PID tracker's integral rejects a constant xi
             dm = match_roots(dz, [0.0], R)
             ratios["xi zeros"] = dm["ratio"]

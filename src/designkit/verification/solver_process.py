@@ -1,0 +1,177 @@
+"""Conic solves (cvxpy + Clarabel) in a warm child process, started before the parent needs them.
+
+Why.  Importing cvxpy costs more than every solve of a ``designkit synth`` run together: about
+1-2 s on a 2-core machine, because it imports ``scipy.stats`` and ``scipy.optimize`` with it;
+the solves themselves take milliseconds.  The command line therefore starts this process first
+thing (:func:`start`): the child imports cvxpy on the second core while the parent imports the
+rest of the stack, designs and simulates.  When a check reaches a solve, the parent sends the
+problem's NumPy data through a pipe and gets the solver's answer back.
+
+What it changes.  Nothing in the results: the child runs the same functions
+(:func:`designkit.verification.lmi.solve_margin_lmi`, :func:`designkit.verification.lp.solve_lp`)
+with the same cvxpy and Clarabel, and what it returns is only a candidate -- every certificate
+is re-checked with NumPy in the parent (:mod:`designkit.verification.certificate`), which alone
+decides.  Any failure of the channel (the child could not start, died, or answered with an
+error) makes the parent solve in-process, as it does when no child runs (the Python API, a
+one-core machine, or ``DESIGNKIT_SOLVER_PROCESS=0``), so an error a solve raises is raised in
+the parent exactly as without the child.
+
+Protocol: length-prefixed pickles over the child's stdin/stdout (a private pipe between two
+processes of the same program); requests name a function of :data:`SOLVERS`, nothing else.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import pickle
+import struct
+import subprocess
+import sys
+from typing import Any, BinaryIO
+
+__all__ = ["SOLVERS", "SolverProcess", "active", "call", "serve", "start", "stop"]
+
+SOLVERS: dict[str, tuple[str, str]] = {
+    "margin_lmi": ("designkit.verification.lmi", "solve_margin_lmi"),
+    "lp": ("designkit.verification.lp", "solve_lp"),
+}
+"""Request name -> (module, function) the child may run."""
+
+ENV_SWITCH = "DESIGNKIT_SOLVER_PROCESS"
+"""Environment variable: ``0`` keeps every solve in-process."""
+
+_HEADER = struct.Struct("<Q")
+
+
+def _send(stream: BinaryIO, obj: Any) -> None:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    stream.write(_HEADER.pack(len(data)) + data)
+    stream.flush()
+
+
+def _receive(stream: BinaryIO) -> Any:
+    head = stream.read(_HEADER.size)
+    if len(head) < _HEADER.size:
+        raise EOFError("solver process closed the pipe")
+    (size,) = _HEADER.unpack(head)
+    data = stream.read(size)
+    if len(data) < size:
+        raise EOFError("solver process closed the pipe")
+    return pickle.loads(data)  # noqa: S301 - our own child's answer on a private pipe
+
+
+class SolverProcess:
+    """A child Python that imports cvxpy at once, then runs the :data:`SOLVERS` it is sent."""
+
+    def __init__(self) -> None:
+        self._proc = subprocess.Popen(  # noqa: S603 - this interpreter, a fixed module
+            [sys.executable, "-c", "from designkit.verification.solver_process import serve; serve()"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+        )
+        self.failed = False
+
+    @property
+    def alive(self) -> bool:
+        """Started, not yet failed, and still running."""
+        return not self.failed and self._proc.poll() is None
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[bool, Any]:
+        """Run solver ``name`` in the child: ``(True, result)``, or ``(False, None)`` when the channel
+        failed or the child raised (the caller then solves in-process); a failure retires the child."""
+        if not self.alive:
+            return False, None
+        try:
+            _send(self._proc.stdin, (name, args, kwargs))
+            status, value = _receive(self._proc.stdout)
+        except (OSError, EOFError, pickle.PickleError, ValueError):
+            self.failed = True
+            return False, None
+        if status != "ok":
+            return False, None
+        return True, value
+
+    def close(self) -> None:
+        """End the child: closing its stdin ends its loop and it exits at once (:func:`serve`); this
+        process does not wait for it (a child still importing is killed)."""
+        for stream in (self._proc.stdin, self._proc.stdout):
+            if stream is not None:
+                with contextlib.suppress(OSError):
+                    stream.close()
+        if self._proc.poll() is None and self.failed:
+            self._proc.kill()
+
+
+_active: SolverProcess | None = None
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def start() -> SolverProcess | None:
+    """Start the solver process for this program (once); None when it would not help or is switched off.
+
+    It helps when a second core can import cvxpy while this process works: on one core it would
+    only compete, so none is started.  ``DESIGNKIT_SOLVER_PROCESS=0`` switches it off.
+    """
+    global _active
+    if _active is not None:
+        return _active
+    if os.environ.get(ENV_SWITCH, "1") == "0" or _cores() < 2 or "cvxpy" in sys.modules:
+        return None
+    try:
+        _active = SolverProcess()
+    except OSError:
+        return None
+    atexit.register(stop)
+    return _active
+
+
+def stop() -> None:
+    """End the solver process, if any."""
+    global _active
+    if _active is not None:
+        _active.close()
+        _active = None
+
+
+def active() -> SolverProcess | None:
+    """The running solver process, or None."""
+    return _active if _active is not None and _active.alive else None
+
+
+def call(name: str, *args: Any, **kwargs: Any) -> tuple[bool, Any]:
+    """``(True, result)`` of solver ``name`` run in the solver process, or ``(False, None)`` when none
+    runs or it failed (then solve in-process)."""
+    proc = active()
+    if proc is None:
+        return False, None
+    return proc.call(name, *args, **kwargs)
+
+
+def serve(stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:
+    """The child's loop: import cvxpy, then answer requests until stdin closes."""
+    import importlib
+
+    import cvxpy  # noqa: F401 - the point of this process: import it while the parent works
+
+    stdin = stdin if stdin is not None else sys.stdin.buffer
+    stdout = stdout if stdout is not None else sys.stdout.buffer
+    while True:
+        try:
+            name, args, kwargs = _receive(stdin)
+        except EOFError:  # the parent is done: exit without the interpreter's slow teardown of cvxpy and SciPy
+            stdout.flush()
+            os._exit(0)
+        try:
+            module, func = SOLVERS[name]
+            value = getattr(importlib.import_module(module), func)(*args, **kwargs)
+            answer: tuple[str, Any] = ("ok", value)
+        except Exception as exc:  # noqa: BLE001 - reported; the parent then solves in-process
+            answer = ("error", f"{type(exc).__name__}: {exc}")
+        _send(stdout, answer)
