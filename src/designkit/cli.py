@@ -82,16 +82,26 @@ def _exit_for(result) -> int:
     return EXIT_OK if result.verified else EXIT_CHECK_FAILED
 
 
-def _start_solver_process() -> None:
-    """Let a second core import cvxpy while this process works (:mod:`designkit.verification.solver_process`)."""
-    from designkit.verification.solver_process import start
+def _start_solver_process(*, report: bool = False) -> None:
+    """Let a second core import cvxpy while this process works (:mod:`designkit.verification.solver_process`);
+    with ``report``, import the report's stack while waiting for a solve, if ever."""
+    from designkit.verification import solver_process
 
-    start()
+    if solver_process.start() is not None and report:
+        solver_process.while_waiting(_import_report_stack)
+
+
+def _import_report_stack() -> None:
+    import importlib
+
+    for name in ("matplotlib.figure", "matplotlib.backends.backend_svg", "designkit.report.figures",
+                 "designkit.report.model", "designkit.report.html", "designkit.report.pdf"):
+        importlib.import_module(name)
 
 
 def cmd_synth(args: argparse.Namespace) -> int:
     """Synthesise, verify, simulate and write the HTML + PDF report."""
-    _start_solver_process()
+    _start_solver_process(report=not args.no_report)
     from designkit.pipeline import run
     from designkit.report import write_report
     from designkit.spec import load_spec

@@ -149,3 +149,17 @@ def test_pole_placement_detects_a_perturbed_pole(poles, shift):
     else:  # move the pair together so that it stays conjugate
         moved = (poles[0] + shift * R, poles[1] + shift * R, poles[2])
     assert pole_placement(dataclasses.replace(design, poles=moved)).passed is False
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 8))
+def test_exhaustive_assignment_has_scipys_optimal_cost(seed, n):
+    from scipy.optimize import linear_sum_assignment
+
+    from designkit.verification.pole_zero import assignment
+
+    cost = np.random.default_rng(seed).exponential(size=(n, n))
+    rows, cols = assignment(cost)
+    r_ref, c_ref = linear_sum_assignment(cost)
+    assert sorted(cols.tolist()) == list(range(n))  # a permutation
+    assert cost[rows, cols].sum() == pytest.approx(cost[r_ref, c_ref].sum(), rel=1e-12)

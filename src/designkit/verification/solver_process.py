@@ -16,6 +16,10 @@ error) makes the parent solve in-process, as it does when no child runs (the Pyt
 one-core machine, or ``DESIGNKIT_SOLVER_PROCESS=0``), so an error a solve raises is raised in
 the parent exactly as without the child.
 
+Waiting.  When a solve is requested before the child has finished importing cvxpy, the parent
+would sit idle; work registered with :func:`while_waiting` (the command line registers the imports
+of the report's stack) runs then instead, once, before the parent blocks on the answer.
+
 Protocol: length-prefixed pickles over the child's stdin/stdout (a private pipe between two
 processes of the same program); requests name a function of :data:`SOLVERS`, nothing else.
 """
@@ -26,12 +30,14 @@ import atexit
 import contextlib
 import os
 import pickle
+import select
 import struct
 import subprocess
 import sys
+from collections.abc import Callable
 from typing import Any, BinaryIO
 
-__all__ = ["SOLVERS", "SolverProcess", "active", "call", "serve", "start", "stop"]
+__all__ = ["SOLVERS", "SolverProcess", "active", "call", "serve", "start", "stop", "while_waiting"]
 
 SOLVERS: dict[str, tuple[str, str]] = {
     "margin_lmi": ("designkit.verification.lmi", "solve_margin_lmi"),
@@ -84,6 +90,8 @@ class SolverProcess:
             return False, None
         try:
             _send(self._proc.stdin, (name, args, kwargs))
+            if _idle_work and not select.select([self._proc.stdout], [], [], 0.0)[0]:
+                _run_idle_work()  # the answer is not there yet: do something useful meanwhile
             status, value = _receive(self._proc.stdout)
         except (OSError, EOFError, pickle.PickleError, ValueError):
             self.failed = True
@@ -104,6 +112,21 @@ class SolverProcess:
 
 
 _active: SolverProcess | None = None
+_idle_work: list[Callable[[], Any]] = []
+
+
+def while_waiting(work: Callable[[], Any]) -> None:
+    """Run ``work()`` (once) the first time this process would wait for the solver process's answer.
+
+    Meant for work the program needs later anyway (imports): if no wait happens, it is simply done
+    when it is needed.
+    """
+    _idle_work.append(work)
+
+
+def _run_idle_work() -> None:
+    while _idle_work:
+        _idle_work.pop(0)()
 
 
 def _cores() -> int:
