@@ -4,7 +4,13 @@ Run apart from the tests:  python benchmarks/bench_synth.py [--repeat N] [--phas
 
 The whole CLI is timed in fresh subprocesses (median of N runs), with `python -c pass` timed in
 the same run as the baseline, so the result is also quoted as a ratio that is less sensitive to
-a loaded machine; the children's CPU time (user + system) is reported next to it.  Every synth
+a loaded machine; the children's CPU time (user + system) is reported next to it.  The default
+command (``--jobs 2``: cvxpy imported by a solver process, figures drawn on two cores) is timed
+interleaved with ``--jobs 1`` (everything in one process), and the machine's parallel speed-up is
+measured in the same run (two CPU-bound Python processes at once against one after the other),
+since what two processes can gain depends on it.  designkit's bytecode is compiled first
+(``compileall``), as ``pip install`` does and as Python does on a first run: a sandbox that sets
+``PYTHONDONTWRITEBYTECODE`` would otherwise recompile the package on every run.  Every synth
 run must exit 0 and write both reports, else the benchmark fails: a broken command is not timed.
 ``--phases`` adds one in-process breakdown (imports, design + simulation + checks, report model
 with its figures, HTML, PDF); ``--imports`` lists the modules whose import costs the most in a
@@ -31,6 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "specs" / "posspeed-link.yaml"
 BUDGET_S = 3.0
 SYNTH = [sys.executable, "-m", "designkit.cli", "synth", str(SPEC)]
+_SPIN = "s = 0\nfor i in range(6_000_000):\n    s += i\n"
 
 _PHASES = r"""
 import json, sys, tempfile, time
@@ -90,6 +97,24 @@ def _times(cmd: list[str], repeat: int, *, check_reports: Path | None = None,
     return out
 
 
+def _parallel_speedup(repeat: int = 3) -> float:
+    """Two CPU-bound Python processes at once vs one after the other: the wall-time ratio (2.0 is two
+    full cores; SMT siblings or a shared host give less)."""
+    cmd = [sys.executable, "-c", _SPIN]
+    serial, parallel = [], []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        subprocess.run(cmd, check=True)
+        subprocess.run(cmd, check=True)
+        serial.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        procs = [subprocess.Popen(cmd) for _ in range(2)]
+        for p in procs:
+            p.wait()
+        parallel.append(time.perf_counter() - start)
+    return statistics.median(serial) / statistics.median(parallel)
+
+
 def _phases() -> dict[str, float]:
     proc = subprocess.run([sys.executable, "-c", _PHASES, str(SPEC)], check=True, capture_output=True, text=True)
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -119,20 +144,27 @@ def main() -> None:
                         "interleaved with the working tree, for a before/after comparison")
     args = parser.parse_args()
     env_note = os.environ.get("MPLBACKEND", "")
+    import compileall
+
+    compileall.compile_dir(str(ROOT / "src" / "designkit"), quiet=1)
     out = Path(tempfile.mkdtemp())
     try:
         base_cpu: list[float] = []
         synth_cpu: list[float] = []
         before_src = _checkout(args.before, out.parent / f"{out.name}-before") if args.before else None
+        if before_src is not None:
+            compileall.compile_dir(str(before_src), quiet=1)
         before: list[float] = []
         before_cpu: list[float] = []
         base = _times([sys.executable, "-c", "pass"], max(args.repeat, 5), cpu=base_cpu)
-        synth = []
+        synth, serial, serial_cpu = [], [], []
         for _ in range(args.repeat):  # interleaved, so both see the same load
             synth += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=synth_cpu)
+            serial += _times([*SYNTH, "--out", str(out), "--jobs", "1"], 1, check_reports=out, cpu=serial_cpu)
             if before_src is not None:
                 env = {**os.environ, "PYTHONPATH": str(before_src)}
                 before += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=before_cpu, env=env)
+        speedup = _parallel_speedup()
         phases = _phases() if args.phases else None
         imports = _imports(out) if args.imports else None
     finally:
@@ -145,11 +177,17 @@ def main() -> None:
     print(f"| python -c pass (baseline) | {b:.3f} | {', '.join(f'{x:.2f}' for x in base)} | 1.0 | {bc:.3f} |")
     print(f"| designkit synth posspeed-link --out DIR (HTML + PDF) | {s:.3f} | "
           f"{', '.join(f'{x:.2f}' for x in synth)} | {s / b:.1f} | {sc:.3f} |")
+    ss, ssc = statistics.median(serial), statistics.median(serial_cpu)
+    print(f"| same with --jobs 1 (one process) | {ss:.3f} | {', '.join(f'{x:.2f}' for x in serial)} | "
+          f"{ss / b:.1f} | {ssc:.3f} |")
     if before:
         bs, bsc = statistics.median(before), statistics.median(before_cpu)
         print(f"| same, src/ of {args.before} (before) | {bs:.3f} | {', '.join(f'{x:.2f}' for x in before)} | "
               f"{bs / b:.1f} | {bsc:.3f} |")
-    print("\nCPU time (user + system of the child) is less sensitive than wall time to other load on the machine.")
+    print("\nCPU time (user + system of the command and the processes it forks: the solver process and the "
+          "figure process) is less sensitive than wall time to other load on the machine.")
+    print(f"\n--jobs 2 vs --jobs 1: {ss / s:.2f}x faster; this machine runs two CPU-bound processes "
+          f"{speedup:.2f}x faster at once than one after the other (2.0 = two full cores).")
     verdict = "within" if s < BUDGET_S else "OVER"
     load = os.getloadavg() if hasattr(os, "getloadavg") else None
     print(f"\nbudget {BUDGET_S:.1f} s: {verdict} ({s:.2f} s); load average at the end "
@@ -165,8 +203,11 @@ def main() -> None:
     (ROOT / "benchmarks" / "results").mkdir(exist_ok=True)
     record = {
         "python -c pass (baseline)": b, "designkit synth posspeed-link (HTML + PDF)": s,
-        "runs": {"baseline": base, "synth": synth}, "cpu_s": {"baseline": bc, "synth": sc},
-        "cpu_runs": {"baseline": base_cpu, "synth": synth_cpu}, "ratio_to_python_c_pass": s / b,
+        "designkit synth --jobs 1": ss,
+        "runs": {"baseline": base, "synth": synth, "synth_jobs_1": serial},
+        "cpu_s": {"baseline": bc, "synth": sc, "synth_jobs_1": ssc},
+        "cpu_runs": {"baseline": base_cpu, "synth": synth_cpu, "synth_jobs_1": serial_cpu},
+        "ratio_to_python_c_pass": s / b, "parallel_speedup_of_two_processes": speedup,
         "before": {"ref": args.before, "runs": before, "cpu_runs": before_cpu} if before else None,
         "budget_s": BUDGET_S,
         "within_budget": s < BUDGET_S, "phases": phases, "imports": imports,

@@ -148,3 +148,29 @@ def test_unwritable_output_is_bad_input(tmp_path, capsys):
     assert code == 2
     assert err.startswith("designkit: error: --out: cannot write the report")
     assert blocker.read_text() == "not a directory"
+
+
+def test_jobs_1_and_2_write_the_same_reports(tmp_path):
+    """--jobs 2 (solver process, figures on two cores) changes where the work runs, not what is written.
+    Run as separate commands: a fresh process is what the command line forks from."""
+    spec = _write(tmp_path, POSSPEED_YAML)
+    env = {**__import__("os").environ, "DESIGNKIT_PROVENANCE": "stable"}
+    outs = {}
+    for jobs in ("1", "2"):
+        out = tmp_path / f"jobs{jobs}"
+        done = subprocess.run([sys.executable, "-m", "designkit.cli", "synth", str(spec), "--out", str(out),
+                               "--jobs", jobs], capture_output=True, text=True, env=env, timeout=600)
+        assert done.returncode == 0, done.stderr
+        outs[jobs] = {p.name: p.read_bytes() for p in sorted(out.rglob("report.*"))}
+    assert set(outs["1"]) == {"report.html", "report.pdf"}
+    assert outs["1"] == outs["2"]
+
+
+@pytest.mark.parametrize("value", ["0", "3", "two"])
+def test_jobs_must_be_1_or_2(tmp_path, capsys, value):
+    spec = _write(tmp_path, POSSPEED_YAML)
+    with pytest.raises(SystemExit) as exc:
+        main(["synth", str(spec), "--jobs", value, "--out", str(tmp_path / "out")])
+    assert exc.value.code == 2
+    assert "--jobs" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

@@ -85,9 +85,12 @@ def _exit_for(result) -> int:
 def _start_solver_process(*, report: bool = False) -> None:
     """Let a second core import cvxpy while this process works (:mod:`designkit.verification.solver_process`);
     with ``report``, import the report's stack while waiting for a solve, if ever."""
+    import numpy  # noqa: F401 - imported before the fork, so the solver process inherits them
+    import scipy.linalg  # noqa: F401
+
     from designkit.verification import solver_process
 
-    if solver_process.start() is not None and report:
+    if solver_process.start(fork=True) is not None and report:
         solver_process.while_waiting(_import_report_stack)
 
 
@@ -101,7 +104,8 @@ def _import_report_stack() -> None:
 
 def cmd_synth(args: argparse.Namespace) -> int:
     """Synthesise, verify, simulate and write the HTML + PDF report."""
-    _start_solver_process(report=not args.no_report)
+    if args.jobs > 1:
+        _start_solver_process(report=not args.no_report)
     from designkit.pipeline import run
     from designkit.report import write_report
     from designkit.spec import load_spec
@@ -111,7 +115,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
     files = None
     if not args.no_report:
         try:
-            files = write_report(result, Path(args.out))
+            files = write_report(result, Path(args.out), processes=args.jobs)
         except OutputError as exc:
             raise OutputError("--out", f"cannot write the report: {exc.message}") from None
         except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
@@ -130,7 +134,8 @@ def cmd_synth(args: argparse.Namespace) -> int:
 
 def cmd_verify(args: argparse.Namespace) -> int:
     """Synthesise and verify; print the checks; write nothing."""
-    _start_solver_process()
+    if args.jobs > 1:
+        _start_solver_process()
     from designkit.pipeline import run
     from designkit.spec import load_spec
 
@@ -211,6 +216,19 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _jobs(text: str) -> int:
+    if text not in ("1", "2"):
+        raise argparse.ArgumentTypeError(f"must be 1 or 2, got {text!r}")
+    return int(text)
+
+
+def _jobs_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=_jobs, default=2, metavar="{1,2}",
+                   help="processes to use (default 2 on a machine with two cores or more: a solver process "
+                   "imports cvxpy while this one designs, and the figures are drawn on two cores; same results); "
+                   "1 runs everything in this process")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
     parser = argparse.ArgumentParser(
@@ -229,11 +247,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "goes to OUT/<spec name>/report.html and report.pdf")
     p.add_argument("--json", action="store_true", help="print one JSON object (gains, verified, checks)")
     p.add_argument("--no-report", action="store_true", help="do not write the report")
+    _jobs_option(p)
     p.set_defaults(func=cmd_synth)
 
     p = sub.add_parser("verify", help="synthesise and run every check; write nothing")
     p.add_argument("spec")
     p.add_argument("--json", action="store_true")
+    _jobs_option(p)
     p.set_defaults(func=cmd_verify)
 
     p = sub.add_parser("simulate", help="simulate the designed closed loop on the nonlinear model")

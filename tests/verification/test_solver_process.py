@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import io
 import json
+import os
+import signal
 import subprocess
 import sys
 
@@ -18,9 +20,9 @@ from tests.problems import POSSPEED_YAML
 A_STABLE = [np.array([[0.0, 1.0], [-2.0, -3.0]]), np.array([[0.0, 1.0], [-3.0, -2.5]])]
 
 
-@pytest.fixture
-def child(monkeypatch):
-    proc = SolverProcess()
+@pytest.fixture(params=["spawned", "forked"])
+def child(monkeypatch, request):
+    proc = SolverProcess(fork=request.param == "forked")
     monkeypatch.setattr(solver_process, "_active", proc)
     yield proc
     monkeypatch.setattr(solver_process, "_active", None)
@@ -55,8 +57,12 @@ def test_lp_answers_equal_the_in_process_solve(child, monkeypatch):
 
 
 def test_a_dead_child_falls_back_to_the_in_process_solve(child, monkeypatch):
-    child._proc.kill()
-    child._proc.wait()
+    if child._proc is not None:
+        child._proc.kill()
+        child._proc.wait()
+    else:
+        os.kill(child._pid, signal.SIGKILL)
+        os.waitpid(child._pid, 0)
     coords = lmi.coordinates(A_STABLE)
     sol = lmi.solve_margin_lmi(coords.Ah)  # the channel fails: solved here instead
     assert sol.status == "optimal" and sol.t > 0
@@ -95,11 +101,11 @@ def test_serve_answers_only_the_listed_solvers(monkeypatch):
     assert status == "error" and "KeyError" in value
 
 
-def test_start_is_off_by_the_switch_and_when_cvxpy_is_loaded(monkeypatch):
+def test_start_is_off_on_one_core_and_when_cvxpy_is_loaded(monkeypatch):
     monkeypatch.setattr(solver_process, "_active", None)
-    monkeypatch.setenv(solver_process.ENV_SWITCH, "0")
+    monkeypatch.setattr(solver_process, "_cores", lambda: 1)
     assert solver_process.start() is None
-    monkeypatch.delenv(solver_process.ENV_SWITCH)
+    monkeypatch.setattr(solver_process, "_cores", lambda: 2)
     monkeypatch.setitem(sys.modules, "cvxpy", sys.modules.get("cvxpy", object()))
     assert solver_process.start() is None  # nothing to gain: this process has cvxpy already
 
@@ -111,7 +117,8 @@ def test_a_synth_run_with_the_solver_process_never_imports_cvxpy_in_the_parent(t
     script = (
         "import json, sys\n"
         "from designkit.verification import solver_process\n"
-        "proc = solver_process.start()\n"
+        "import numpy, scipy.linalg\n"
+        "proc = solver_process.start(fork=True)\n"
         "from designkit.pipeline import run\n"
         "from designkit.spec import load_spec\n"
         f"r = run(load_spec({str(spec)!r}))\n"
@@ -120,9 +127,7 @@ def test_a_synth_run_with_the_solver_process_never_imports_cvxpy_in_the_parent(t
         "                  'cvxpy': 'cvxpy' in sys.modules, 'lyapunov': lyap.passed,\n"
         "                  'margin': lyap.margin, 'verified': r.verified}))\n"
     )
-    env = {k: v for k, v in __import__("os").environ.items() if k != solver_process.ENV_SWITCH}
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, env=env,
-                         timeout=300)
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300)
     got = json.loads(out.stdout.strip().splitlines()[-1])
     if not got["started"]:
         pytest.skip("one core: no solver process is started")

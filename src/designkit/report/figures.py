@@ -1004,20 +1004,26 @@ EXTRA_CHECK_FIGURES: dict[str, tuple[Callable[[Any, Any], Figure | None], ...]] 
 """Check name -> further figures drawn from that check, after its :data:`CHECK_FIGURES` one."""
 
 
-def design_figures(result: Any) -> tuple[Figure, ...]:
+def design_figures(result: Any, *, processes: int = 1) -> tuple[Figure, ...]:
     """Every figure of a report, in report order (figures without data are left out).
 
     A check gets the figure :data:`CHECK_FIGURES` names for it, or, when its certificate holds a
     parameter lattice (``"grid"``), the robustness figure; then those of :data:`EXTRA_CHECK_FIGURES`.
-    File names are unique (a later figure with a taken name is left out).
+    File names are unique (a later figure with a taken name is left out).  With ``processes=2`` the
+    figures are drawn on two cores (:func:`designkit.report.parallel.run_tasks`; same figures).
     """
-    out = [f for draw in DESIGN_FIGURES if (f := draw(result)) is not None]
+    from functools import partial
+
+    from designkit.report.parallel import run_tasks
+
+    tasks: list[Callable[[], Figure | None]] = [partial(draw, result) for draw in DESIGN_FIGURES]
     for check in result.checks:
         draw = CHECK_FIGURES.get(check.name)
         if draw is None and isinstance(check.certificate, dict | Mapping) and "grid" in check.certificate:
             draw = robustness_figure
         draws = ((draw,) if draw is not None else ()) + EXTRA_CHECK_FIGURES.get(check.name, ())
-        out.extend(f for d in draws if (f := d(result, check)) is not None)
+        tasks.extend(partial(d, result, check) for d in draws)
+    out = [f for f in run_tasks(tasks, processes=processes) if f is not None]
     seen: set[str] = set()
     return tuple(f for f in out if not (f.filename in seen or seen.add(f.filename)))
 

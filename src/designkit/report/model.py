@@ -1082,13 +1082,19 @@ def _contents(model_parts: Mapping[str, Any]) -> tuple[Section, ...]:
     return tuple(sections)
 
 
-def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None) -> ReportModel:
+def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
+                       processes: int = 1) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
 
     Parameters
     ----------
     result : designkit.pipeline.PipelineResult
         Spec, design, checks, simulation and versions of one run.
+    provenance : sequence of (str, str), optional
+        The provenance rows (default: :func:`designkit.report.provenance.provenance_rows`).
+    processes : int
+        2 draws the figures on two cores (:func:`designkit.report.parallel.run_tasks`: a forked child,
+        only when this process runs no other thread); the report is the same.
 
     Returns
     -------
@@ -1103,7 +1109,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     label = display.label
     plant = design.plant
     lab_intro, lab = _lab_sections(lab_answers(result))
-    figures = design_figures(result)
+    figures = design_figures(result, processes=processes)
     diagnosis = _diagnose(result) if checks else None
     why, why_note, why_fixes = _why_section(result, diagnosis)
     if isinstance(diagnosis, Exception):

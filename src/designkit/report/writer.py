@@ -93,7 +93,7 @@ def _check_destination(out_dir: object, name: str) -> Path:
     return folder
 
 
-def write_report(result, out_dir: str | os.PathLike[str]) -> ReportFiles:
+def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1) -> ReportFiles:
     """Render the report of ``result`` and write ``out_dir/<spec name>/report.{html,pdf}``.
 
     Parameters
@@ -102,6 +102,8 @@ def write_report(result, out_dir: str | os.PathLike[str]) -> ReportFiles:
         The run to report.
     out_dir : path-like
         Report root; created when missing.
+    processes : int
+        2 draws the figures on two cores (see :func:`~designkit.report.model.build_report_model`).
 
     Returns
     -------
@@ -123,7 +125,7 @@ def write_report(result, out_dir: str | os.PathLike[str]) -> ReportFiles:
     if not isinstance(result, PipelineResult):
         raise SpecError("result", f"expected the PipelineResult of designkit.run, got {type(result).__name__}")
     _check_destination(out_dir, result.loaded.spec.name)  # before the costly rendering
-    model = build_report_model(result)
+    model = build_report_model(result, processes=processes)
     html = render_html(model).encode("utf-8")
     pdf = compile_pdf(model)
     folder = _check_destination(out_dir, model.name)

@@ -13,15 +13,15 @@ with the same cvxpy and Clarabel, and what it returns is only a candidate -- eve
 is re-checked with NumPy in the parent (:mod:`designkit.verification.certificate`), which alone
 decides.  Any failure of the channel (the child could not start, died, or answered with an
 error) makes the parent solve in-process, as it does when no child runs (the Python API, a
-one-core machine, or ``DESIGNKIT_SOLVER_PROCESS=0``), so an error a solve raises is raised in
-the parent exactly as without the child.
+one-core machine, or ``designkit synth --jobs 1``), so an error a solve raises is raised in the
+parent exactly as without the child.
 
 Waiting.  When a solve is requested before the child has finished importing cvxpy, the parent
 would sit idle; work registered with :func:`while_waiting` (the command line registers the imports
 of the report's stack) runs then instead, once, before the parent blocks on the answer.
 
-Protocol: length-prefixed pickles over the child's stdin/stdout (a private pipe between two
-processes of the same program); requests name a function of :data:`SOLVERS`, nothing else.
+Protocol: length-prefixed pickles over two pipes (private to two processes of the same program);
+requests name a function of :data:`SOLVERS`, nothing else.
 """
 
 from __future__ import annotations
@@ -31,11 +31,14 @@ import contextlib
 import os
 import pickle
 import select
+import signal
 import struct
 import subprocess
 import sys
 from collections.abc import Callable
 from typing import Any, BinaryIO
+
+from designkit.processes import can_fork
 
 __all__ = ["SOLVERS", "SolverProcess", "active", "call", "serve", "start", "stop", "while_waiting"]
 
@@ -44,9 +47,6 @@ SOLVERS: dict[str, tuple[str, str]] = {
     "lp": ("designkit.verification.lp", "solve_lp"),
 }
 """Request name -> (module, function) the child may run."""
-
-ENV_SWITCH = "DESIGNKIT_SOLVER_PROCESS"
-"""Environment variable: ``0`` keeps every solve in-process."""
 
 _HEADER = struct.Struct("<Q")
 
@@ -69,19 +69,69 @@ def _receive(stream: BinaryIO) -> Any:
 
 
 class SolverProcess:
-    """A child Python that imports cvxpy at once, then runs the :data:`SOLVERS` it is sent."""
+    """A child process that imports cvxpy at once, then runs the :data:`SOLVERS` it is sent.
 
-    def __init__(self) -> None:
-        self._proc = subprocess.Popen(  # noqa: S603 - this interpreter, a fixed module
-            [sys.executable, "-c", "from designkit.verification.solver_process import serve; serve()"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-        )
+    Parameters
+    ----------
+    fork : bool
+        Fork this process (the child keeps what is already imported, e.g. NumPy and SciPy's linear
+        algebra, and only imports cvxpy on top) instead of starting a new interpreter.  Only done
+        where ``os.fork`` exists and this process runs no other Python thread; otherwise a new
+        interpreter is started.
+    """
+
+    def __init__(self, *, fork: bool = False) -> None:
         self.failed = False
+        self._pid: int | None = None
+        self._proc: subprocess.Popen | None = None
+        if fork and can_fork():
+            self._fork()
+        else:
+            self._proc = subprocess.Popen(  # noqa: S603 - this interpreter, a fixed module
+                [sys.executable, "-c", "from designkit.verification.solver_process import serve; serve()"],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+            )
+            self._requests, self._answers = self._proc.stdin, self._proc.stdout
+
+    def _fork(self) -> None:
+        req_r, req_w = os.pipe()
+        ans_r, ans_w = os.pipe()
+        sys.stdout.flush()
+        sys.stderr.flush()
+        pid = os.fork()
+        if pid == 0:  # the child: quiet (no output, no Ctrl-C traceback), serve, leave without teardown
+            try:
+                os.close(req_w)
+                os.close(ans_r)
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+                devnull = os.open(os.devnull, os.O_RDWR)
+                for fd in (0, 1, 2):
+                    os.dup2(devnull, fd)
+                serve(os.fdopen(req_r, "rb"), os.fdopen(ans_w, "wb"))
+            finally:
+                os._exit(0)
+        os.close(req_r)
+        os.close(ans_w)
+        self._pid = pid
+        self._requests, self._answers = os.fdopen(req_w, "wb"), os.fdopen(ans_r, "rb")
+
+    def _running(self) -> bool:
+        if self._proc is not None:
+            return self._proc.poll() is None
+        if self._pid is None:
+            return False
+        try:
+            done, _ = os.waitpid(self._pid, os.WNOHANG)
+        except ChildProcessError:
+            done = self._pid
+        if done:
+            self._pid = None
+        return not done
 
     @property
     def alive(self) -> bool:
         """Started, not yet failed, and still running."""
-        return not self.failed and self._proc.poll() is None
+        return not self.failed and self._running()
 
     def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[bool, Any]:
         """Run solver ``name`` in the child: ``(True, result)``, or ``(False, None)`` when the channel
@@ -89,10 +139,10 @@ class SolverProcess:
         if not self.alive:
             return False, None
         try:
-            _send(self._proc.stdin, (name, args, kwargs))
-            if _idle_work and not select.select([self._proc.stdout], [], [], 0.0)[0]:
+            _send(self._requests, (name, args, kwargs))
+            if _idle_work and not select.select([self._answers], [], [], 0.0)[0]:
                 _run_idle_work()  # the answer is not there yet: do something useful meanwhile
-            status, value = _receive(self._proc.stdout)
+            status, value = _receive(self._answers)
         except (OSError, EOFError, pickle.PickleError, ValueError):
             self.failed = True
             return False, None
@@ -101,14 +151,20 @@ class SolverProcess:
         return True, value
 
     def close(self) -> None:
-        """End the child: closing its stdin ends its loop and it exits at once (:func:`serve`); this
-        process does not wait for it (a child still importing is killed)."""
-        for stream in (self._proc.stdin, self._proc.stdout):
-            if stream is not None:
-                with contextlib.suppress(OSError):
-                    stream.close()
-        if self._proc.poll() is None and self.failed:
-            self._proc.kill()
+        """End the child now: its pipes are closed and it is killed (it holds nothing to save)."""
+        for stream in (self._requests, self._answers):
+            with contextlib.suppress(OSError):
+                stream.close()
+        if self._proc is not None:
+            with contextlib.suppress(OSError):
+                self._proc.kill()
+            self._proc.wait()
+        elif self._pid is not None:
+            with contextlib.suppress(OSError):
+                os.kill(self._pid, signal.SIGKILL)
+            with contextlib.suppress(ChildProcessError):
+                os.waitpid(self._pid, 0)
+            self._pid = None
 
 
 _active: SolverProcess | None = None
@@ -130,25 +186,25 @@ def _run_idle_work() -> None:
 
 
 def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
+    from designkit.processes import available_cores
+
+    return available_cores()
 
 
-def start() -> SolverProcess | None:
-    """Start the solver process for this program (once); None when it would not help or is switched off.
+def start(*, fork: bool = False) -> SolverProcess | None:
+    """Start the solver process for this program (once); None when it would not help.
 
     It helps when a second core can import cvxpy while this process works: on one core it would
-    only compete, so none is started.  ``DESIGNKIT_SOLVER_PROCESS=0`` switches it off.
+    only compete, so none is started; nor when this process has imported cvxpy already.  ``fork``:
+    see :class:`SolverProcess`.
     """
     global _active
     if _active is not None:
         return _active
-    if os.environ.get(ENV_SWITCH, "1") == "0" or _cores() < 2 or "cvxpy" in sys.modules:
+    if _cores() < 2 or "cvxpy" in sys.modules:
         return None
     try:
-        _active = SolverProcess()
+        _active = SolverProcess(fork=fork)
     except OSError:
         return None
     atexit.register(stop)
