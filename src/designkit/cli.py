@@ -301,5 +301,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def entry() -> None:
+    """The ``designkit`` console script: :func:`main`, then leave without the interpreter's teardown.
+
+    Finalizing the interpreter after a ``synth`` run (matplotlib, CasADi, SciPy, pydantic loaded)
+    takes about 0.5 s, and nothing designkit needs happens then: every file is closed when it is
+    written and the solver process is stopped here.  So once the standard streams are flushed,
+    the process ends with :func:`os._exit`.  (A tool that saves its data at exit, e.g. coverage,
+    should call :func:`main` instead.)  ``--help``, ``--version`` and ``--debug`` tracebacks leave
+    through the normal path.
+    """
+    import contextlib
+    import os
+
+    code = main()
+    solver_process = sys.modules.get("designkit.verification.solver_process")
+    if solver_process is not None:
+        solver_process.stop()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(BrokenPipeError, ValueError):  # output piped into e.g. `head`, or closed
+            stream.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()

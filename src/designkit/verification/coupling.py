@@ -9,7 +9,8 @@ the simplified model lumps into the perturbation ``xi_i``.  Two measurements of 
   per-joint requested poles (the pole shift the intercoupling causes at rest);
 * with a simulation, each joint's position on the full nonlinear coupled arm against the
   response its own loop predicts on its simplified model for the same reference (the exact linear
-  response of the loop's linear closed loop, :func:`designkit.simulation.linear.forced_response`): the **intercoupling error** ``q_i - q_i,decoupled`` (rad),
+  response of the loop's linear closed loop,
+  :func:`designkit.simulation.linear.forced_response`): the **intercoupling error** ``q_i - q_i,decoupled`` (rad),
   largest over the run.
 
 The ``coupling`` check is informational: coupling is what the notes warn a PID may not
