@@ -133,3 +133,25 @@ def test_a_synth_run_with_the_solver_process_never_imports_cvxpy_in_the_parent(t
         pytest.skip("one core: no solver process is started")
     assert got == {**got, "alive": True, "cvxpy": False, "lyapunov": True, "verified": True}
     assert got["margin"] > 0
+
+
+def test_import_cvxpy_defers_scipy_stats_and_leaves_the_real_module_importable():
+    """Run in a fresh interpreter: the stand-in must not outlive the import, and the deferred
+    function must give scipy's answer when called."""
+    script = (
+        "import sys, json\n"
+        "from designkit.verification.solver_process import import_cvxpy\n"
+        "import_cvxpy()\n"
+        "loaded_during = 'scipy.stats' in sys.modules\n"
+        "from cvxpy.atoms.quantum_rel_entr import entropy\n"
+        "value = entropy([0.25, 0.75])\n"
+        "import scipy.stats\n"
+        "print(json.dumps({'during': loaded_during, 'value': float(value),\n"
+        "                  'real': scipy.stats.entropy([0.25, 0.75]), 'is_module': hasattr(scipy.stats, 'norm')}))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["during"] is False  # deferred: not imported by `import cvxpy`
+    assert got["is_module"] is True  # the real scipy.stats afterwards
+    expected = -(0.25 * np.log(0.25) + 0.75 * np.log(0.75))  # nats, computed here
+    assert got["value"] == pytest.approx(expected, rel=1e-15) and got["real"] == pytest.approx(expected, rel=1e-15)
