@@ -114,3 +114,18 @@ def test_a_model_without_shared_fixes_renders_as_before(infeasible_model):
     section = _why_html(render_html(plain))
     assert 'class="fixes"' not in section and section.count("Do this.") == 3
     assert "*Fix 1*" not in render_typst(plain)
+
+
+def test_a_long_cause_stated_by_an_earlier_row_is_referred_to():
+    from designkit.report.model import REPEATED_CAUSE_MIN, WhyRow, _share_causes
+
+    long_cause = "The controller's model differs from the true plant" + " (details)" * 12
+    assert len(long_cause) >= REPEATED_CAUSE_MIN
+
+    def row(label, cause):
+        return WhyRow("c", label, "FAIL", "r", "a", "s", "p", cause, "f")
+
+    rows = _share_causes([row("First", long_cause + "; and the worst corner."), row("Second", long_cause + "."),
+                          row("Third", "Short cause."), row("Fourth", "Short cause.")])
+    assert [r.cause for r in rows[1:]] == ["Same cause as First (above).", "Short cause.", "Short cause."]
+    assert rows[0].cause.startswith(long_cause)

@@ -816,10 +816,27 @@ def _why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, 
     else:
         note = ("Causes are diagnosed from this run (the simulation, the linear analysis of the design and the "
                 "checks' certificates); the fixes are computed from the same run.")
+    rows = _share_causes(rows)
     shared_rows, fixes = _share_fixes(rows, parts)
     if fixes:
         note += " A fix that applies to several rows is given once, numbered, below the table."
     return shared_rows, note, fixes
+
+
+REPEATED_CAUSE_MIN = 120
+"""A cause at least this long (characters) that an earlier row's cause already states in full is
+replaced by a reference to that row; a shorter one is clearer repeated."""
+
+
+def _share_causes(rows: Sequence[WhyRow]) -> list[WhyRow]:
+    """Rows whose long cause is contained in an earlier row's cause say "Same cause as <row> (above)." instead."""
+    out: list[WhyRow] = []
+    for row in rows:
+        text = row.cause.strip().rstrip(".")
+        earlier = next((r for r in out if len(text) >= REPEATED_CAUSE_MIN and text in r.cause), None)
+        same = f"Same cause as {earlier.label} (above)." if earlier is not None else ""
+        out.append(dataclasses.replace(row, cause=same) if same else row)
+    return out
 
 
 def _fix_parts(finding: Any) -> tuple[str, ...]:
