@@ -35,6 +35,12 @@ def _in_process(monkeypatch, func, *args, **kwargs):
         return func(*args, **kwargs)
 
 
+def _fresh_interpreter(script: str) -> dict:
+    """The JSON object the last line of ``script``'s output holds, run in a new Python."""
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def test_lmi_answers_equal_the_in_process_solve(child, monkeypatch):
     coords = lmi.coordinates(A_STABLE)
     remote = lmi.solve_margin_lmi(coords.Ah)
@@ -127,8 +133,7 @@ def test_a_synth_run_with_the_solver_process_never_imports_cvxpy_in_the_parent(t
         "                  'cvxpy': 'cvxpy' in sys.modules, 'lyapunov': lyap.passed,\n"
         "                  'margin': lyap.margin, 'verified': r.verified}))\n"
     )
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300)
-    got = json.loads(out.stdout.strip().splitlines()[-1])
+    got = _fresh_interpreter(script)
     if not got["started"]:
         pytest.skip("one core: no solver process is started")
     assert got == {**got, "alive": True, "cvxpy": False, "lyapunov": True, "verified": True}
@@ -149,8 +154,7 @@ def test_import_cvxpy_defers_scipy_stats_and_leaves_the_real_module_importable()
         "print(json.dumps({'during': loaded_during, 'value': float(value),\n"
         "                  'real': scipy.stats.entropy([0.25, 0.75]), 'is_module': hasattr(scipy.stats, 'norm')}))\n"
     )
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=300)
-    got = json.loads(out.stdout.strip().splitlines()[-1])
+    got = _fresh_interpreter(script)
     assert got["during"] is False  # deferred: not imported by `import cvxpy`
     assert got["is_module"] is True  # the real scipy.stats afterwards
     expected = -(0.25 * np.log(0.25) + 0.75 * np.log(0.75))  # nats, computed here
