@@ -7,7 +7,9 @@
   the worst uncertainty corner against the ``tracking_bounds`` certificate;
 - resolved acceleration near the wrist singularity: ``lambda`` against the check's own bound
   ``1/(2 lambda)`` recomputed from the certificate's singular values, and the joint named against
-  finite differences of the condition number of the task Jacobian.
+  finite differences of the condition number of the task Jacobian;
+- the fixes applied: each spec rewritten with the damping or the gain factor the diagnosis names
+  (the factor with 10 % to spare) passes every check.
 
 Each PUMA spec is run once per module (module-scoped fixtures).
 """
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -205,3 +208,30 @@ def test_singular_joint_against_finite_differences(singular_run, singular_findin
     assert j == 4  # the wrist: q5 near 0
     assert f"set by joint {j + 1}" in singular_finding.cause
     assert "not diagnosed" not in singular_finding.fix and singular_finding.fix
+
+
+def test_the_suggested_damping_verifies_the_spec(singular_finding):
+    """The fix, applied: the spec with the damping the diagnosis names passes every check."""
+    shown = re.search(r"damped_least_squares: \{damping: ([0-9.e-]+)\}", singular_finding.fix).group(1)
+    text = Path(f"{SPECS}/puma560-resolved-acceleration.yaml").read_text(encoding="utf-8")
+    dls = f"  damped_least_squares: {{damping: {shown}}}\n"
+    fixed = text.replace("  orientation: held\n", "  orientation: held\n" + dls)
+    assert fixed != text
+    result = dk.run(dk.parse_spec(fixed))
+    assert result.verified, [(c.name, c.detail) for c in result.failed]
+
+
+def test_the_suggested_gain_factor_verifies_the_spec(payload_findings):
+    """The fix, applied with 10 % to spare: K1 scaled by 1.1 x the factor named for tracking_bounds (the
+    natural frequency by its square root, the damping kept) passes every check, and the worst error
+    over the box lands where the 1/K1 scaling puts it, at the limit / 1.1."""
+    fix = payload_findings["tracking_bounds"].fix
+    factor = float(re.search(r"Raise K1 by a factor ([0-9.]+) or more", fix).group(1))
+    text = Path(f"{SPECS}/puma560-computed-torque-payload.yaml").read_text(encoding="utf-8")
+    wn = 20.0 * math.sqrt(1.1 * factor)
+    fixed = text.replace("  natural_frequency: 20\n", f"  natural_frequency: {wn:.6g}\n")
+    assert fixed != text
+    result = dk.run(dk.parse_spec(fixed))
+    assert result.verified, [(c.name, c.detail) for c in result.failed]
+    bound = next(c for c in result.checks if c.name == "tracking_bounds")
+    assert bound.achieved == pytest.approx(0.001 / 1.1, rel=0.05)
