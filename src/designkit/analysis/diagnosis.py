@@ -1025,8 +1025,8 @@ def _corrected_model(result: Any) -> tuple[Any, str] | None:
     return None
 
 
-def _gain_fix(result: Any, predicted: float, limit: float, what: str) -> str:
-    """Raise K1 (and K2 at the same damping) so that ``predicted`` (scaling as 1/K1) meets ``limit``."""
+def _gain_fix(result: Any, predicted: float, limit: float, what: str, unit: str = "rad") -> str:
+    """Raise K1 (and K2 at the same damping) so that ``predicted`` (scaling as 1/K1, in ``unit``) meets ``limit``."""
     if not (math.isfinite(predicted) and predicted > limit > 0):
         return ""
     factor = predicted / limit
@@ -1040,7 +1040,7 @@ def _gain_fix(result: Any, predicted: float, limit: float, what: str) -> str:
         f"{fmt_number(lo * math.sqrt(factor))} to {_q(hi * math.sqrt(factor), '1/s')}"
     return (f"raise K1 by a factor {fmt_number(factor, 3)} or more (K1 = {k1}; K2 by √{fmt_number(factor, 3)} to keep "
             f"the damping): for a fixed model-error torque the error scales as 1/K1, so the predicted "
-            f"{_q(predicted, 'rad')} {what} falls to the {_q(limit, 'rad')} limit; the error poles move from "
+            f"{_q(predicted, unit)} {what} falls to the {_q(limit, unit)} limit; the error poles move from "
             f"|p| = {old} to |p| = {new}, and the commanded torques grow with the gains")
 
 
@@ -1089,7 +1089,7 @@ def _mismatch_text(result: Any, check: Any) -> tuple[str, str]:
         predicted, what_error = float(np.max(peaks)), f"error at {at}"
     if not explained or limit is None:
         return cause, ""
-    fixes = [f for f in (_gain_fix(result, predicted, limit, what_error),) if f]
+    fixes = [f for f in (_gain_fix(result, predicted, limit, what_error, unit),) if f]
     corrected = _corrected_model(result)
     if corrected is not None:
         fixed, setting = corrected
@@ -1105,11 +1105,11 @@ def _mismatch_text(result: Any, check: Any) -> tuple[str, str]:
         if after <= 1e-9 * limit:
             text += ": the model-error torque then vanishes and so does the predicted error"
         elif after <= limit:
-            text += (f": the predicted {what_error} then falls to {_q(after, 'rad')}, within the "
-                     f"{_q(limit, 'rad')} limit")
+            text += (f": the predicted {what_error} then falls to {_q(after, unit)}, within the "
+                     f"{_q(limit, unit)} limit")
         else:
-            text += (f": the predicted {what_error} then falls to {_q(after, 'rad')}, still above the "
-                     f"{_q(limit, 'rad')} limit, so K1 must then still grow by a factor {fmt_number(after / limit, 3)}")
+            text += (f": the predicted {what_error} then falls to {_q(after, unit)}, still above the "
+                     f"{_q(limit, unit)} limit, so K1 must then still grow by a factor {fmt_number(after / limit, 3)}")
         fixes.append(text)
     return cause, "; or ".join(fixes)
 
@@ -1180,7 +1180,7 @@ def damping_for_condition(sigma_min: float, condition: float, max_condition: flo
     Parameters
     ----------
     sigma_min : float
-        Smallest singular value of ``J`` at the worst point (m/rad).
+        Smallest singular value of ``J`` at the worst point (``J`` mixes m/rad and 1 rows: no single unit).
     condition : float
         Condition number of ``J`` there.
     max_condition : float
@@ -1189,7 +1189,7 @@ def damping_for_condition(sigma_min: float, condition: float, max_condition: flo
     Returns
     -------
     float
-        ``lambda`` (m/rad).
+        ``lambda`` (same scale as ``J``'s singular values).
     """
     return condition * sigma_min / (2.0 * max_condition)
 
@@ -1256,7 +1256,7 @@ def _singularity_text(result: Any, check: Any) -> tuple[str, str]:
     shown = float(f"{lam * (1 + 5e-4):.3g}")  # rounded up: still within the bound
     gain = s_min**2 / (s_min**2 + shown**2)
     fix = (f"resolve with damped least squares (controller.damped_least_squares: {{damping: {fmt_number(shown, 3)}}}): "
-           f"λ ≥ σ_max/(2 κ_max) = {fmt_number(kappa * s_min)}/(2 × {fmt_number(limit)}) = {fmt_number(lam)} m/rad "
+           f"λ ≥ σ_max/(2 κ_max) = {fmt_number(kappa * s_min)}/(2 × {fmt_number(limit)}) = {fmt_number(lam)} "
            f"bounds "
            f"the resolution's gain by 1/(2λ) = {fmt_number(1 / (2 * shown))}, what J⁻¹ has at condition number "
            f"{fmt_number(limit)}, instead of {fmt_number(1 / s_min)}; the price is a task gain of "

@@ -38,6 +38,15 @@ def _can_fork() -> bool:
     return can_fork() and available_cores() >= 2
 
 
+def _delivered(data: bytes) -> dict[int, Any]:
+    """The results the child sent (task index -> result); none when its message is empty or broken."""
+    try:
+        sent = pickle.loads(data)  # noqa: S301 - our own forked child, a private pipe
+    except (pickle.UnpicklingError, EOFError, ValueError, TypeError):
+        return {}
+    return {k: value for k, ok, value in sent if ok}
+
+
 def run_tasks(tasks: Sequence[Callable[[], T]], *, processes: int = 1) -> list[T]:
     """``[task() for task in tasks]``, with the second half of the tasks run in a forked child when
     ``processes >= 2`` and forking is safe (module docstring).
@@ -91,12 +100,7 @@ def run_tasks(tasks: Sequence[Callable[[], T]], *, processes: int = 1) -> list[T
     with os.fdopen(read_fd, "rb") as pipe:
         data = pipe.read()
     os.waitpid(pid, 0)
-    try:
-        for k, ok, value in pickle.loads(data):  # noqa: S301 - our own forked child, a private pipe
-            if ok:
-                results[k] = value
-    except (pickle.UnpicklingError, EOFError, ValueError, TypeError):
-        pass
+    results.update(_delivered(data))
     for k in range(split, len(tasks)):  # whatever the child did not deliver
         if k not in results:
             results[k] = tasks[k]()

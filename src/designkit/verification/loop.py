@@ -66,17 +66,13 @@ class LoopMargins:
 
 
 def siso_zeros(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: float) -> np.ndarray:
-    """Finite transmission zeros of a SISO state-space system (generalised eigenvalues of the
-    Rosenbrock pencil)."""
-    from scipy.linalg import eigvals
+    """Finite transmission zeros (1/s) of a SISO state-space system, ascending: those of
+    :func:`designkit.verification.pole_zero.finite_zeros` (Rosenbrock pencil, infinite ones dropped)."""
+    from designkit.verification.pole_zero import Siso, finite_zeros
 
     n = A.shape[0]
-    M = np.block([[A, b.reshape(n, 1)], [c.reshape(1, n), np.array([[d]])]])
-    N = np.zeros((n + 1, n + 1))
-    N[:n, :n] = np.eye(n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = eigvals(M, N)
-    return np.sort_complex(z[np.isfinite(z)])
+    z, _ = finite_zeros(Siso(A, np.reshape(b, (n, 1)), np.reshape(c, (1, n)), np.array([[d]], dtype=float)))
+    return np.sort_complex(z)
 
 
 def achieved_zeros(design: Any) -> np.ndarray:
@@ -162,10 +158,8 @@ def _response(A: np.ndarray, b: np.ndarray, c: np.ndarray, w: np.ndarray) -> np.
     n = A.shape[0]
     Ms = 1j * w[:, None, None] * np.eye(n)[None, :, :] - A[None, :, :]
     bc = b.astype(complex)
-    try:
+    with contextlib.suppress(np.linalg.LinAlgError):  # one batched solve, unless some frequency is singular
         return (c @ np.linalg.solve(Ms, np.broadcast_to(bc, (w.size, n, 1))))[:, 0, 0]
-    except np.linalg.LinAlgError:
-        pass
     out = np.full(w.size, complex(np.inf, 0.0))
     for k, M in enumerate(Ms):
         with contextlib.suppress(np.linalg.LinAlgError):  # singular: an imaginary-axis pole of L, L = inf
