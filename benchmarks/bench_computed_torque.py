@@ -63,8 +63,8 @@ from scipy.integrate import solve_ivp
 from designkit.families import family
 from designkit.models.codegen import find_compiler
 from designkit.pipeline import design as pipeline_design
+from designkit.schema.loader import parse_spec
 from designkit.simulation.run import build, simulate
-from designkit.spec.loader import parse_spec
 
 RESULTS = Path(__file__).resolve().parent / "results" / "computed_torque.json"
 SPEC = """\
@@ -241,7 +241,7 @@ import json, statistics, sys, time
 t0 = time.perf_counter()
 from designkit.pipeline import design
 from designkit.simulation.run import build
-from designkit.spec.loader import parse_spec
+from designkit.schema.loader import parse_spec
 t1 = time.perf_counter()
 loaded = parse_spec(sys.stdin.read())
 d = design(loaded)

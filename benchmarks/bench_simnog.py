@@ -55,9 +55,9 @@ from designkit.models.codegen import compile_function
 from designkit.models.robots.planar2r import DEFAULTS
 from designkit.models.summary import operation_counts
 from designkit.pipeline import design as pipeline_design
+from designkit.schema.loader import parse_spec
 from designkit.simulation.integrate import run_steps
 from designkit.simulation.run import build, simulate
-from designkit.spec.loader import parse_spec
 
 RESULTS = Path(__file__).resolve().parent / "results" / "simnog.json"
 SPEC = """\

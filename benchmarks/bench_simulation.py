@@ -32,8 +32,8 @@ import casadi
 import numpy as np
 
 from designkit.families import synthesize
+from designkit.schema.spec import Spec
 from designkit.simulation.run import build, simulate
-from designkit.spec.schema import Spec
 
 RESULTS = Path(__file__).resolve().parent / "results" / "simulation.json"
 LIMIT = 20.0

@@ -46,7 +46,7 @@ from designkit.pipeline import run
 from designkit.report.html import render_html
 from designkit.report.model import build_report_model
 from designkit.report.pdf import compile_pdf
-from designkit.spec import load_spec
+from designkit.schema.loader import load_spec
 t.append(time.perf_counter())
 result = run(load_spec(sys.argv[1]))
 t.append(time.perf_counter())

@@ -75,7 +75,24 @@ CASES = {
     },
 }
 """Family -> canonical plant -> (controller section, simulation section[, requirements]): the conformance suite
-runs each."""
+runs each.  A family whose tests declare ``CONFORMANCE`` in ``tests/families/<kind>/cases.py`` adds its cases there
+(:func:`discovered`), so adding a family edits no shared test."""
+
+
+def discovered(name: str) -> dict:
+    """``{kind: cases.<name>}`` of every family test package that declares it."""
+    from importlib import import_module
+    from pathlib import Path
+
+    out = {}
+    for path in sorted((Path(__file__).resolve().parent / "families").glob("*/cases.py")):
+        value = getattr(import_module(f"tests.families.{path.parent.name}.cases"), name, None)
+        if value is not None:
+            out[path.parent.name] = value
+    return out
+
+
+CASES.update(discovered("CONFORMANCE"))
 
 REQUIREMENTS = "{overshoot: 50, settling_time: 10.0, steady_state_error: 0.05}"
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from designkit.cli import main
-from tests.problems import POSSPEED_GAINS, POSSPEED_YAML
+from tests.problems import POSSPEED_GAINS, POSSPEED_YAML, discovered
 
 ROOT = Path(__file__).resolve().parents[1]
 SPECS = sorted((ROOT / "specs").glob("*.yaml"))
@@ -31,10 +31,12 @@ EXPECTED_EXIT = {
     "puma560-computed-torque": 0,
     "puma560-computed-torque-payload": 1,  # no integral action: the missing 0.5 kg leaves a static error
     "simnog-computed-torque": 0,
-    "scara-decentralized-pid": 0,
+    "scara-decentralized-pid": 1,  # simulated from the designed equilibrium: joint 2 overshoots 40 % (15 % asked)
     "puma560-resolved-acceleration": 1,  # the path passes near the wrist singularity with the exact inverse
     "puma560-resolved-acceleration-dls": 0,
 }
+for _examples in discovered("EXAMPLES").values():  # the families' own examples (tests/families/<kind>/cases.py)
+    EXPECTED_EXIT.update(_examples)
 
 
 def _write(tmp_path: Path, text: str, name: str = "spec.yaml") -> Path:

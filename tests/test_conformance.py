@@ -16,14 +16,14 @@ import pytest
 import yaml
 from pydantic import TypeAdapter
 
-from designkit.families import FAMILIES
+from designkit.families import FAMILIES, check_rules
 from designkit.pipeline import run
 from designkit.report import write_report
-from designkit.spec.loader import parse_spec
+from designkit.schema.loader import parse_spec
+from designkit.schema.spec import Spec
 from designkit.spec.plants import PlantSpec
-from designkit.spec.schema import Spec
 from designkit.verification.lmi import lyapunov_recheck
-from designkit.verification.suite import CHECKS, Context
+from designkit.verification.suite import Context
 from tests.problems import CASES, PLANTS, case_yaml
 
 CASE_IDS = [(kind, plant) for kind, plants in CASES.items() for plant in plants]
@@ -62,11 +62,13 @@ def test_pipeline_runs_offered_checks_and_their_evidence_rechecks(kind, plant, r
     assert design.kind == kind and result.simulation is not None
     assert np.all(np.isfinite(result.simulation.state))
     names = [c.name for c in checks]
-    ctx = Context(loaded.spec, result.simulation, "CLARABEL")
-    for offered in FAMILIES[kind].checks:
-        if CHECKS[offered].applies(design, ctx):  # what the design exposes, the suite must run
-            produced = [c for rule_check in CHECKS[offered].run(design, ctx) for c in [rule_check]]
-            assert all(c.name in names for c in produced), (offered, names)
+    ctx = Context(loaded.spec, result.simulation, "CLARABEL", result.plant, design.law, result.trials)
+    rules = check_rules(kind)
+    for rule in rules:
+        if rule.offered_for(design, ctx):  # what the design exposes, the suite must run
+            assert all(c.name in names for c in rule.run(design, ctx)), (rule.name, names)
+    if not design.linearization.linear:  # the contract says none: no check that reads a linear loop is offered
+        assert not any(r.offered_for(design, ctx) for r in rules if r.linear)
     for check in checks:
         assert check.passed in (True, False, None) and check.detail
         json.dumps(check.to_dict())
@@ -76,10 +78,10 @@ def test_pipeline_runs_offered_checks_and_their_evidence_rechecks(kind, plant, r
     html = files.html.read_text().replace("<wbr>", "")
     from html import unescape
 
-    from designkit.report.model import check_label
+    from designkit.report.labels import check_label
 
     text = unescape(html)
-    assert all(check_label(name) in text for name in names), [n for n in names if check_label(n) not in text]
+    assert all(check_label(c) in text for c in checks), [c.name for c in checks if check_label(c) not in text]
     assert files.pdf.read_bytes().startswith(b"%PDF")
 
 

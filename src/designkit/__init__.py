@@ -28,10 +28,10 @@ __version__ = "0.1.0"
 
 _EXPORTS: dict[str, str] = {
     # spec and pipeline
-    "load_spec": "designkit.spec.loader",
-    "parse_spec": "designkit.spec.loader",
-    "LoadedSpec": "designkit.spec.loader",
-    "Spec": "designkit.spec.schema",
+    "load_spec": "designkit.schema.loader",
+    "parse_spec": "designkit.schema.loader",
+    "LoadedSpec": "designkit.schema.loader",
+    "Spec": "designkit.schema.spec",
     "synthesize": "designkit.families",
     "Design": "designkit.synthesis.design",
     "LinearSystem": "designkit.models.linear_system",

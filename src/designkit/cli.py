@@ -108,7 +108,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
         _start_solver_process(report=not args.no_report)
     from designkit.pipeline import run
     from designkit.report import write_report
-    from designkit.spec import load_spec
+    from designkit.schema.loader import load_spec
 
     loaded = load_spec(args.spec)
     result = run(loaded)
@@ -137,7 +137,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     if args.jobs > 1:
         _start_solver_process()
     from designkit.pipeline import run
-    from designkit.spec import load_spec
+    from designkit.schema.loader import load_spec
 
     result = run(load_spec(args.spec))
     print(json.dumps(result.to_json(), indent=2) if args.json else _summary(result))
@@ -149,8 +149,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from designkit.pipeline import design
+    from designkit.schema.loader import load_spec
     from designkit.simulation.run import simulate
-    from designkit.spec import load_spec
 
     loaded = load_spec(args.spec)
     dsn = design(loaded)
@@ -182,7 +182,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_schema(args: argparse.Namespace) -> int:
     """Print the JSON Schema of the spec format."""
-    from designkit.spec.schema import Spec
+    from designkit.schema.spec import Spec
 
     print(json.dumps(Spec.model_json_schema(), indent=2))
     return EXIT_OK
@@ -198,13 +198,13 @@ def cmd_model(args: argparse.Namespace) -> int:
 
 def cmd_codegen(args: argparse.Namespace) -> int:
     """Design the spec's controller and write its control law (with its model terms) as C code."""
-    from designkit.spec import load_spec
-    from designkit.synthesis.codegen import generate_spec_code
+    from designkit.pipeline import codegen
+    from designkit.schema.loader import load_spec
 
     options = {"out_dir": "--out", "name": "--name"}
     loaded = load_spec(args.spec)
     try:
-        code = generate_spec_code(loaded, Path(args.out), name=args.name)
+        code = codegen(loaded, Path(args.out), name=args.name)
     except SpecError as exc:
         if exc.path in options:
             raise SpecError(options[exc.path], exc.message) from None

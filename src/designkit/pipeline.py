@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from designkit.errors import SpecError
-from designkit.spec.loader import LoadedSpec
-from designkit.spec.schema import Spec
+from designkit.schema.loader import LoadedSpec
+from designkit.schema.spec import Spec
 from designkit.synthesis.design import Design
 from designkit.verification.check import Check, all_passed, not_passed
 
@@ -46,12 +46,14 @@ class PipelineResult:
     checks : tuple of Check
         Every verification check, in report order.
     simulation : SimulationResult or None
-        The closed-loop simulation (None when not run).
+        The closed-loop simulation (None when not run); for a learning design, the last trial's.
     versions : Mapping
         designkit and dependency versions.
     plant : Plant or None
         The true plant the simulation ran on (the design's ``plant`` is the controller's model; the two
         differ when the spec gives ``controller.model``).  None means the design's.
+    trials : TrialsResult or None
+        Every trial of a learning design (``design.learning``), None for a design run once.
     """
 
     loaded: LoadedSpec
@@ -60,6 +62,7 @@ class PipelineResult:
     simulation: Any = None
     versions: Mapping[str, str] = field(default_factory=dict)
     plant: Any = None
+    trials: Any = None
 
     @property
     def verified(self) -> bool:
@@ -70,6 +73,13 @@ class PipelineResult:
     def failed(self) -> tuple[Check, ...]:
         """Required checks that failed or are undecided."""
         return not_passed(self.checks)
+
+    @property
+    def display(self) -> Any:
+        """How the design's family is named and written (:class:`~designkit.synthesis.family.Display`)."""
+        from designkit.families import family
+
+        return family(self.design.kind).display
 
     @cached_property
     def _report_model(self) -> Any:
@@ -89,7 +99,11 @@ class PipelineResult:
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json``."""
+        from designkit.families import family
+
         d = self.design
+        fam = family(d.kind)
+        extra = dict(fam.json(self)) if fam.json is not None else {}
         return {
             "name": self.loaded.spec.name,
             "spec_sha256": self.loaded.sha256,
@@ -106,6 +120,7 @@ class PipelineResult:
             "checks": [c.to_dict() for c in self.checks],
             "notes": list(d.notes),
             "versions": dict(self.versions),
+            **extra,
         }
 
 
@@ -116,17 +131,18 @@ def base_dir(loaded: LoadedSpec) -> Path | None:
 
 def plant(loaded: LoadedSpec) -> Any:
     """The nominal plant of a spec."""
-    from designkit.models.from_spec import plant_from_spec
+    from designkit.spec.plant_builder import plant_from_spec
 
     return plant_from_spec(loaded.spec.plant, base_dir(loaded))
 
 
 def design(loaded: LoadedSpec, true_plant: Any = None) -> Design:
-    """Synthesise the controller of a spec (for its true plant, built from the spec when not given)."""
-    from designkit.families import family
+    """Synthesise the controller of a spec (for its true plant, built from the spec when not given), with its law
+    carrying the spec's anti-windup (:func:`designkit.families.synthesize`)."""
+    from designkit.families import synthesize
 
     true_plant = plant(loaded) if true_plant is None else true_plant
-    return family(loaded.spec.controller.kind).synthesize(loaded.spec, true_plant)
+    return synthesize(loaded.spec, true_plant)
 
 
 def _check_per_input(spec: Spec, true_plant: Any) -> None:
@@ -156,7 +172,9 @@ def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
         ``loaded`` is neither a :class:`LoadedSpec` nor a :class:`Spec`, or the spec cannot be
         designed as given (a :class:`~designkit.errors.DesignkitError` names the key path).
     """
-    from designkit.simulation.run import simulate as simulate_loop
+    from designkit.families import check_rules
+    from designkit.simulation.run import build
+    from designkit.simulation.trials import run_trials
     from designkit.verification.suite import run_checks
 
     if isinstance(loaded, Spec):
@@ -168,7 +186,49 @@ def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
     true_plant = plant(loaded)
     _check_per_input(spec, true_plant)
     dsn = design(loaded, true_plant)
-    sim = simulate_loop(spec, dsn, plant=true_plant) if simulate else None
-    checks = run_checks(spec, dsn, sim, plant=true_plant)
+    sim = trials = None
+    if simulate:
+        learning = dsn.learning
+        simulator = build(spec, dsn, plant=true_plant, expected_runs=learning.trials if learning else 1)
+        if learning is not None:
+            trials = run_trials(simulator, learning.trials, learning.update)
+            sim = trials.results[-1]
+        else:
+            sim = simulator.run()
+    checks = run_checks(spec, dsn, sim, plant=true_plant, rules=check_rules(dsn.kind), trials=trials)
     return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions(),
-                          plant=true_plant)
+                          plant=true_plant, trials=trials)
+
+
+def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str | None = None) -> Any:
+    """Design the controller of a spec and write its C code (the body of ``designkit codegen``).
+
+    Parameters
+    ----------
+    loaded : LoadedSpec or path-like
+        A loaded spec (:func:`designkit.schema.loader.load_spec`) or the path of a YAML spec.
+    out_dir : path-like
+        Root folder; the code goes to ``out_dir/<spec name>/``.
+    name : str, optional
+        C prefix; default the spec name made a C identifier (:func:`designkit.synthesis.codegen.c_identifier`).
+
+    Returns
+    -------
+    LawCode
+        See :func:`designkit.synthesis.codegen.generate_law_code`.
+
+    Raises
+    ------
+    SpecError
+        Bad spec (its key path), bad ``name`` or unwritable ``out_dir``; nothing is written.
+    """
+    from designkit.families import family
+    from designkit.schema.loader import load_spec
+    from designkit.synthesis.codegen import check_name, generate_law_code
+
+    if name is not None:
+        check_name(name)
+    loaded = loaded if isinstance(loaded, LoadedSpec) else load_spec(loaded)
+    dsn = design(loaded)
+    return generate_law_code(dsn, dsn.law, out_dir, name=name, spec_name=loaded.spec.name, spec_sha256=loaded.sha256,
+                             law_lines=family(dsn.kind).display.law)

@@ -20,24 +20,22 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.analysis.diagnosis import (
-    Diagnosis,
-    Finding,
-    LimitCycle,
-    bang_bang_trajectory,
-    diagnose,
-    divergence_of,
-    full_thrust_time,
-    limit_for_settling_time,
-    measure_oscillation,
-    minimum_move_time,
-    minimum_settling_time,
+from designkit.analysis.diagnosis import Diagnosis, Finding, LimitCycle, diagnose
+from designkit.analysis.diagnosis.divergence import divergence_of, measure_oscillation
+from designkit.analysis.diagnosis.findings import shortfall
+from designkit.analysis.elements.relay import (
     relay_describing_function,
     relay_harmonic_balance,
     relay_periodic_solution,
-    shortfall,
 )
-from designkit.report.certificates import fmt_number
+from designkit.analysis.elements.saturation import (
+    bang_bang_trajectory,
+    full_thrust_time,
+    limit_for_settling_time,
+    minimum_move_time,
+    minimum_settling_time,
+)
+from designkit.display.numbers import fmt_number
 from designkit.verification.check import Check
 
 SPECS = "specs"

@@ -25,13 +25,10 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.analysis.diagnosis import (
-    damping_for_condition,
-    diagnose,
-    model_error_prediction,
-    static_model_error,
-)
-from designkit.report.certificates import fmt_number
+from designkit.analysis.diagnosis import diagnose
+from designkit.display.numbers import fmt_number
+from designkit.families.computed_torque.model_error import model_error_prediction, static_model_error
+from designkit.verification.diagnoses.singularity import damping_for_condition
 
 SPECS = "specs"
 

@@ -1,4 +1,4 @@
-"""The lab questions of experiment 1 answered from a run (designkit.analysis.experiment1).
+"""The lab questions of experiment 1 answered from a run (designkit.analysis.lab).
 
 Independent routes: the two-link arm's dynamics derived here by Lagrange with sympy (coupling and
 Coriolis torques), the payload's weight written by hand (model error torque), the static error of
@@ -16,26 +16,18 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from designkit.analysis import experiment1 as ex
-from designkit.analysis.experiment1 import (
-    GainEffect,
-    GainRun,
-    JointCoupling,
-    coupling_level,
-    coupling_sentences,
-    coupling_torques,
-    gain_sentence,
-    lab_answers,
-    model_error_torque,
-    study_sentences,
-    tracking_sentences,
-)
+from designkit.analysis.lab import gains as lab_gains
+from designkit.analysis.lab import lab_answers
+from designkit.analysis.lab.coupling import JointCoupling, coupling_level, coupling_sentences
+from designkit.analysis.lab.gains import GainEffect, GainRun, gain_sentence, study_sentences
+from designkit.analysis.lab.tracking import CoordinateError, tracking_sentences
 from designkit.models.robot_plant import zoo_plant
+from designkit.models.torques import coupling_torques, model_error_torque
 from designkit.pipeline import run
 from designkit.report.html import render_html
 from designkit.report.model import build_report_model
 from designkit.report.pdf import compile_pdf
-from designkit.spec.loader import parse_spec
+from designkit.schema.loader import parse_spec
 from tests.problems import POSSPEED_YAML
 from tests.tolerances import TOL
 
@@ -235,11 +227,11 @@ def test_a_destabilizing_gain_is_reported_not_raised():
 
 def test_gain_study_is_skipped_beyond_its_bounds(mismatch, monkeypatch):
     result, _ = mismatch
-    monkeypatch.setattr(ex, "MAX_JOINTS", 1)
+    monkeypatch.setattr(lab_gains, "MAX_JOINTS", 1)
     study = lab_answers(result).gains
     assert study.effects == () and "2 joints" in study.skipped and study.sentences[0].startswith("Gain study skipped")
-    monkeypatch.setattr(ex, "MAX_JOINTS", 6)
-    monkeypatch.setattr(ex, "STUDY_BUDGET_S", 0.0)
+    monkeypatch.setattr(lab_gains, "MAX_JOINTS", 6)
+    monkeypatch.setattr(lab_gains, "STUDY_BUDGET_S", 0.0)
     study = lab_answers(result).gains
     assert study.effects == () and "budget" in study.skipped
 
@@ -311,7 +303,7 @@ def test_the_most_sensitive_gain_is_decided_by_the_numbers():
 
 def test_tracking_sentence_tells_a_static_error_from_a_decaying_one():
     def coords(final: float):
-        return [ex.CoordinateError("q1", "rad", 1.0, 0.01, 0.5, 0.005, final)]
+        return [CoordinateError("q1", "rad", 1.0, 0.01, 0.5, 0.005, final)]
 
     static = tracking_sentences("trajectory", coords(0.009), [])
     decays = tracking_sentences("trajectory", coords(1e-5), [])
@@ -327,18 +319,19 @@ def test_none_for_a_link_plant_or_without_simulation(exact):
     assert lab_answers(link) is None
     result, _ = exact
     assert lab_answers(dataclasses.replace(result, simulation=None)) is None
-    assert build_report_model(link).lab == ()
+    assert build_report_model(link).sections == ()
 
 
 def test_report_of_a_robot_spec_has_the_lab_section(exact):
     result, answers = exact
     model = build_report_model(result)
-    questions = [s.question for s in model.lab]
+    (lab,) = model.sections
+    questions = [s.question for s in lab.questions]
     assert len(questions) == 5 and questions[0].startswith("How well does the controller perform")
     html = render_html(model)
     assert '<h2 id="lab">Lab questions (notes, experiment 1)</h2>' in html
     assert answers.tracking.sentences[0] in html.replace("&#39;", "'")
-    gain_table = model.lab[1].tables[0]
+    gain_table = lab.questions[1].tables[0]
     unit_rows = [row for row in gain_table.rows if row[1] == "× 1"]
     assert len(unit_rows) == 2 and all(row[2] == "as designed" for row in unit_rows)
     assert compile_pdf(model).startswith(b"%PDF")

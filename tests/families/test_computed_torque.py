@@ -24,8 +24,8 @@ import pytest
 from designkit.families import family
 from designkit.pipeline import design as design_of
 from designkit.pipeline import plant as plant_of
+from designkit.schema.loader import parse_spec
 from designkit.simulation.run import build
-from designkit.spec.loader import parse_spec
 from tests.cli_input import assert_bad_input
 from tests.tolerances import TOL
 

@@ -34,9 +34,8 @@ from designkit.families import family
 from designkit.models.robots import robot
 from designkit.pipeline import design as design_of
 from designkit.pipeline import plant as plant_of
-from designkit.simulation.motion import motion_of
+from designkit.schema.loader import parse_spec
 from designkit.simulation.run import build
-from designkit.spec.loader import parse_spec
 from designkit.verification.singularity import singularity_check
 from designkit.verification.tracking import error_poles_check
 from tests.cli_input import assert_bad_input
@@ -273,7 +272,7 @@ def _near(dls: bool):
     extra = f", damped_least_squares: {{damping: {DAMPING}}}" if dls else ""
     loaded = parse_spec(_planar(f"{{kind: resolved_acceleration, poles: [-10, -10]{extra}}}", NEAR_LINE))
     design = design_of(loaded)
-    return loaded, design, motion_of(loaded.spec, design)
+    return loaded, design, design.motion
 
 
 def test_singularity_check_fails_near_the_stretched_arm_with_the_analytic_condition_number():
@@ -368,7 +367,7 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
     loaded = parse_spec(_puma(dls=False))
     design = design_of(loaded)
     assert tuple(design.extra["task"]["coordinates"]) == ("x", "y", "z", "rx", "ry", "rz")
-    check = singularity_check(design, motion_of(loaded.spec, design))
+    check = singularity_check(design, design.motion)
     assert check.passed is False
     q = np.array(check.certificate["worst_configuration"])
     assert abs(q[4]) < 0.05  # q5 near 0: wrist axes 4 and 6 aligned
@@ -380,7 +379,7 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
 
     loaded = parse_spec(_puma(dls=True))
     design = design_of(loaded)
-    damped = singularity_check(design, motion_of(loaded.spec, design))
+    damped = singularity_check(design, design.motion)
     assert damped.passed is True
     assert damped.certificate["joint_acceleration_gain_bound"] == pytest.approx(25.0, rel=1e-15)
     assert damped.certificate["worst_condition"] == pytest.approx(check.certificate["worst_condition"], rel=1e-12)
@@ -398,7 +397,8 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
                  "{kind: line, displacement: [0.5, 0.5, 0.0], duration: 0.5}"),
          "simulation.trajectory.displacement: out of reach"),
         (_planar("{kind: resolved_acceleration, poles: [-10, -10]}",
-                 "{kind: quintic, amplitude: 0.1, duration: 0.5}"), "simulation.trajectory.kind: a task-space"),
+                 "{kind: quintic, amplitude: 0.1, duration: 0.5}"),
+         "simulation.trajectory.kind: the resolved_acceleration controller follows line, circle, not 'quintic'"),
         (_puma(dls=False, displacement="[0, 0, 0.3]"), "simulation.trajectory: the joint motion leaves joint 4's"),
         (_planar("{kind: computed_torque, poles: [-10, -10]}", LINE), "simulation.trajectory.kind:"),
         (_puma(dls=False, orientation="none"), "controller.orientation: the task space must be square"),

@@ -13,8 +13,8 @@ import pytest
 
 from designkit.families import synthesize
 from designkit.pipeline import PipelineResult, versions
+from designkit.schema.loader import parse_spec
 from designkit.simulation.result import SimulationResult
-from designkit.spec.loader import parse_spec
 from designkit.verification.check import Check
 from designkit.verification.loop import loop_margins_check
 from tests.problems import TRACKING_YAML
@@ -99,7 +99,7 @@ def servo_checks(*, overshoot_passed: bool | None = True, detail_extra: str = ""
                            "eig_A": [[[-4.0, 0.0], [-5.0, 0.0], [-20.0, 0.0]]]}),
         Check("overshoot", overshoot_passed, target="<= 10 %", achieved=4.2, margin=5.8, unit="%",
               detail="peak of x1 over the step" + detail_extra),
-        Check("robust_stability", True, target="stable over the box", achieved=0.1, margin=0.1, unit="1/s",
+        Check("robust_grid", True, target="stable over the box", achieved=0.1, margin=0.1, unit="1/s",
               detail="min over the grid", certificate={"grid": {
                   "axes": [{"name": "Km", "unit": "(rad/s)/(N*m)", "values": km.tolist()},
                            {"name": "tau", "unit": "s", "values": tau.tolist()}],

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from designkit.report.certificates import fmt_number, render_certificate
+from designkit.display.numbers import fmt_number
+from designkit.report.certificates import render_certificate
 
 
 def test_lyapunov_certificate_matrix_has_four_significant_digits(servo_model):

@@ -13,8 +13,11 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.report import figures as fg
-from designkit.report import svg
+from designkit.display import svg
+from designkit.report.figures import design_figures
+from designkit.report.figures.pole_zero import pole_origin
+from designkit.report.figures.simulation import _draw_simulation
+from designkit.verification.figures.loop_margins import sensitivity_peaks
 from designkit.verification.tolerances import STEADY_STATE_WINDOW
 
 SPECS = Path(__file__).resolve().parents[2] / "specs"
@@ -63,7 +66,7 @@ def runs():
 
 @pytest.fixture(scope="module")
 def figures(runs):
-    return {name: {f.filename: f for f in fg.design_figures(r)} for name, r in runs.items()}
+    return {name: {f.filename: f for f in design_figures(r)} for name, r in runs.items()}
 
 
 def drawn(draw, *args):
@@ -97,7 +100,7 @@ def test_no_requirement_no_envelope_no_limit_no_perturbation(figures):
 
 def test_infeasible_spec_draws_its_envelope_limits_and_a_symlog_control_axis(runs, figures):
     res = runs["infeasible-requirements"]
-    fig, info = drawn(fg._draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
+    fig, info = drawn(_draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
     ax_u = fig.axes[-1]
     assert ax_u.get_yscale() == "symlog"
     peak = float(np.max(np.abs(res.simulation.u_command)))
@@ -114,8 +117,8 @@ def test_infeasible_spec_draws_its_envelope_limits_and_a_symlog_control_axis(run
 
 
 def test_requested_and_derived_poles_are_labelled_as_such(runs, figures):
-    assert fg.pole_origin(runs["infeasible-requirements"]) == ("derived", "derived")
-    assert fg.pole_origin(runs["posspeed-link"]) == ("requested", "requested")
+    assert pole_origin(runs["infeasible-requirements"]) == ("derived", "derived")
+    assert pole_origin(runs["posspeed-link"]) == ("requested", "requested")
     derived = figures["infeasible-requirements"]["fig-pole-zero.svg"]
     assert "derived-poles" in svg.svg_keys(derived.svg) and "poles derived from the requirements" in derived.svg
     assert "ζ = 0.703" in derived.caption  # the damping the design derived (design.extra)
@@ -126,7 +129,7 @@ def test_requested_and_derived_poles_are_labelled_as_such(runs, figures):
 def test_drawn_steady_state_window_is_the_checks(runs):
     res = runs["posspeed-saturation"]
     sim = res.simulation
-    fig, _ = drawn(fg._draw_simulation, res.design, sim, res.loaded.spec.requirements)
+    fig, _ = drawn(_draw_simulation, res.design, sim, res.loaded.spec.requirements)
     (band,) = by_key(fig, "steady-state-band")
     x = np.concatenate([seg[:, 0] for seg in band.get_segments()])
     t0, t1 = float(x.min()), float(x.max())
@@ -141,7 +144,7 @@ def test_drawn_steady_state_window_is_the_checks(runs):
 
 def test_rise_time_markers_are_the_checks_crossings(runs):
     res = runs["requirements-driven"]
-    fig, _ = drawn(fg._draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
+    fig, _ = drawn(_draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
     (markers,) = by_key(fig, "rise-time")
     t10, t90 = markers.get_xdata()
     check = next(c for c in res.checks if c.name == "rise_time")
@@ -149,7 +152,7 @@ def test_rise_time_markers_are_the_checks_crossings(runs):
 
 
 def test_limits_references_and_events_have_distinct_line_styles(servo_result):
-    fig, info = drawn(fg._draw_simulation, servo_result.design, servo_result.simulation,
+    fig, info = drawn(_draw_simulation, servo_result.design, servo_result.simulation,
                       servo_result.loaded.spec.requirements)
     styles = {key: {a.get_linestyle() for a in by_key(fig, key)} for key in
               ("reference", "overshoot-limit", "control-limit", "perturbation-onset", "position")}
@@ -163,7 +166,7 @@ def test_limits_references_and_events_have_distinct_line_styles(servo_result):
 
 def test_tracking_error_panel_for_trackers(runs, figures):
     res = runs["tracking-pid"]
-    fig, _ = drawn(fg._draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
+    fig, _ = drawn(_draw_simulation, res.design, res.simulation, res.loaded.spec.requirements)
     (err,) = by_key(fig, "tracking-error")
     t, e = (np.asarray(v, float) for v in err.get_data())
     sim = res.simulation
@@ -189,7 +192,7 @@ def test_sensitivity_peak_matches_python_control_and_the_modulus_margin(runs, fi
     res = runs[name]
     check = next(c for c in res.checks if c.name == "loop_margins")
     w = np.asarray(check.data["frequency"])
-    peaks = fg.sensitivity_peaks(check.data)
+    peaks = sensitivity_peaks(check.data)
     for k, pk in enumerate(peaks):
         ms = max(float(np.max(_python_control_sensitivity(res.design, k, w))), 1.0)
         assert pk["Ms"] == pytest.approx(ms, rel=1e-6)
@@ -215,7 +218,7 @@ def test_evidence_links_name_present_checks_and_filenames_are_unique(runs, figur
     for name, res in runs.items():
         present = {c.name for c in res.checks}
         figs = list(figures[name].values())
-        assert len({f.filename for f in fg.design_figures(res)}) == len(fg.design_figures(res))
+        assert len({f.filename for f in design_figures(res)}) == len(design_figures(res))
         for f in figs:
             assert set(f.evidence) <= present and f.anchor == f.filename[:-4] and f.anchor.startswith("fig-")
         assert set(figures[name]["fig-simulation.svg"].evidence) == timed & present

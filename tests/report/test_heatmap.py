@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from designkit.report import heatmap
+from designkit.display import heatmap
 from tests.report.conftest import assert_svg
 
 
@@ -37,7 +37,7 @@ def test_no_heat_map_without_grid_data():
 
 
 def test_zero_contour_is_drawn_and_tagged_only_when_the_margin_changes_sign():
-    from designkit.report.svg import svg_keys
+    from designkit.display.svg import svg_keys
 
     mixed = svg_keys(heatmap.robustness_svg("r", _grid([[1.0, -2.0, 3.0], [4.0, 5.0, -6.0]])))
     positive = svg_keys(heatmap.robustness_svg("r", _grid([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])))

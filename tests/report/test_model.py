@@ -9,11 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from designkit.report.model import (
-    ReportModel,
-    build_report_model,
-    verdict_of,
-)
+from designkit.report.model import ReportModel, build_report_model
+from designkit.report.verdict import verdict_of
 from designkit.verification.check import Check
 from tests.report.conftest import make_result, servo_checks
 
@@ -101,7 +98,7 @@ def test_formulas_notes_and_loop_margins(servo_result, servo_model):
 
 def test_check_rows_in_order_with_formatted_values(servo_model):
     rows = servo_model.checks
-    assert [r.name for r in rows] == ["routh_hurwitz", "lyapunov", "overshoot", "robust_stability", "loop_margins"]
+    assert [r.name for r in rows] == ["routh_hurwitz", "lyapunov", "overshoot", "robust_grid", "loop_margins"]
     assert [r.status for r in rows] == ["PASS"] * 5
     over = rows[2]
     assert (over.target, over.achieved, over.margin, over.unit) == ("<= 10 %", "4.2", "+5.8", "%")
@@ -144,7 +141,7 @@ def test_simulation_settings_rows(servo_model):
 
 
 def test_simulation_settings_of_nested_values_are_words():
-    from designkit.report.model import _simulation_rows
+    from designkit.report.simulation_rows import simulation_rows
     from designkit.simulation.result import SimulationResult
 
     result = make_result()
@@ -154,7 +151,7 @@ def test_simulation_settings_of_nested_values_are_words():
     sim = SimulationResult(time=sim.time, reference=sim.reference, state=sim.state,
                            controller_state=sim.controller_state, u_command=sim.u_command, u_applied=sim.u_applied,
                            perturbation=sim.perturbation, measured=sim.measured, kind="step", settings=settings)
-    rows = {r.name: r.value for r in _simulation_rows(sim, result.design.plant)}
+    rows = {r.name: r.value for r in simulation_rows(sim, result.design.plant)}
     assert rows["Time step"] == "0.001 s"
     assert rows["Spec settings ignored"] == "none"
     assert rows["Simulated plant"] == "Km = 2 (rad/s)/(N·m), τ = 0.5 s"
@@ -217,7 +214,7 @@ def test_glossary_explains_the_words_of_the_tables(servo_model):
 
 
 def test_equations_are_typeset_from_the_formulas(servo_model):
-    from designkit.report.model import MathFrac
+    from designkit.display.typeset import MathFrac
 
     labels = [e.label for e in servo_model.equations]
     assert labels[:3] == ["Plant", "Plant", "Control law"]
@@ -232,7 +229,7 @@ def test_equations_are_typeset_from_the_formulas(servo_model):
 
 
 def test_equation_splits_words_and_subscripts():
-    from designkit.report.model import equation
+    from designkit.display.typeset import equation
 
     text = "L(s) = ((Km K2 − 1) s² + Km K1 s + Km K3) / (s² (τ s + 1))  (x2/Km cancels the link damping)"
     eq = equation("Loop", text)
@@ -264,7 +261,7 @@ def test_a_failed_diagnosis_is_reported_not_raised(failed_result, monkeypatch):
     def broken(result):
         raise ValueError("no simulation")
 
-    monkeypatch.setattr(model, "_diagnose", lambda result: model_diagnose(broken, result))
+    monkeypatch.setattr(model, "diagnose_run", lambda result: model_diagnose(broken, result))
     built = build_report_model(failed_result)
     assert [r.check for r in built.why] == ["overshoot"]
     assert "diagnosis of this run failed (ValueError: no simulation)" in built.why_note
@@ -274,7 +271,7 @@ def test_a_failed_diagnosis_is_reported_not_raised(failed_result, monkeypatch):
 def model_diagnose(fn, result):
     try:
         return fn(result)
-    except Exception as exc:  # noqa: BLE001 - mirrors model._diagnose
+    except Exception as exc:  # noqa: BLE001 - mirrors designkit.report.why.diagnose_run
         return exc
 
 
@@ -287,7 +284,7 @@ def test_findings_of_the_diagnosis_fill_cause_and_fix(failed_result, monkeypatch
                                 limit_cycle=SimpleNamespace(sentence="x1 oscillates at 3 rad/s."),
                                 linear_vs_nonlinear=(SimpleNamespace(metric="overshoot", unit="%", linear="4.5",
                                                                      nonlinear=""),))
-    monkeypatch.setattr(model, "_diagnose", lambda result: diagnosis)
+    monkeypatch.setattr(model, "diagnose_run", lambda result: diagnosis)
     built = build_report_model(failed_result)
     (row,) = built.why
     assert (row.cause, row.fix) == ("the loop diverges", "add anti-windup")

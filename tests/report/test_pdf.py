@@ -146,13 +146,13 @@ def test_pdf_text_shows_verdict_and_checks(servo_result, servo_pdf, tmp_path):
     path.write_bytes(servo_pdf)
     text = subprocess.run(["pdftotext", "-layout", str(path), "-"], capture_output=True, text=True,
                           check=True).stdout
-    from designkit.report.model import check_label
+    from designkit.report.labels import check_label
 
     assert "VERIFIED" in text
     raw = subprocess.run(["pdftotext", str(path), "-"], capture_output=True, text=True, check=True).stdout
     flat = " ".join(raw.split())
     for check in servo_result.checks:
-        assert check_label(check.name) in flat
+        assert check_label(check) in flat
     assert "Spec SHA-256" in text
     assert flat.index("Requirement compliance") < flat.index("Appendix A: check details")
 
@@ -194,7 +194,7 @@ def test_pdf_metadata_lists_the_versions_of_the_versions_table(servo_model, serv
     "weird = #x $y$ \\ [a] {b} \"q\" <l> @r ) ( // ⁻¹ ᵀ",
 ])
 def test_typeset_formulas_compile(formula):
-    from designkit.report.model import equation
+    from designkit.display.typeset import equation
     from designkit.report.pdf import typst_math
 
     source = str(typst_math(equation("f", formula)))

@@ -13,7 +13,7 @@ import pytest
 
 from designkit.pipeline import run
 from designkit.report import build_report_model, write_report
-from designkit.spec import load_spec
+from designkit.schema.loader import load_spec
 from tests.report.pdf_text import pdf_pages, pdf_text
 
 SPECS = Path(__file__).resolve().parents[2] / "specs"
@@ -37,10 +37,10 @@ def test_report_of_a_real_run(name, tmp_path):
     files = write_report(result, tmp_path)
     html = files.html.read_text(encoding="utf-8")
     assert "http" not in html and "src=" not in html
-    from designkit.report.model import check_label
+    from designkit.report.labels import check_label
 
     for check in result.checks:
-        assert check_label(check.name) in html
+        assert check_label(check) in html
         assert f'<span class="badge {check.status}">{check.status}</span>' in html
     assert files.pdf.read_bytes().startswith(b"%PDF")
 

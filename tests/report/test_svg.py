@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from designkit.report import svg
+from designkit.display import svg
 
 
 def test_minmax_decimate_keeps_extremes_and_bounds_the_length():

@@ -1,6 +1,6 @@
 """The "why it failed" section: shared fixes shown once, and the robot failures diagnosed.
 
-- :func:`designkit.report.model._share_fixes` on hand-made rows: a fix found under several rows is
+- :func:`designkit.report.why.share_fixes` on hand-made rows: a fix found under several rows is
   numbered once, those rows refer to it and keep their own fixes; the HTML, Typst and notebook
   views show it once;
 - end to end on ``infeasible-requirements`` (no fix text twice in the section) and on the two PUMA
@@ -17,9 +17,11 @@ import pytest
 
 import designkit as dk
 from designkit.report.html import render_html
-from designkit.report.model import WhyFix, WhyRow, _share_fixes, build_report_model
+from designkit.report.model import build_report_model
 from designkit.report.notebook import result_html
 from designkit.report.pdf import render_typst
+from designkit.report.rows import WhyFix, WhyRow
+from designkit.report.why import share_fixes
 
 SPECS = "specs"
 SHARED = "An anti-windup stops the divergence."
@@ -35,14 +37,14 @@ def test_a_shared_fix_is_numbered_once_and_referred_to():
     rows = [_row("overshoot", f"{SHARED} {DEMAND}"), _row("settling_time", f"{SHARED} {OWN} {DEMAND}"),
             _row("max_control", DEMAND), _row("rise_time", "Slow down.")]
     parts = [(SHARED, DEMAND), (SHARED, OWN, DEMAND), (DEMAND,), ("Slow down.",)]
-    shared, fixes = _share_fixes(rows, parts)
+    shared, fixes = share_fixes(rows, parts)
     assert fixes == (WhyFix(1, SHARED, ("Overshoot", "Settling_Time")),
                      WhyFix(2, DEMAND, ("Overshoot", "Settling_Time", "Max_Control")))
     assert [r.fix for r in shared] == ["See fixes 1 and 2 below.", f"{OWN} See fixes 1 and 2 below.",
                                        "See fix 2 below.", "Slow down."]
     assert [r.fix_refs for r in shared] == [(1, 2), (1, 2), (2,), ()]
     assert shared[3] is rows[3]  # a row with no shared fix is left as it was
-    assert _share_fixes(rows[3:], parts[3:]) == (tuple(rows[3:]), ())
+    assert share_fixes(rows[3:], parts[3:]) == (tuple(rows[3:]), ())
 
 
 @pytest.fixture(scope="module")
@@ -117,7 +119,7 @@ def test_a_model_without_shared_fixes_renders_as_before(infeasible_model):
 
 
 def test_a_long_cause_stated_by_an_earlier_row_is_referred_to():
-    from designkit.report.model import REPEATED_CAUSE_MIN, WhyRow, _share_causes
+    from designkit.report.why import REPEATED_CAUSE_MIN, share_causes
 
     long_cause = "The controller's model differs from the true plant" + " (details)" * 12
     assert len(long_cause) >= REPEATED_CAUSE_MIN
@@ -125,7 +127,7 @@ def test_a_long_cause_stated_by_an_earlier_row_is_referred_to():
     def row(label, cause):
         return WhyRow("c", label, "FAIL", "r", "a", "s", "p", cause, "f")
 
-    rows = _share_causes([row("First", long_cause + "; and the worst corner."), row("Second", long_cause + "."),
+    rows = share_causes([row("First", long_cause + "; and the worst corner."), row("Second", long_cause + "."),
                           row("Third", "Short cause."), row("Fourth", "Short cause.")])
     assert [r.cause for r in rows[1:]] == ["Same cause as First (above).", "Short cause.", "Short cause."]
     assert rows[0].cause.startswith(long_cause)

@@ -8,7 +8,7 @@ import numpy as np
 
 from designkit.families import synthesize
 from designkit.models.link import LinkPlant
-from designkit.spec.schema import Spec
+from designkit.schema.spec import Spec
 from designkit.synthesis.design import Design
 from tests.tolerances import TOL  # noqa: F401  (re-exported for the simulation tests)
 

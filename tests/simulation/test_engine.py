@@ -11,9 +11,9 @@ from scipy.signal import place_poles
 
 from designkit.models.elastic import ElasticJointPlant, elastic_state_space
 from designkit.models.robots.elastic_link import DEFAULTS, elastic_link
+from designkit.schema.spec import Spec
 from designkit.simulation.run import build, simulate
 from designkit.simulation.trials import run_trials
-from designkit.spec.schema import Spec
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.law import Law, law_symbols
 from tests.simulation.helpers import TRACKING, design_of, make_spec

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from designkit.families import synthesize
+from designkit.schema.loader import load_spec
 from designkit.simulation.run import simulate
-from designkit.spec.loader import load_spec
 
 SPECS = sorted((Path(__file__).resolve().parents[2] / "specs").glob("*.yaml"))
 
@@ -19,7 +19,11 @@ SPECS = sorted((Path(__file__).resolve().parents[2] / "specs").glob("*.yaml"))
 def test_example_spec_simulates(path):
     spec = load_spec(path).spec
     res = simulate(spec, synthesize(spec))
-    assert np.all(np.isfinite(res.state)) and res.time.size > 100
+    if not np.all(np.isfinite(res.state)):  # only an example meant to fail may diverge (and its checks say so)
+        from tests.test_cli import EXPECTED_EXIT
+
+        assert EXPECTED_EXIT[path.stem] == 1
+    assert res.time.size > 100
     json.dumps(res.settings)
     if spec.simulation.duration is not None:
         assert res.time[-1] == pytest.approx(spec.simulation.duration)

@@ -57,7 +57,8 @@ def test_nominal_tracking_follows_the_quintic_exactly_up_to_rk4_error():
 
 @pytest.mark.parametrize("controller", [None, TRACKING], ids=["servo", "tracking"])
 def test_mismatched_plant_equals_python_control(controller):
-    spec = make_spec(controller, duration=2.5, dt=0.001, trajectory=QUINTIC)
+    scenario = {"trajectory": QUINTIC} if controller is not None else {}  # a servo follows simulation.step
+    spec = make_spec(controller, duration=2.5, dt=0.001, **scenario)
     design = design_of(spec)
     res = simulate(spec, design, plant=OTHER_PLANT)
     fine = np.linspace(0.0, 2.5, 25001)  # python-control holds inputs first-order: use a finer grid
@@ -166,7 +167,8 @@ def test_integral_saturation_bounds_the_integral_and_reduces_overshoot():
     base = {"duration": 6.0, "nonlinearity": {"kind": "saturation", "limit": 5.0}}
     design = design_of(make_spec(**base))
     wound = simulate(make_spec(**base), design)
-    clamped = simulate(make_spec(**base, anti_windup={"kind": "saturation", "value": 20.0}), design)
+    clamping = make_spec(**base, anti_windup={"kind": "saturation", "value": 20.0})
+    clamped = simulate(clamping, design_of(clamping))  # the anti-windup is part of the designed law
     k3 = design.gains["K3"]
     assert np.max(np.abs(k3 * wound.controller_state)) > 22.0
     assert np.max(np.abs(k3 * clamped.controller_state)) <= 20.0 + 1e-9
@@ -178,7 +180,8 @@ def test_integral_threshold_freezes_integration_far_from_the_target():
     base = {"duration": 6.0, "nonlinearity": {"kind": "saturation", "limit": 5.0}}
     design = design_of(make_spec(**base))
     wound = simulate(make_spec(**base), design)
-    gated = simulate(make_spec(**base, anti_windup={"kind": "threshold", "value": 0.5}), design)
+    gating = make_spec(**base, anti_windup={"kind": "threshold", "value": 0.5})
+    gated = simulate(gating, design_of(gating))
     far = np.abs(gated.tracking_error) > 0.5 + 1e-3
     assert far[0] and np.all(gated.controller_state[: np.argmin(far)] == 0.0)
     assert overshoot(gated.position, 1.0) < overshoot(wound.position, 1.0) - 3.0

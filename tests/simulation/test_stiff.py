@@ -20,10 +20,10 @@ import scipy.signal
 import designkit as dk
 from designkit.cli import main
 from designkit.errors import SpecError
+from designkit.schema.spec import Spec
 from designkit.simulation.integrate import run_steps
 from designkit.simulation.run import simulate
 from designkit.simulation.timing import CAPPED_STEPS, MAX_STEPS, rates_of, resolve
-from designkit.spec.schema import Spec
 from tests.cli_input import assert_bad_input
 from tests.simulation.helpers import design_of
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from designkit.errors import SpecError
+from designkit.schema.spec import Spec
 from designkit.simulation.run import simulate
 from designkit.simulation.timing import rates_of, resolve
-from designkit.spec.schema import Spec
 from tests.simulation.helpers import TRACKING, design_of, make_spec
 
 

@@ -2,7 +2,7 @@
 and the range, or designed; never an internal error.
 
 * the issue's inputs through ``designkit synth`` (exit 2, one line naming the key path and the range);
-* every declared range (:func:`designkit.spec.ranges.declared_ranges`): a value inside is accepted, one just
+* every declared range (:func:`designkit.schema.ranges_table.declared_ranges`): a value inside is accepted, one just
   outside refused with the key path (hypothesis);
 * the poles' own rules (modulus, spread), uncertainty intervals, the README table and the JSON Schema;
 * extreme values inside the ranges through ``verify`` and ``synth``: exit 0 or 1, the same from both.
@@ -22,11 +22,13 @@ from hypothesis import strategies as st
 
 from designkit.cli import main
 from designkit.errors import SpecError
-from designkit.spec import ranges
-from designkit.spec.loader import parse_spec
-from designkit.spec.ranges import POLE_MODULUS, POLE_SPREAD, Range, declared_ranges, fmt_value
-from designkit.spec.schema import Spec
+from designkit.schema import ranges_table as ranges
+from designkit.schema.loader import parse_spec
+from designkit.schema.ranges_table import declared_ranges
+from designkit.schema.spec import Spec
+from designkit.spec.ranges import POLE_MODULUS, POLE_SPREAD, Range, fmt_value
 from tests.cli_input import assert_bad_input
+from tests.problems import discovered
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -279,6 +281,22 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "numerics.rtol": [(SERVO, "numerics.rtol", "numerics.rtol")],
     "numerics.atol": [(SERVO, "numerics.atol", "numerics.atol")],
 }
+
+SQUARE = SERVO.replace("anti_windup: {kind: saturation, value: 25}}", "anti_windup: {kind: saturation, value: 25}, "
+                       "trajectory: {kind: square, amplitude: 0.5, period: 2.0}, "
+                       "plant_change: {time: 2.0, values: {Km: 2.5}}}")
+PRBS = SQUARE.replace("{kind: square, amplitude: 0.5, period: 2.0}", "{kind: prbs, amplitude: 0.5, bit: 0.5, order: 5, "
+                      "seed: 3}")
+WHERE.update({
+    "simulation.trajectory.period": [(SQUARE, "simulation.trajectory.period", "simulation.trajectory.period")],
+    **{f"simulation.trajectory.{k}": [(PRBS, f"simulation.trajectory.{k}", f"simulation.trajectory.{k}")]
+       for k in ("bit", "order", "seed")},
+    "simulation.plant_change.time": [(SQUARE, "simulation.plant_change.time", "simulation.plant_change.time")],
+    "simulation.plant_change.values.<name>": [(SQUARE, "simulation.plant_change.values.Km",
+                                               "simulation.plant_change.values.Km")],
+})
+for _ranges in discovered("RANGES").values():  # a family's own section: the cases its tests declare
+    WHERE.update(_ranges)
 
 ROWS = {(row.path, row.range) for row in declared_ranges()}
 CASES = [(path, rng, base, where, key) for path, rng in sorted(ROWS, key=lambda r: r[0])

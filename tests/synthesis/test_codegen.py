@@ -24,15 +24,15 @@ from designkit.cli import main
 from designkit.errors import SpecError
 from designkit.families import FAMILIES, family
 from designkit.models.codegen import find_compiler
+from designkit.pipeline import codegen
 from designkit.pipeline import design as design_of
-from designkit.spec.loader import load_spec, parse_spec
+from designkit.schema.loader import load_spec, parse_spec
 from designkit.synthesis.codegen import (
     LAW_ROLES,
     MODEL_TERMS,
     LawCode,
     c_identifier,
     generate_law_code,
-    generate_spec_code,
 )
 from tests.tolerances import TOL
 
@@ -151,7 +151,7 @@ def _doc_example(prefix: str) -> str:
 def test_documented_c_example_matches_python_law(kind, cc, tmp_path):
     loaded = load_spec(_specs_of(kind)[0])
     dsn, law = _law(loaded)
-    code = generate_spec_code(loaded, tmp_path / "out")
+    code = codegen(loaded, tmp_path / "out")
     (tmp_path / "example.c").write_text(_doc_example(code.name))
     exe = _build(cc, [tmp_path / "example.c", code.source], tmp_path / "example", shared=False,
                  include=code.directory)
@@ -168,7 +168,7 @@ def test_documented_c_example_matches_python_law(kind, cc, tmp_path):
 
 def test_documented_example_output(cc, tmp_path):
     """The number printed in docs/codegen.md is what the example prints."""
-    code = generate_spec_code(SERVO, tmp_path / "codegen")
+    code = codegen(SERVO, tmp_path / "codegen")
     (tmp_path / "example.c").write_text(_doc_example(code.name))
     exe = _build(cc, [tmp_path / "example.c", code.source], tmp_path / "example", shared=False,
                  include=code.directory)
@@ -198,13 +198,13 @@ def test_terms_are_the_ones_the_family_declares(tmp_path):
     dsn, law = _law(parse_spec(text))
     code = generate_law_code(dsn, law, tmp_path, spec_name="no-gravity")
     assert [f.role for f in code.functions] == list(LAW_ROLES)
-    servo = generate_spec_code(SERVO, tmp_path)
+    servo = codegen(SERVO, tmp_path)
     assert [f.role for f in servo.functions] == list(LAW_ROLES)
-    assert [f.role for f in generate_spec_code(SIMNOG, tmp_path).functions] == [*LAW_ROLES, "g_hat"]
+    assert [f.role for f in codegen(SIMNOG, tmp_path).functions] == [*LAW_ROLES, "g_hat"]
 
 
 def test_two_controllers_link_into_one_library(cc, tmp_path):
-    codes = [generate_spec_code(spec, tmp_path) for spec in (SERVO, ROOT / "specs" / "tracking-pid.yaml", SIMNOG)]
+    codes = [codegen(spec, tmp_path) for spec in (SERVO, ROOT / "specs" / "tracking-pid.yaml", SIMNOG)]
     library = _build(cc, [c.source for c in codes], tmp_path / "libboth.so", shared=True)
     for c in codes:
         assert ca.external(c.function("command").symbol, str(library)).name_out() == ["u"]
@@ -228,30 +228,30 @@ def test_c_identifier_and_bad_arguments(tmp_path):
         generate_law_code(dsn, law, blocker / "sub", spec_name="x")
     assert err.value.path == "out_dir" and "\n" not in str(err.value)
     with pytest.raises(SpecError) as err:
-        generate_spec_code(SERVO, tmp_path / "out", name="a b")
+        codegen(SERVO, tmp_path / "out", name="a b")
     assert err.value.path == "name"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
     assert blocker.read_text() == "not a directory"
 
 
 def test_rewrite_is_atomic(tmp_path, monkeypatch):
-    import designkit.synthesis.codegen as codegen
+    import designkit.synthesis.codegen as module
 
-    first = generate_spec_code(SERVO, tmp_path)
+    first = codegen(SERVO, tmp_path)
     before = {p: p.read_bytes() for p in first.files}
-    second = generate_spec_code(SERVO, tmp_path)
+    second = codegen(SERVO, tmp_path)
     assert {p: p.read_bytes() for p in second.files} == before  # deterministic, same names
     assert sorted(p.name for p in first.directory.iterdir()) == ["posspeed_link.c", "posspeed_link.h"]
 
     def failing_replace(src, dst):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(codegen.os, "replace", failing_replace)
+    monkeypatch.setattr(module.os, "replace", failing_replace)
     with pytest.raises(SpecError, match="out_dir: cannot write the C code"):
-        generate_spec_code(SERVO, tmp_path, name="other")
+        codegen(SERVO, tmp_path, name="other")
     assert sorted(p.name for p in first.directory.iterdir()) == ["posspeed_link.c", "posspeed_link.h"]
     with pytest.raises(SpecError):
-        generate_spec_code(SERVO, tmp_path / "fresh" / "deeper")
+        codegen(SERVO, tmp_path / "fresh" / "deeper")
     assert not (tmp_path / "fresh").exists()
 
 
@@ -266,7 +266,7 @@ def test_cli_codegen_end_to_end(tmp_path, capsys):
     folder = out / "simnog-decentralized-pid"
     assert written == [folder / "simnog_decentralized_pid.c", folder / "simnog_decentralized_pid.h"]
     assert "simnog_decentralized_pid_command" in printed[0] and "simnog_decentralized_pid_g_hat" in printed[0]
-    api = generate_spec_code(SIMNOG, tmp_path / "api")
+    api = codegen(SIMNOG, tmp_path / "api")
     assert [p.read_bytes() for p in written] == [p.read_bytes() for p in api.files]
 
     header = written[1].read_text()

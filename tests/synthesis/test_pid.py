@@ -8,7 +8,7 @@ import pytest
 
 from designkit.families import synthesize
 from designkit.models.link import LinkPlant
-from designkit.spec import parse_spec
+from designkit.schema.loader import parse_spec
 from designkit.synthesis import pid
 from tests.problems import COMPLEX_YAML, POSSPEED_GAINS, POSSPEED_YAML, TRACKING_GAINS, TRACKING_YAML
 

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from designkit.families import synthesize
-from designkit.spec import parse_spec
+from designkit.schema.loader import parse_spec
 from designkit.synthesis.requirements import damping_from_overshoot, dominant_poles
 
 

@@ -12,7 +12,8 @@ import scipy.linalg
 
 from designkit.verification.certificate import Certificate, Recheck, array_from_json, load, to_json
 from designkit.verification.lmi import KypCertificate, LyapunovCertificate
-from designkit.verification.lp import FarkasCertificate, FeasiblePointCertificate, LowerBoundCertificate, Polytope
+from designkit.verification.lp import Polytope
+from designkit.verification.lp_certificates import FarkasCertificate, FeasiblePointCertificate, LowerBoundCertificate
 from designkit.verification.lyapunov import lyapunov_equation, lyapunov_lmi
 
 A3 = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-40.0, -30.0, -8.0]])  # poles well in the left half plane

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from designkit.families import synthesize
-from designkit.spec.loader import parse_spec
+from designkit.schema.loader import parse_spec
 from designkit.verification import loop
 from tests.problems import COMPLEX_YAML, POSSPEED_YAML, TRACKING_YAML
 

@@ -11,16 +11,12 @@ import scipy.optimize
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from designkit.verification import lp
-from designkit.verification.lp import (
-    LinearCondition,
-    LowerBoundCertificate,
-    LpSolution,
-    Polytope,
-    linear_feasibility,
-    robust_linear_conditions,
-    solve_lp,
-)
+from designkit.synthesis.design import LinearCondition
+from designkit.verification import lp_feasibility, robust_linear
+from designkit.verification.lp import LpSolution, Polytope, solve_lp
+from designkit.verification.lp_certificates import LowerBoundCertificate
+from designkit.verification.lp_feasibility import linear_feasibility
+from designkit.verification.robust_linear import robust_linear_conditions
 from designkit.verification.tolerances import LP_EPS
 
 
@@ -145,7 +141,7 @@ def test_a_bad_dual_leaves_the_condition_undecided(monkeypatch):
     """The solver claims optimal with zero multipliers: the re-check only has the bounding box,
     where the condition's minimum is -0.45, so it cannot certify; the point is no counterexample."""
     fake = LpSolution(np.array([0.5, 0.5]), -0.5, np.zeros(5), "optimal", "CLARABEL")
-    monkeypatch.setattr(lp, "solve_lp", lambda c, G, h, solver: fake)
+    monkeypatch.setattr(robust_linear, "solve_lp", lambda c, G, h, solver: fake)
     check = robust_linear_conditions("t", [LinearCondition("c", 0.55, {"a": -0.5, "b": -0.5})], TRIANGLE)
     assert check.passed is None
     assert check.certificate["conditions"][0]["certified_lower_bound"] < 0
@@ -159,7 +155,7 @@ def test_solver_failure_is_undecided_but_a_counterexample_still_fails(monkeypatc
     assert robust_linear_conditions("r", [fails], box, solver="NO_SUCH_SOLVER").passed is False
     good = solve_lp(np.array([1.0]), box.A, box.b)
     inaccurate = LpSolution(good.x, good.value, good.dual, "optimal_inaccurate", "CLARABEL")
-    monkeypatch.setattr(lp, "solve_lp", lambda c, G, h, solver: inaccurate)
+    monkeypatch.setattr(robust_linear, "solve_lp", lambda c, G, h, solver: inaccurate)
     check = robust_linear_conditions("r", [holds], box)
     assert check.passed is None and "optimal_inaccurate" in check.detail
 
@@ -221,7 +217,7 @@ def test_feasibility_solver_failure_is_undecided(monkeypatch):
     G, h = np.array([[1.0], [-1.0]]), np.array([1.0, 1.0])
     assert linear_feasibility(G, h, solver="NO_SUCH_SOLVER").feasible is None
     fake = LpSolution(np.array([0.0, 1.0]), -1.0, np.array([0.5, 0.5, 0.0]), "optimal_inaccurate", "CLARABEL")
-    monkeypatch.setattr(lp, "solve_lp", lambda c, G, h, solver: fake)
+    monkeypatch.setattr(lp_feasibility, "solve_lp", lambda c, G, h, solver: fake)
     result = linear_feasibility(G, h)
     assert result.feasible is None
     assert result.to_check().status == "UNDECIDED"
@@ -231,7 +227,7 @@ def test_optimal_status_with_a_wrong_point_is_undecided(monkeypatch):
     """The solver claims x = 5 (outside 0 <= x <= 1) with margin 1 and no useful dual."""
     G, h = np.array([[1.0], [-1.0]]), np.array([1.0, 0.0])
     fake = LpSolution(np.array([5.0, 1.0]), -1.0, np.zeros(3), "optimal", "CLARABEL")
-    monkeypatch.setattr(lp, "solve_lp", lambda c, G, h, solver: fake)
+    monkeypatch.setattr(lp_feasibility, "solve_lp", lambda c, G, h, solver: fake)
     assert linear_feasibility(G, h).feasible is None
 
 

@@ -13,7 +13,7 @@ from tests.problems import POSSPEED_YAML
 
 def _servo_A(poles: list[float]) -> np.ndarray:
     from designkit.families import synthesize
-    from designkit.spec.loader import parse_spec
+    from designkit.schema.loader import parse_spec
 
     text = POSSPEED_YAML.replace("poles: [-4, -5, -20]", f"poles: {poles}")
     return synthesize(parse_spec(text).spec).closed_loop.A

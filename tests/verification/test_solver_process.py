@@ -126,7 +126,7 @@ def test_a_synth_run_with_the_solver_process_never_imports_cvxpy_in_the_parent(t
         "import numpy, scipy.linalg\n"
         "proc = solver_process.start(fork=True)\n"
         "from designkit.pipeline import run\n"
-        "from designkit.spec import load_spec\n"
+        "from designkit.schema.loader import load_spec\n"
         f"r = run(load_spec({str(spec)!r}))\n"
         "lyap = [c for c in r.checks if c.name == 'lyapunov'][0]\n"
         "print(json.dumps({'started': proc is not None, 'alive': solver_process.active() is not None,\n"

@@ -9,7 +9,7 @@ from hypothesis import assume, given, settings
 
 from designkit.families import pid_servo
 from designkit.models.link import LinkPlant
-from designkit.spec.schema import Requirements
+from designkit.schema.spec import Requirements
 from designkit.verification.time_domain import response_metrics, time_domain_checks
 from tests.verification.helpers import pole_sets, real_pole, step_result
 

@@ -3,6 +3,6 @@
 They sit between the pipeline and the report: the report draws what they return and never computes it.
 """
 
-from designkit.analysis.experiment1 import LabAnswers, lab_answers
+from designkit.analysis.lab import LabAnswers, lab_answers
 
 __all__ = ["LabAnswers", "lab_answers"]

@@ -1,10 +1,11 @@
-"""The controller families, one module each, and the registry derived from them.
+"""The controller families, one module (or package) each, and the registry derived from them.
 
-Every module of this package (other than those starting with ``_``) defines ``FAMILY``, a
-:class:`~designkit.synthesis.family.Family`.  :data:`FAMILIES` maps each ``kind`` to it, in
+Every module or subpackage of this package (other than those starting with ``_``) defines ``FAMILY``,
+a :class:`~designkit.synthesis.family.Family`.  :data:`FAMILIES` maps each ``kind`` to it, in
 module-name order; the spec's ``controller`` union, the loader's tags, the checks that run and
 the report's law and gain tables are derived from it.  Adding a family is adding a module here
-(see ``docs/architecture.md`` for the worked example).
+(see ``docs/architecture.md`` for the worked examples); a family with checks, figures or
+diagnoses of its own is a package holding them.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from types import MappingProxyType
 from designkit.errors import SpecError
 from designkit.synthesis.family import Family
 
-__all__ = ["FAMILIES", "family", "synthesize"]
+__all__ = ["FAMILIES", "check_rules", "family", "synthesize"]
 
 
 def _discover() -> dict[str, Family]:
@@ -47,9 +48,28 @@ def family(kind: str) -> Family:
 
 
 def synthesize(spec, plant=None, *, base_dir=None):
-    """The design a spec asks for (the nominal plant is built from ``spec.plant`` when not given)."""
+    """The design a spec asks for (the nominal plant is built from ``spec.plant`` when not given).
+
+    The family's synthesis, then the design's law rebuilt with the spec's ``simulation.anti_windup`` (the
+    linearization is unchanged: an anti-windup gate is open and its clamp inactive at the operating point)
+    and the family's label.
+    """
+    import dataclasses
+
     if plant is None:
-        from designkit.models.from_spec import plant_from_spec
+        from designkit.spec.plant_builder import plant_from_spec
 
         plant = plant_from_spec(spec.plant, base_dir)
-    return family(spec.controller.kind).synthesize(spec, plant)
+    fam = family(spec.controller.kind)
+    design = fam.synthesize(spec, plant)
+    changes = {"label": fam.display.label}
+    if spec.simulation.anti_windup is not None:
+        changes["law"] = fam.law(design, spec.simulation.anti_windup)
+    return dataclasses.replace(design, **changes)
+
+
+def check_rules(kind: str) -> tuple:
+    """The :class:`~designkit.verification.suite.CheckRule` values the family of ``kind`` offers, in report order."""
+    from designkit.verification.suite import resolve
+
+    return resolve(family(kind).checks)

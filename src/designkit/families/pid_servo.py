@@ -140,7 +140,7 @@ FAMILY = Family(
     synthesize=synthesize,
     law=law,
     checks=("pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins",
-            "time_domain"),
+            "designed_loop", "time_domain"),
     display=Display(
         label="PID position servo",
         law=("u = -K1 (x1 - xD) - K2 x2 - K3 ∫(x1 - xD) dt + K3 K4 xD",),

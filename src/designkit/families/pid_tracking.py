@@ -90,7 +90,7 @@ FAMILY = Family(
     synthesize=synthesize,
     law=law,
     checks=("pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins",
-            "time_domain"),
+            "designed_loop", "time_domain"),
     display=Display(
         label="PID trajectory tracking",
         law=("u = (τ/Km) xD'' + x2/Km - K1 (x1 - xD) - K2 (x2 - xD') - K3 ∫(x1 - xD) dt",),

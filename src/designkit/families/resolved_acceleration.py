@@ -28,6 +28,7 @@ conditioning the ``singularity`` check reports.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Literal
 
 import casadi as ca
@@ -149,10 +150,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
     fns = task_functions(model.robot, model.model_parameters(), space)
     x0 = np.asarray(fns.tracked(q0)).ravel()
     r0 = np.concatenate([x0, np.zeros(2 * n)])
-    return with_closed_loop(design, law(design), r0, z0=np.concatenate([q0, np.zeros(n)]),
-                            field="simulation.initial_position",
-                            hint=" (a singular task Jacobian: start away from the singularity or set "
-                                 "controller.damped_least_squares)")
+    design = with_closed_loop(design, law(design), r0, z0=np.concatenate([q0, np.zeros(n)]),
+                              field="simulation.initial_position",
+                              hint=" (a singular task Jacobian: start away from the singularity or set "
+                                   "controller.damped_least_squares)")
+    return dataclasses.replace(design, motion=motion(spec, design))
 
 
 def motion(spec: Any, design: Design) -> Any:
@@ -202,7 +204,7 @@ FAMILY = Family(
     synthesize=synthesize,
     law=law,
     checks=("lyapunov", "error_poles", "singularity", "robustness", "tracking_bounds",
-            "time_domain", "torque_limits"),
+            "designed_loop", "time_domain", "torque_limits"),
     display=Display(
         label="Resolved-acceleration control",
         law=("a* = ẍD + K1 (xD − x) + K2 (ẋD − J q̇)",
@@ -211,5 +213,6 @@ FAMILY = Family(
                 "through the Jacobian and applied with the model's inverse dynamics; on an exact model each task "
                 "coordinate's error obeys ë + K2 ė + K1 e = 0 away from singular configurations.",
     ),
+    references=("line", "circle"),
     motion=motion,
 )

@@ -171,6 +171,14 @@ class PlantBase(ABC):
                 return par
         raise ModelError(name, f"unknown parameter; this {self.kind} plant has {list(self.parameter_names)}")
 
+    def nonsmooth(self) -> tuple[str, ...]:
+        """The plant's terms that are not differentiable at rest, in words (``()``: a smooth plant).
+
+        A linearization at rest leaves them out (CasADi's derivative of ``sign`` is zero), so a small-signal
+        comparison of the simulated loop with its linearization does not apply to a plant that has any.
+        """
+        return ()
+
     def rest_state(self, q: Any) -> np.ndarray:
         """The state at rest with the joints at positions ``q`` (every other state zero)."""
         x = np.zeros(self.n_states)

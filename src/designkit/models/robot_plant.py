@@ -126,6 +126,18 @@ class RobotPlant(PlantBase):
         """``<robot>_ode: (x = (q, qd), u, d, p) -> xdot``."""
         return self._ode
 
+    def nonsmooth(self) -> tuple[str, ...]:
+        """Coulomb friction ``Fc sign(q̇)`` when the robot has it (see :meth:`PlantBase.nonsmooth`)."""
+        if not self.robot.friction:
+            return ()
+        coulomb = [numeric_value(link.coulomb) for link in self.robot.description.links]
+        joints = [j + 1 for j, c in enumerate(coulomb) if c is None or c != 0]
+        if not joints:
+            return ()
+        peak = max((abs(c) for c in coulomb if c is not None), default=0.0)
+        return (f"Coulomb friction Fc sign(q̇) on joint{'s' if len(joints) > 1 else ''} "
+                f"{', '.join(map(str, joints))} (up to {peak:.3g} N·m)",)
+
     def equations(self) -> tuple[str, ...]:
         """The model in plain text."""
         terms = "M(q) q̈ + C(q, q̇) q̇ + g(q)"

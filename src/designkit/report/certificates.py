@@ -1,15 +1,14 @@
-"""Number formatting and the compact rendering of check certificates.
+"""The compact rendering of check certificates, and of any value, in words rather than Python notation.
 
-Numbers are formatted here for the whole report (:func:`fmt_number`, :func:`fmt_signed`,
-:func:`fmt_compact`); :func:`render_certificate` turns a check's certificate (nested mappings,
-matrices, lists of records, ``[re, im]`` pairs, robustness grids) into
+Numbers are written by :mod:`designkit.display.numbers` (:func:`~designkit.display.numbers.fmt_number`);
+:func:`fmt_compact` writes any value on one line and :func:`render_certificate` turns a check's
+certificate (nested mappings, matrices, lists of records, ``[re, im]`` pairs, robustness grids) into
 :class:`CertificateEntry` rows that the HTML and PDF renderers lay out as they are.
 """
 
 from __future__ import annotations
 
 import contextlib
-import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -17,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from designkit.report.heatmap import robustness_grid
+from designkit.display.heatmap import robustness_grid
+from designkit.display.numbers import fmt_number, plain_complex, sentence_units
 
 # certificate keys whose [re, im] pairs are complex numbers (poles, zeros, eigenvalues)
 _COMPLEX_KEYS = re.compile(r"eig|pole|zero", re.IGNORECASE)
@@ -78,7 +78,6 @@ LABELS: dict[str, str] = {
     "threshold": "threshold", "margin": "margin", "unit": "unit", "requested": "requested", "achieved": "achieved",
     "error": "error", "largest_deviation_from_decoupled_form": "largest deviation from the decoupled form",
 }
-_UNIT_STAR = re.compile(r"(?<=[A-Za-z)])\*(?=[A-Za-z(])")
 _SUFFIX_UNITS = {"rad_s": " (rad/s)", "deg": " (deg)", "percent": " (%)", "rad": " (rad)", "s": " (s)"}
 
 
@@ -98,41 +97,6 @@ def human_key(key: str) -> str:
                     break
             parts.append(re.sub(r"\s+", " ", words.replace("_", " ")).strip() + suffix)
     return " › ".join(p for p in parts if p)
-
-
-def fmt_number(value: Any, digits: int = 4) -> str:
-    """A number with ``digits`` significant digits (``"∞"``, ``"nan"``; complex as ``a ± bj``)."""
-    if value is None:
-        return "—"
-    if isinstance(value, bool | np.bool_):
-        return str(bool(value)).lower()
-    if isinstance(value, complex | np.complexfloating):
-        z = complex(value)
-        if abs(z.imag) <= 1e-12 * max(1.0, abs(z)):
-            return fmt_number(z.real, digits)
-        sign = "+" if z.imag >= 0 else "-"
-        if abs(z.real) <= 1e-12 * abs(z):
-            return f"{'-' if z.imag < 0 else ''}j{fmt_number(abs(z.imag), digits)}"
-        return f"{fmt_number(z.real, digits)} {sign} j{fmt_number(abs(z.imag), digits)}"
-    if isinstance(value, int | float | np.integer | np.floating):
-        x = float(value)
-        if math.isnan(x):
-            return "nan"
-        if math.isinf(x):
-            return "∞" if x > 0 else "-∞"
-        if x == 0:
-            return "0"
-        return f"{x:.{digits}g}"
-    return str(value)
-
-
-def fmt_signed(value: Any, digits: int = 4) -> str:
-    """Like :func:`fmt_number` with an explicit sign for finite non-zero reals."""
-    if isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool):
-        x = float(value)
-        if math.isfinite(x) and x != 0:
-            return f"{x:+.{digits}g}"
-    return fmt_number(value, digits)
 
 
 def _is_number(x: Any) -> bool:
@@ -199,7 +163,7 @@ def fmt_compact(value: Any, digits: int = 4) -> str:
     separated by ``;``), cut after :data:`_LIST_MAX` items with their count.
     """
     if isinstance(value, str):
-        return _UNIT_STAR.sub("·", value)  # units written one way: N·m, not N*m
+        return plain_complex(sentence_units(value))  # units written one way (N·m, not N*m), no Python complex
     if isinstance(value, bool | np.bool_):
         return "yes" if value else "no"
     if _is_number(value) or isinstance(value, complex | np.complexfloating) or value is None:
@@ -280,7 +244,7 @@ def _grid_summary(grid: Mapping[str, Any], digits: int, *, figure: bool) -> str:
         except (TypeError, ValueError, KeyError):
             continue
         if arr.size:
-            unit = _UNIT_STAR.sub("·", f" {axis.get('unit', '')}".rstrip())
+            unit = sentence_units(f" {axis.get('unit', '')}".rstrip())
             parts.append(f"{axis.get('name', '?')} ∈ [{fmt_number(arr.min(), digits)}, {fmt_number(arr.max(), digits)}]"
                          f"{unit} ({arr.size} points)")
     with contextlib.suppress(TypeError, ValueError):  # values that are not numbers are simply not summarised

@@ -13,7 +13,8 @@ import re
 import jinja2
 from markupsafe import Markup, escape
 
-from designkit.report.model import Equation, MathFrac, MathToken, ReportModel
+from designkit.display.typeset import Equation, MathFrac, MathToken
+from designkit.report.model import ReportModel
 
 _TEMPLATE = "report.html.j2"
 
@@ -78,7 +79,7 @@ def _mathml_nodes(nodes) -> str:
 
 
 def mathml(eq: Equation) -> Markup:
-    """An :class:`~designkit.report.model.Equation` as presentation MathML (no script, no web font)."""
+    """An :class:`~designkit.display.typeset.Equation` as presentation MathML (no script, no web font)."""
     if not eq.nodes:
         return Markup("")
     alt = escape(eq.text)

@@ -16,64 +16,19 @@ view, so several views in one notebook cannot collide.
 from __future__ import annotations
 
 import itertools
-import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-from markupsafe import escape
+from designkit.display.design_view import design_html
+from designkit.display.html import BANNER as _BANNER
+from designkit.display.html import esc as _e
+from designkit.display.html import heading as _heading
+from designkit.display.html import para as _para
+from designkit.display.html import table as _table
 
 __all__ = ["design_html", "result_html"]
 
 _COUNTER = itertools.count(1)
-
-_BANNER = {
-    "verified": ("#e6f4ea", "#1e7a34"),
-    "failed": ("#fdecea", "#b3261e"),
-    "undecided": ("#fff4e5", "#8a5300"),
-}
-_STATUS = {"PASS": "#1e7a34", "FAIL": "#b3261e", "UNDECIDED": "#8a5300"}
-_TABLE = 'style="border-collapse:collapse;margin:0.3em 0 0.8em 0;font-size:0.9em"'
-_CELL = "padding:2px 8px;border-bottom:1px solid #ddd;text-align:left;vertical-align:top"
-
-
-def _e(value: Any) -> str:
-    return str(escape("" if value is None else value))
-
-
-def _status_cell(status: str) -> str:
-    colour = _STATUS.get(str(status).upper(), "inherit")
-    return f'<td style="{_CELL};font-weight:bold;color:{colour}">{_e(status)}</td>'
-
-
-def _table(header: Sequence[str], rows: Iterable[Sequence[Any]], *, status_column: int | None = None,
-           caption: str = "") -> str:
-    """An HTML table; every cell is escaped (a cell given as ``("html", text)`` is inserted as is)."""
-    out = [f"<table {_TABLE}>"]
-    if caption:
-        out.append(f'<caption style="text-align:left;font-weight:bold">{_e(caption)}</caption>')
-    out.append("<thead><tr>" + "".join(f'<th style="{_CELL}">{_e(h)}</th>' for h in header) + "</tr></thead>")
-    out.append("<tbody>")
-    for row in rows:
-        cells = []
-        for k, cell in enumerate(row):
-            if k == status_column:
-                cells.append(_status_cell(str(cell)))
-            elif isinstance(cell, tuple) and len(cell) == 2 and cell[0] == "html":
-                cells.append(f'<td style="{_CELL}">{cell[1]}</td>')
-            else:
-                cells.append(f'<td style="{_CELL}">{_e(cell)}</td>')
-        out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</tbody></table>")
-    return "".join(out)
-
-
-def _heading(text: str) -> str:
-    return f'<h4 style="margin:0.8em 0 0.2em 0">{_e(text)}</h4>'
-
-
-def _para(text: str) -> str:
-    return f'<p style="margin:0.2em 0">{_e(text)}</p>' if text else ""
 
 
 def _fields(row: Any, names: Sequence[str]) -> list[str]:
@@ -229,86 +184,3 @@ def result_html(model: Any, *, prefix: str | None = None) -> str:
         "</div>",
     ]
     return "".join(p for p in parts if p)
-
-
-# ----------------------------------------------------------------------------- a design alone
-
-
-def _fmt(value: Any, digits: int = 6) -> str:
-    from designkit.report.certificates import fmt_number
-
-    return fmt_number(value, digits)
-
-
-def _gain_text(value: Any) -> str:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim == 0:
-        return _fmt(float(arr))
-    if arr.ndim == 1:
-        return "; ".join(f"joint {j + 1}: {_fmt(v)}" for j, v in enumerate(arr))
-    return "; ".join("[" + ", ".join(_fmt(v) for v in row) + "]" for row in arr)
-
-
-def _pole_rows(poles: Iterable[complex]) -> list[list[str]]:
-    rows = []
-    for p in sorted((complex(p) for p in poles), key=lambda z: (z.real, z.imag)):
-        wn = abs(p)
-        rows.append([_fmt(p), _fmt(-p.real / wn, 4) if wn > 0 else "—", _fmt(wn, 4)])
-    return rows
-
-
-def _unit(text: str) -> str:
-    return str(text).replace("*", "·")
-
-
-def design_html(design: Any) -> str:
-    """A design as an HTML fragment for Jupyter (no check is run).
-
-    Parameters
-    ----------
-    design : Design
-
-    Returns
-    -------
-    str
-        One ``<div>``: controller and plant, gains with their units and roles, requested poles
-        and zeros (1/s), the achieved closed-loop poles with damping ratio and natural frequency
-        (rad/s), the closed loop's inputs, outputs and states, per-joint loops and the notes.
-    """
-    from designkit.families import FAMILIES
-
-    fam = FAMILIES.get(design.kind)
-    label = fam.display.label if fam is not None else design.kind
-    parts = ['<div class="designkit-design" style="font-family:sans-serif;line-height:1.35">',
-             f'<h3 style="margin:0.2em 0">{_e(label)} ({_e(design.kind)}) on a {_e(design.plant.kind)} plant</h3>',
-             _heading("Gains"),
-             _table(("Gain", "Value", "Unit", "Meaning"),
-                    ([k, _gain_text(v), _unit(design.gains.unit(k)), design.gains.meaning(k)]
-                     for k, v in design.gains.items()))]
-    if design.poles or design.zeros:
-        rows = [["pole", _fmt(p)] for p in design.poles] + [["zero", _fmt(z)] for z in design.zeros]
-        parts += [_heading("Requested"), _table(("", "Value (1/s)"), rows)]
-    cl = design.closed_loop
-    if cl is not None:
-        poles = np.linalg.eigvals(np.asarray(cl.A, float))
-        abscissa = float(np.max(poles.real)) if poles.size else -math.inf
-        stable = "asymptotically stable" if abscissa < 0 else "not asymptotically stable"
-        parts += [
-            _heading("Nominal closed loop (linearized at the operating point)"),
-            _para(f"{len(cl.states)} states ({', '.join(cl.states)}); inputs {', '.join(cl.inputs)}; "
-                  f"outputs {', '.join(cl.outputs)}. {stable.capitalize()}: the slowest pole has real part "
-                  f"{_fmt(abscissa, 4)} 1/s."),
-            _table(("Achieved pole (1/s)", "ζ", "ωn (rad/s)"), _pole_rows(poles)),
-        ]
-    for name, loop in zip(design.loop_names, design.loops, strict=False):
-        if loop.closed_loop is not None:
-            parts += [_heading(f"Loop {name}"),
-                      _table(("Achieved pole (1/s)", "ζ", "ωn (rad/s)"),
-                             _pole_rows(np.linalg.eigvals(np.asarray(loop.closed_loop.A, float))))]
-    if design.notes:
-        parts.append(_heading("Notes"))
-        parts.append("<ul>" + "".join(f"<li>{_e(n)}</li>" for n in design.notes) + "</ul>")
-    parts.append(_para("No check has been run on this design: designkit.run(spec) verifies it."))
-    parts.append("</div>")
-    return "".join(parts)
-

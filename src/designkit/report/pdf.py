@@ -9,7 +9,7 @@ filter (trusted Typst written by this module).  Figures are written as SVG files
 
 Typst embeds its default fonts (Libertinus Serif, New Computer Modern, DejaVu Sans Mono);
 system fonts are ignored so that the PDF is the same on every machine.  The figures' text is SVG
-``<text>`` set in DejaVu Sans (:mod:`designkit.report.svg`): the DejaVu Sans files that ship
+``<text>`` set in DejaVu Sans (:mod:`designkit.display.svg`): the DejaVu Sans files that ship
 with matplotlib are copied into a ``fonts`` folder of the temporary directory and passed to Typst
 as its only font path, so the figure text stays text in the PDF (searchable, selectable) and
 the font is embedded (only those files: matplotlib's other fonts, e.g. its own DejaVu Sans Mono,
@@ -25,7 +25,8 @@ from pathlib import Path
 
 import jinja2
 
-from designkit.report.model import Equation, MathFrac, MathToken, ReportModel
+from designkit.display.typeset import Equation, MathFrac, MathToken
+from designkit.report.model import ReportModel
 
 _TEMPLATE = "report.typ.j2"
 # Every ASCII punctuation character: Typst markup accepts a backslash before any character, so
@@ -141,7 +142,7 @@ def _math_nodes(nodes) -> str:
 
 
 def typst_math(eq: Equation) -> TypstCode:
-    """An :class:`~designkit.report.model.Equation` as inline Typst math (every word quoted, so any text compiles)."""
+    """An :class:`~designkit.display.typeset.Equation` as inline Typst math (every word quoted: any text compiles)."""
     if not eq.nodes:
         return TypstCode("")
     return TypstCode(f"$display({_math_nodes(eq.nodes)})$")
@@ -180,9 +181,9 @@ def render_typst(model: ReportModel) -> str:
 
 
 def figure_font_dir(root: Path) -> Path:
-    """Copy the figures' font files (:func:`designkit.report.svg.font_files`) into ``root / "fonts"``
+    """Copy the figures' font files (:func:`designkit.display.svg.font_files`) into ``root / "fonts"``
     and return that folder (the font path given to Typst)."""
-    from designkit.report.svg import font_files
+    from designkit.display.svg import font_files
 
     folder = root / "fonts"
     folder.mkdir(exist_ok=True)

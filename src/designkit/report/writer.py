@@ -120,9 +120,7 @@ def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1)
     OSError
         Writing failed part-way (e.g. disk full); an existing report is left as it was.
     """
-    from designkit.pipeline import PipelineResult
-
-    if not isinstance(result, PipelineResult):
+    if not all(hasattr(result, name) for name in ("loaded", "design", "checks", "simulation")):  # a PipelineResult
         raise SpecError("result", f"expected the PipelineResult of designkit.run, got {type(result).__name__}")
     _check_destination(out_dir, result.loaded.spec.name)  # before the costly rendering
     model = build_report_model(result, processes=processes)

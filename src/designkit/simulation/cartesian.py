@@ -111,4 +111,6 @@ def cartesian_reference(traj: Any, p0: Any, space: TaskSpace, q0: Any) -> Refere
         return np.concatenate([rows, np.zeros((rows.shape[0], n_rot, 3))], axis=1) if n_rot else rows
 
     settings = {**settings, "coordinates": list(space.names), "orientation": "held" if n_rot else "free"}
-    return Reference(evaluate, space.m, float(traj.duration), rate, settings, tuple(np.asarray(q0, dtype=float)))
+    before = tuple(evaluate(np.zeros(1))[0, :, 0])
+    return Reference(evaluate, space.m, float(traj.duration), rate, settings, tuple(np.asarray(q0, dtype=float)),
+                     before)

@@ -30,9 +30,10 @@ __all__ = ["forced_response", "linear_response", "linear_step"]
 
 
 def forced_response(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, time: np.ndarray,
-                    inputs: np.ndarray, x0: np.ndarray | None = None) -> np.ndarray:
+                    inputs: np.ndarray, x0: np.ndarray | None = None, *, held: Any = None) -> np.ndarray:
     """Outputs of ``x' = A x + B u, y = C x + D u`` from ``x0`` (zero by default) for inputs sampled at
-    ``time`` and interpolated linearly between the samples (module docstring).
+    ``time`` and interpolated linearly between the samples (module docstring), or held (zero-order hold:
+    ``u(t_k + s) = u_k``, so ``Gamma0 = G``, ``Gamma1 = 0``) for the inputs ``held`` marks.
 
     Parameters
     ----------
@@ -44,6 +45,9 @@ def forced_response(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, 
         Input samples.
     x0 : ndarray, shape (n,), optional
         Initial state.
+    held : array_like of bool, shape (m,), optional
+        Inputs held over each interval (as the simulator holds a disturbance or a piecewise-constant
+        reference) instead of interpolated.
 
     Returns
     -------
@@ -65,8 +69,12 @@ def forced_response(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, 
         M = np.zeros((n + 2 * m, n + 2 * m))
         M[:n, :n], M[:n, n:n + m], M[n:n + m, n + m:] = A * h, B * h, np.eye(m)
         E = scipy.linalg.expm(M)
-        Phi, Gamma1 = E[:n, :n], E[:n, n + m:]
+        Phi, Gamma1 = E[:n, :n], E[:n, n + m:].copy()
         Gamma0 = E[:n, n:n + m] - Gamma1
+        if held is not None:
+            mask = np.asarray(held, dtype=bool).reshape(m)
+            Gamma0[:, mask] += Gamma1[:, mask]
+            Gamma1[:, mask] = 0.0
         W = U[:, :-1].T @ Gamma0.T + U[:, 1:].T @ Gamma1.T  # the input's share of each step
         PhiT, x = Phi.T, X[0]
         for k in range(t.size - 1):
@@ -103,12 +111,13 @@ def linear_response(
         hold), so a step in a disturbance should fall on a sample.
     """
     loop, point = design.closed_loop, design.operating_point
+    if loop is None:
+        raise ValueError(f"this {design.kind} design has no linear closed loop ({design.linearization.reason})")
     if plant is not None and plant is not design.plant:
-        from designkit.families import family
         from designkit.synthesis.closed_loop import linearize
 
         op = design.operating_point
-        loop, _, point = linearize(plant, family(design.kind).law(design, None), op["r"], z0=[*op["x"], *op["xc"]])
+        loop, _, point = linearize(plant, design.linear_law, op["r"], z0=[*op["x"], *op["xc"]])
     n = len(design.plant.positions)
     time = np.asarray(time, float)
     ref = np.asarray(reference, float).reshape(time.size, n, 3)

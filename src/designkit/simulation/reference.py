@@ -18,7 +18,18 @@ own displacement ``A_j``; :meth:`Reference.evaluate` returns an array of shape `
   ``ta (T - ta) < Ka``;
 * ``via_points``: a clamped cubic spline (scipy ``CubicSpline``, zero velocity at both ends;
   continuous acceleration) through ``(0, 0), (t_1, P_1), ..., (t_k, P_k)`` per joint, held after
-  ``t_k``.
+  ``t_k``;
+* ``square`` (servos): ``xD = q0 + A`` over the first half of every period ``T``, ``q0 - A`` over the
+  second, ``xD' = xD'' = 0``;
+* ``prbs`` (servos): ``xD = q0 + A (2 b_k - 1)`` on ``[k T_b, (k + 1) T_b)``, ``b_k`` the output of the
+  maximal-length Fibonacci shift register of ``order`` stages (:data:`PRBS_TAPS`, period
+  ``2^order - 1`` bits) started from a non-zero state drawn from the seed: a persistently exciting
+  signal whose every window of ``2^order - 1`` bits holds each non-zero ``order``-bit pattern once.
+
+:func:`reference_of` gives the reference a design follows in a spec's scenario: the task-space path
+of ``design.motion``, else ``simulation.trajectory`` when given, else a step (``simulation.step``) for a
+servo and the default quintic for a tracker.  Which kinds a controller family can follow is its own
+declaration (:attr:`designkit.synthesis.family.Family.references`), checked when the spec is read.
 """
 
 from __future__ import annotations
@@ -34,7 +45,8 @@ from designkit.errors import SpecError
 from designkit.spec.fields import per_joint
 from designkit.synthesis.design import freeze
 
-__all__ = ["Reference", "quintic", "reference_for", "sine", "step_reference", "trapezoidal", "via_points"]
+__all__ = ["PRBS_TAPS", "Reference", "prbs", "prbs_bits", "quintic", "reference_for", "reference_of", "sine",
+           "square", "step_reference", "trapezoidal", "via_points"]
 
 
 @dataclass(frozen=True)
@@ -55,6 +67,12 @@ class Reference:
         Parameters used, JSON-serialisable.
     start : tuple of float
         The joints' initial positions ``q0`` (rad), where the plant starts at rest.
+    before : tuple of float
+        The reference's positions before the motion (default ``start``; a task-space path: the task
+        coordinates at ``start``), where the loop is at rest at ``t = 0-`` (:meth:`rest`).
+    piecewise_constant : bool
+        The reference only jumps (a step, a square wave, a PRBS): the simulator holds its value at each step's
+        start over the step, so a jump at ``t_k`` acts from ``t_k`` (and never inside an integrator stage).
     """
 
     evaluate: Callable[[np.ndarray], np.ndarray]
@@ -63,10 +81,17 @@ class Reference:
     rate: float
     settings: Any = field(default_factory=dict)
     start: tuple[float, ...] = ()
+    before: tuple[float, ...] = ()
+    piecewise_constant: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
         object.__setattr__(self, "start", tuple(float(v) for v in self.start) or (0.0,) * self.n)
+        object.__setattr__(self, "before", tuple(float(v) for v in self.before) or self.start[:self.n])
+
+    def rest(self) -> np.ndarray:
+        """The ``3 n`` law inputs before the motion: positions ``before``, zero velocities and accelerations."""
+        return np.concatenate([np.asarray(self.before, dtype=float), np.zeros(2 * self.n)])
 
     def flat(self, t: np.ndarray) -> np.ndarray:
         """The reference as the ``3 n`` law inputs per instant: ``(N, 3 n)``, positions then velocities then
@@ -108,7 +133,7 @@ def step_reference(amplitude: Any, start: Any = 0.0, n: int | None = None) -> Re
         t = np.atleast_1d(np.asarray(t, float))
         return _shape(t, q0, amp, np.ones(t.size), np.zeros(t.size), np.zeros(t.size))
 
-    return Reference(evaluate, n, 0.0, 0.0, _settings("step", q0, amplitude=amp), tuple(q0))
+    return Reference(evaluate, n, 0.0, 0.0, _settings("step", q0, amplitude=amp), tuple(q0), piecewise_constant=True)
 
 
 def quintic(amplitude: Any, duration: float, start: Any = 0.0, n: int | None = None) -> Reference:
@@ -221,29 +246,108 @@ def via_points(times: Sequence[float], points: Sequence[Any], start: Any = 0.0, 
                      tuple(q0))
 
 
+def square(amplitude: Any, period: float, start: Any = 0.0, n: int | None = None) -> Reference:
+    """``xD = start + amplitude`` for the first half of every ``period`` (s), ``start - amplitude`` for the second."""
+    n = n or np.size(amplitude)
+    amp, q0, T = _vec(amplitude, n), _vec(start, n), float(period)
+
+    def evaluate(t: np.ndarray) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, float))
+        phase = np.mod(t, T) / T
+        level = np.where(phase < 0.5 - 1e-12, 1.0, -1.0)
+        return _shape(t, q0, amp, level, np.zeros(t.size), np.zeros(t.size))
+
+    return Reference(evaluate, n, 2.0 * T, 0.0, _settings("square", q0, amplitude=amp, period=T), tuple(q0),
+                     piecewise_constant=True)
+
+
+PRBS_TAPS: dict[int, tuple[int, ...]] = {
+    3: (3, 2), 4: (4, 3), 5: (5, 3), 6: (6, 5), 7: (7, 6), 8: (8, 6, 5, 4), 9: (9, 5), 10: (10, 7), 11: (11, 9),
+    12: (12, 6, 4, 1), 13: (13, 4, 3, 1), 14: (14, 5, 3, 1), 15: (15, 14), 16: (16, 15, 13, 4),
+}
+"""Feedback taps (stage numbers, 1-based) of a maximal-length Fibonacci shift register per order: primitive
+trinomials and pentanomials from the standard tables (e.g. Xilinx XAPP052, 1996); the tests check every
+period is ``2^order - 1``."""
+
+
+def prbs_bits(order: int, count: int, seed: int = 0) -> np.ndarray:
+    """``count`` bits (0/1) of the maximal-length shift register of ``order`` stages started from the seed's state.
+
+    The register starts at ``1 + seed mod (2^order - 1)`` (never the all-zero lock-up state); each step outputs
+    its last stage and shifts in the XOR of the tapped stages.
+    """
+    taps = PRBS_TAPS[int(order)]
+    state = [(1 + int(seed) % (2**order - 1)) >> k & 1 for k in range(order)]
+    out = np.empty(int(count), dtype=np.int8)
+    for k in range(int(count)):
+        out[k] = state[-1]
+        feedback = 0
+        for tap in taps:
+            feedback ^= state[tap - 1]
+        state = [feedback, *state[:-1]]
+    return out
+
+
+def prbs(amplitude: Any, bit: float, order: int = 7, seed: int = 0, start: Any = 0.0, n: int | None = None,
+         horizon: float | None = None) -> Reference:
+    """A PRBS of positions ``start +- amplitude`` switching at multiples of ``bit`` (s) (module docstring).
+
+    The sequence repeats every ``2^order - 1`` bits; ``horizon`` (s, default one period of the sequence) is how
+    long the reference itself lasts for the default duration.
+    """
+    n = n or np.size(amplitude)
+    amp, q0, Tb = _vec(amplitude, n), _vec(start, n), float(bit)
+    length = 2**int(order) - 1
+    bits = prbs_bits(order, length, seed).astype(float)
+
+    def evaluate(t: np.ndarray) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, float))
+        k = np.mod(np.floor(np.maximum(t, 0.0) / Tb + 1e-9).astype(np.int64), length)
+        return _shape(t, q0, amp, 2.0 * bits[k] - 1.0, np.zeros(t.size), np.zeros(t.size))
+
+    span = length * Tb if horizon is None else float(horizon)
+    return Reference(evaluate, n, span, 0.0, _settings("prbs", q0, amplitude=amp, bit=Tb, order=int(order),
+                                                       seed=int(seed), period_bits=length), tuple(q0),
+                     piecewise_constant=True)
+
+
+def _joints(value: Any, n: int, key: str) -> tuple[float, ...]:
+    try:
+        return per_joint(value, n, f"simulation.trajectory.{key}")
+    except ValueError as exc:
+        path, msg = str(exc).split(": ", 1)
+        raise SpecError(path, msg) from None
+
+
 def _trajectory(traj: Any, start: np.ndarray, n: int) -> Reference:
     if traj.kind in ("line", "circle"):
         raise SpecError("simulation.trajectory.kind", f"{traj.kind!r} is an end-effector path, for a task-space "
                         "controller; this controller tracks joints: use quintic, sine, trapezoidal or via_points")
-    def joints(value: Any, key: str) -> tuple[float, ...]:
-        try:
-            return per_joint(value, n, f"simulation.trajectory.{key}")
-        except ValueError as exc:
-            path, msg = str(exc).split(": ", 1)
-            raise SpecError(path, msg) from None
-
+    if traj.kind in ("square", "prbs"):
+        raise SpecError("simulation.trajectory.kind", f"{traj.kind!r} jumps between positions, for a servo; a "
+                        "tracking controller needs a smooth trajectory: use quintic, sine, trapezoidal or via_points")
     if traj.kind == "quintic":
-        return quintic(joints(traj.amplitude, "amplitude"), traj.duration, start, n)
+        return quintic(_joints(traj.amplitude, n, "amplitude"), traj.duration, start, n)
     if traj.kind == "sine":
-        return sine(joints(traj.amplitude, "amplitude"), traj.frequency, start, n)
+        return sine(_joints(traj.amplitude, n, "amplitude"), traj.frequency, start, n)
     if traj.kind == "trapezoidal":
         try:
-            return trapezoidal(joints(traj.amplitude, "amplitude"), joints(traj.max_velocity, "max_velocity"),
-                               joints(traj.max_acceleration, "max_acceleration"), traj.duration, start, n)
+            return trapezoidal(_joints(traj.amplitude, n, "amplitude"), _joints(traj.max_velocity, n, "max_velocity"),
+                               _joints(traj.max_acceleration, n, "max_acceleration"), traj.duration, start, n)
         except ValueError as exc:
             raise SpecError("simulation.trajectory." + str(exc).split(": ", 1)[0], str(exc).split(": ", 1)[1]) from None
-    points = [joints(p, f"points[{k}]") for k, p in enumerate(traj.points)]
+    points = [_joints(p, n, f"points[{k}]") for k, p in enumerate(traj.points)]
     return via_points(traj.times, points, start, n)
+
+
+def _servo_reference(traj: Any, start: np.ndarray, n: int) -> Reference:
+    """A piecewise-constant ``simulation.trajectory`` (square wave, PRBS) for a servo."""
+    if traj.kind == "square":
+        return square(_joints(traj.amplitude, n, "amplitude"), traj.period, start, n)
+    if traj.kind == "prbs":
+        return prbs(_joints(traj.amplitude, n, "amplitude"), traj.bit, traj.order, traj.seed, start, n)
+    raise SpecError("simulation.trajectory.kind", f"{traj.kind!r} is a smooth trajectory, for a tracking "
+                    "controller; a servo follows simulation.step, or a square or prbs simulation.trajectory")
 
 
 DEFAULT_TRAJECTORY = {"kind": "quintic", "amplitude": 1.0, "duration": 1.0}
@@ -251,22 +355,28 @@ DEFAULT_TRAJECTORY = {"kind": "quintic", "amplitude": 1.0, "duration": 1.0}
 
 
 def reference_for(kind: str, sim: Any, n: int = 1) -> Reference:
-    """The reference of kind ``"step"`` or ``"trajectory"`` that ``simulation`` describes, for ``n`` joints.
+    """The reference of a ``"step"`` (servo) or ``"trajectory"`` (tracker) design in ``simulation``, for ``n`` joints.
+
+    A servo follows ``simulation.trajectory`` when it is a square wave or a PRBS, else the step
+    ``simulation.step``; a tracker follows ``simulation.trajectory`` (default: :data:`DEFAULT_TRAJECTORY`).
 
     Raises
     ------
     SpecError
         A per-joint list of the wrong length (``simulation.step``, ``simulation.initial_position``,
-        ``simulation.trajectory.amplitude``...) or a trapezoid too short for its limits.
+        ``simulation.trajectory.amplitude``...), a trapezoid too short for its limits, or a trajectory kind
+        the design cannot follow (``simulation.trajectory.kind``).
     """
     try:
         start = np.array(per_joint(sim.initial_position if sim.initial_position is not None else 0.0, n,
                                    "simulation.initial_position"))
-        if kind == "step":
+        if kind == "step" and sim.trajectory is None:
             return step_reference(per_joint(sim.step, n, "simulation.step"), start, n)
     except ValueError as exc:
         path, msg = str(exc).split(": ", 1)
         raise SpecError(path, msg) from None
+    if kind == "step":
+        return _servo_reference(sim.trajectory, start, n)
     if kind != "trajectory":
         raise SpecError("controller.kind", f"unknown reference kind {kind!r}; known: ['step', 'trajectory']")
     if sim.trajectory is None:
@@ -274,3 +384,10 @@ def reference_for(kind: str, sim: Any, n: int = 1) -> Reference:
 
         return _trajectory(QuinticTrajectory(**DEFAULT_TRAJECTORY), start, n)
     return _trajectory(sim.trajectory, start, n)
+
+
+def reference_of(spec: Any, design: Any) -> Reference:
+    """The reference ``design`` follows in the scenario of ``spec`` (module docstring)."""
+    if design.motion is not None:
+        return design.motion.reference
+    return reference_for(design.reference, spec.simulation, len(design.plant.positions))

@@ -51,6 +51,9 @@ class SimulationResult:
         The tracked task coordinates (m, rad) of a task-space controller; ``None``: the joints are tracked.
     tracked_names, tracked_units : tuple of str
         Their names (``x``, ``y``, ``rz``) and units.
+    signals : Mapping
+        The law's recorded signals (:attr:`designkit.synthesis.law.Law.signals`): name -> array ``(N,)``,
+        with ``signal_units`` name -> unit.
     """
 
     time: np.ndarray
@@ -72,6 +75,8 @@ class SimulationResult:
     tracked: np.ndarray | None = None
     tracked_names: tuple[str, ...] = ()
     tracked_units: tuple[str, ...] = ()
+    signals: Mapping[str, np.ndarray] = field(default_factory=dict)
+    signal_units: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         n_t = np.size(self.time)
@@ -89,6 +94,9 @@ class SimulationResult:
             arr.setflags(write=False)
             object.__setattr__(self, "tracked", arr)
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
+        object.__setattr__(self, "signals", freeze({k: np.asarray(v, dtype=float).reshape(n_t)
+                                                    for k, v in self.signals.items()}))
+        object.__setattr__(self, "signal_units", freeze(dict(self.signal_units)))
 
     @property
     def n_joints(self) -> int:

@@ -1,33 +1,22 @@
 """Closed-loop simulation of any plant under a designed controller (the notes' POSSPEED and SIMNOG).
 
-Signal chain, per integration step ``[t_k, t_k + dt]`` (``dt`` from :mod:`designkit.simulation.timing`)::
+:func:`build` assembles a :class:`Simulator` from a spec's ``simulation`` section and a design:
+the reference (:func:`~designkit.simulation.reference.reference_of`: a step, a trajectory, a square
+wave or a PRBS, or the task-space path of ``design.motion``), the law (``design.law``, which carries
+the spec's anti-windup), the nonlinear element, the noise and the perturbation, the time grid
+(:mod:`designkit.simulation.timing`) and the step (:mod:`designkit.simulation.step`, where the
+signal chain is described).  :meth:`Simulator.run` evaluates it.
 
-    y = x + n_k                        measurement, Gaussian noise n_k held over the step
-    u_c = law.command(y, xc, m, r)     controller (+ a per-step feedforward, zero unless a trial sets it);
-                                       sampled: only at sampling instants, then held
-    m <- law.update(y, xc, m, r)       the law's discrete memory, at each controller sample
-    v = element(u_c, e)                nonlinear element per input (saturation, dead zone, relay, quantizer)
-    u_a(t) = v(t - delay)              delay line of ``delay/dt`` steps
-    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative
-
-State layout (computed from the plant, the law and the element, never fixed)::
-
-    z = (x[nx], xc[nc], m[nm], e[ne], u_hold[nu], xc_dot_hold[nc], delay line[nu * delay_steps])
-    w = (r(t)[3n], r(t + dt/2)[3n], r(t + dt)[3n], noise[nx], d[nd], sample flag, u_feedforward[nu], p[np])
+Where the run starts: the plant at rest at the reference's start (``simulation.initial_position``),
+the controller at :func:`~designkit.synthesis.closed_loop.rest_state` -- the states a law names in
+``rest_start`` (integrals, reference models) solved so that the loop is at rest at the reference
+before the motion, the others at the law's ``initial_state``.  The settings record the initial
+controller state and whether the loop starts at rest.
 
 The true plant's parameters ``p`` are an input of the step (repeated in every column of ``w``), so
 one built simulator runs on any parameter values (``Simulator.run(parameters=...)``): sweeps over
 an uncertainty box and model-mismatch studies never rebuild the step, and the compiled step is
 shared by every parameter value.
-
-Evaluation: when the controller is continuous (``sampling_period = 0``), there is no delay and
-the element is continuous and memoryless (none, saturation, dead zone), the whole chain is
-evaluated inside the integrator (fourth-order accurate with RK4).  Otherwise the discontinuous
-parts (relay switching, quantizer, sampling instants, delay line) are evaluated once per step,
-at the step's start, and the applied control is held over the step.  A sampled controller runs
-at ``t = j Ts``: it computes ``u`` and the derivative of its state there and holds both.  The
-anti-windup gate is evaluated at each step's start; its clamp after each step.  The
-disturbance is held per step: a step at ``time`` acts from the first ``t_k >= time``.
 
 Integrators (``numerics.integrator``): ``rk4`` (classical, fixed step) or ``cvodes`` (CasADi's
 variable-step BDF inside every step, for stiff plants).  Without ``numerics.integrator`` the
@@ -35,6 +24,8 @@ integrator is chosen from the poles (:func:`~designkit.simulation.timing.resolve
 CVODES with an output step set by the non-stiff poles when RK4 would need more steps than the
 bound (``settings["integrator_choice"]`` says why).  Either way the steps are rolled by
 ``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
+A discontinuous law is held over each step (:mod:`designkit.simulation.step`), so CVODES integrates
+a smooth right-hand side inside each step and never meets the switch.
 
 Compiled evaluation (``numerics.compile``): the rolled RK4 step can be turned into C by CasADi's
 code generator and the system C compiler (:func:`designkit.models.codegen.compile_function`,
@@ -56,15 +47,14 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
-from designkit.families import family
-from designkit.simulation.integrate import rk4, run_steps, variable_step
-from designkit.simulation.nonlinear import Element, element_for
-from designkit.simulation.reference import Reference, reference_for
+from designkit.simulation.integrate import run_steps
+from designkit.simulation.nonlinear import element_for
+from designkit.simulation.reference import Reference, reference_of
 from designkit.simulation.result import SimulationResult
-from designkit.simulation.timing import Timing, grid, rates_of, resolve
+from designkit.simulation.step import layout, step_function
+from designkit.simulation.timing import grid, rates_of, resolve
 from designkit.spec.fields import per_joint
-from designkit.spec.schema import Spec
-from designkit.synthesis.closed_loop import linearize
+from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
 
@@ -85,84 +75,6 @@ COMPILE_FLAGS = ("-O1", "-ffp-contract=off", "-fPIC", "-shared")
 """No reassociation and no fused multiply-add: the compiled step gives the interpreted step's numbers."""
 
 
-@dataclass(frozen=True)
-class _Layout:
-    nx: int
-    nc: int
-    nm: int
-    ne: int
-    nu: int
-    nd: int
-    n: int
-    delay_steps: int
-
-    @property
-    def z_sizes(self) -> list[int]:
-        return [self.nx, self.nc, self.nm, self.ne, self.nu, self.nc, self.nu * self.delay_steps]
-
-    np_: int = 0
-
-    @property
-    def w_sizes(self) -> list[int]:
-        return [3 * self.n, 3 * self.n, 3 * self.n, self.nx, self.nd, 1, self.nu, self.np_]
-
-
-def _split(v: Any, sizes: list[int]) -> list[Any]:
-    return ca.vertsplit(v, np.cumsum([0, *sizes]).tolist())
-
-
-def _step_function(plant: Any, law: Law, element: Element, timing: Timing, numerics: Any) -> ca.Function:
-    """One integration step ``sim_step: (z, w) -> (z_next, record)`` (layout in the module docstring).
-
-    ``record`` is ``(x, xc, u_command, u_applied, y, d)`` at the step's start.
-    """
-    L = _Layout(len(plant.states), law.n_state, law.n_memory, element.n_memory, len(plant.inputs),
-                len(plant.disturbances), len(plant.positions), timing.delay_steps, len(plant.parameters))
-    sampled = timing.steps_per_sample > 0
-    per_step = sampled or L.delay_steps > 0 or not element.continuous
-    ode = plant.ode()
-
-    # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values
-    s, a = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", 3 * L.n)
-    h_sizes = [L.nx, L.nd, L.nu, L.nm, L.ne, L.nc, L.nu, L.nc, L.np_]
-    h = ca.SX.sym("h", sum(h_sizes))
-    noise, dist, uff, m, e, gate, u_held, d_held, p_true = _split(h, h_sizes)
-    x, xc = s[:L.nx], s[L.nx:]
-    u_in = u_held if per_step else element.function(law.command(x + noise, xc, m, a) + uff, e)[0]
-    xc_dot = d_held if sampled else law.derivative(x + noise, xc, m, a, gate)
-    rhs = ca.Function("loop_rhs", [s, a, h], [ca.vertcat(ode(x, u_in, dist, p_true), xc_dot)], ["s", "a", "h"],
-                      ["s_dot"])
-
-    sym = ca.MX.sym if timing.integrator == "cvodes" else ca.SX.sym
-    z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
-    x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
-    r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)
-    y = x + noise
-    gate = law.gate(y, xc, m, r0)
-    if sampled:
-        u_hold = ca.if_else(flag, law.command(y, xc, m, r0) + uff, u_hold)
-        d_hold = ca.if_else(flag, law.derivative(y, xc, m, r0, gate), d_hold)
-        u_cmd = u_hold
-    else:
-        u_cmd = law.command(y, xc, m, r0) + uff
-    m_next = ca.if_else(flag, law.update(y, xc, m, r0), m) if L.nm else m
-    if per_step:
-        v, e_next = element.function(u_cmd, e)
-        u_app = line[L.nu * (L.delay_steps - 1):] if L.delay_steps > 0 else v
-        line_next = ca.vertcat(v, line[: L.nu * (L.delay_steps - 1)]) if L.delay_steps > 0 else line
-    else:
-        u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
-    held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold, p)
-    s0 = ca.vertcat(x, xc)
-    if timing.integrator == "cvodes":
-        s_next = variable_step(rhs, s0, timing.dt, (r0, rm, r1), held, rtol=numerics.rtol, atol=numerics.atol)
-    else:
-        s_next = rk4(lambda state, ref: rhs(state, ref, held), s0, timing.dt, (r0, rm, r1))
-    z_next = ca.vertcat(s_next[:L.nx], law.project(s_next[L.nx:]), m_next, e_next, u_hold, d_hold, line_next)
-    record = ca.vertcat(x, xc, u_cmd, u_app, y, dist)
-    return ca.Function("sim_step", [z, w], [z_next, record], ["z", "w"], ["z_next", "record"])
-
-
 def _joint_values(value: Any, n: int, path: str) -> np.ndarray:
     try:
         return np.array(per_joint(value, n, path))
@@ -171,7 +83,7 @@ def _joint_values(value: Any, n: int, path: str) -> np.ndarray:
         raise SpecError(key, msg.replace("per joint", "per entry")) from None
 
 
-def _noise(spec: Spec, n: int, nx: int, names: tuple[str, ...]) -> tuple[np.ndarray, dict[str, Any]]:
+def _noise(spec: Any, n: int, nx: int, names: tuple[str, ...]) -> tuple[np.ndarray, dict[str, Any]]:
     noise = spec.simulation.noise
     if noise is None:
         return np.zeros((nx, n)), {"std": 0.0, "seed": None}
@@ -185,7 +97,7 @@ def _noise(spec: Spec, n: int, nx: int, names: tuple[str, ...]) -> tuple[np.ndar
                      "generator": "numpy PCG64"}
 
 
-def _perturbation(spec: Spec, t: np.ndarray, dt: float, nd: int) -> tuple[np.ndarray, dict[str, Any] | None]:
+def _perturbation(spec: Any, t: np.ndarray, dt: float, nd: int) -> tuple[np.ndarray, dict[str, Any] | None]:
     pert = spec.simulation.perturbation
     if pert is None:
         return np.zeros((nd, t.size)), None
@@ -196,7 +108,7 @@ def _perturbation(spec: Spec, t: np.ndarray, dt: float, nd: int) -> tuple[np.nda
         "value": float(value[0]) if nd == 1 else value.tolist(), "time": float(pert.time), "time_applied": applied}
 
 
-def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]:
+def _closed_loop_poles(design: Design, plant: Any) -> list[np.ndarray]:
     """Poles that set the time scales: the nominal closed loop and the closed loop on the true plant.
 
     The open-loop plant's poles are left out on purpose: a stiff open-loop mode that the loop
@@ -209,9 +121,10 @@ def _closed_loop_poles(design: Design, plant: Any, law: Law) -> list[np.ndarray]
     if design.closed_loop is not None:
         out.append(design.closed_loop.poles)
     op = design.operating_point
-    if plant is not design.plant and op:
+    linear = design.linear_law
+    if plant is not design.plant and op and linear is not None:
         with contextlib.suppress(ValueError):  # no equilibrium on the true plant: the nominal rates stand
-            out.append(linearize(plant, law, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
+            out.append(linearize(plant, linear, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
     return out
 
 
@@ -254,6 +167,7 @@ class Simulator:
     accumulated: ca.Function | None = None
     compiled: Mapping[str, Any] = field(default_factory=dict)
     motion: Any = None
+    change: Any = None
 
     @property
     def n_inputs(self) -> int:
@@ -283,7 +197,7 @@ class Simulator:
         if parameters:
             plant = plant.with_params(**parameters)
             if npar:
-                inputs[-npar:] = np.asarray(plant.parameter_vector, dtype=float)[:, None]
+                inputs[-npar:] = _parameter_rows(plant, self.time.size, self.change)
         failure: dict[str, Any] = {}
         rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
         settings = self.settings
@@ -295,9 +209,8 @@ class Simulator:
                 f"the integrator stopped at t = {t_fail:.6g} s ({failure['error']}): the loop diverged or is too "
                 "stiff for the step; the records are NaN from there")})
         p, law = plant, self.law
-        nx, nc, nu, nd = len(p.states), law.n_state, len(p.inputs), len(p.disturbances)
-        cuts = np.cumsum([0, nx, nc, nu, nu, nx, nd])
-        x, xc, u_c, u_a, y, d = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
+        cuts = np.cumsum([0, *layout(p, law, _NoElement, 0).record_sizes])
+        x, xc, u_c, u_a, y, d, sig = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
         tracked: dict[str, Any] = {}
         if self.motion is not None:
             from designkit.simulation.motion import tracked_outputs
@@ -309,7 +222,8 @@ class Simulator:
             perturbation=d, measured=y, kind=self.kind, positions=tuple(p.positions), velocities=tuple(p.velocities),
             state_names=tuple(s.name for s in p.states), controller_state_names=law.state_names,
             input_names=tuple(s.name for s in p.inputs), disturbance_names=tuple(s.name for s in p.disturbances),
-            settings=settings, **tracked,
+            settings=settings, signals={name: sig[:, k] for k, name in enumerate(law.signal_names)},
+            signal_units=dict(zip(law.signal_names, law.signal_units, strict=True)), **tracked,
         )
 
 
@@ -341,7 +255,13 @@ def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tup
                                "flags": " ".join(COMPILE_FLAGS)}
 
 
-def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Spec, kind: str) -> None:
+class _NoElement:
+    """Sizes of the record only (an element's memory is not recorded)."""
+
+    n_memory = 0
+
+
+def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Any, kind: str) -> None:
     """The commanded motion must stay within the robot's joint limits (``qlim``) and, when the spec gives
     them, ``plant.limits.velocity`` and ``acceleration``; else :class:`SpecError` naming the reference."""
     key = "simulation.trajectory" if kind == "trajectory" else "simulation.step"
@@ -372,8 +292,8 @@ def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Spec, kind:
                                  f"plant.limits.{name} {bound[j]:g} {unit}")
 
 
-def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = None, expected_runs: int = 1
-          ) -> Simulator:
+def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = None, expected_runs: int = 1,
+          reference: Reference | None = None) -> Simulator:
     """Build the simulation of ``design`` in the scenario ``spec.simulation`` on ``plant``.
 
     Parameters
@@ -386,31 +306,37 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     plant : Plant, optional
         The true plant (default: ``design.plant``), e.g. with other parameter values.
     law : Law, optional
-        The controller (default: the design's family's law with the spec's anti-windup); any
-        :class:`~designkit.synthesis.law.Law`, e.g. one with a discrete memory.
+        The controller (default: ``design.law``); any :class:`~designkit.synthesis.law.Law`, e.g. a
+        frozen-gain variant of an adaptive law.
     expected_runs : int
         How many times the simulator will run (a sweep): weighs the choice of compiled evaluation.
+    reference : Reference, optional
+        The reference to follow (default :func:`~designkit.simulation.reference.reference_of`), e.g. the
+        spec's scaled to a small signal.
 
     Raises
     ------
     SpecError
-        On a per-joint list of the wrong length, ``simulation.dt`` incompatible with the
-        sampling period, the delay or the poles, or a run beyond the step bound (naming
-        ``simulation.dt``, ``simulation.duration`` or an explicit ``numerics.integrator: rk4`` on a
-        stiff loop; see :mod:`designkit.simulation.timing`).
+        On a per-joint list of the wrong length, ``simulation.dt`` incompatible with the sampling
+        period, the delay, the poles or the law's largest step, or a run beyond the step bound
+        (naming ``simulation.dt``, ``simulation.duration`` or an explicit ``numerics.integrator: rk4`` on
+        a stiff loop; see :mod:`designkit.simulation.timing`).
+    ValueError
+        ``design`` has no law and none is given.
     """
-    from designkit.simulation.motion import motion_of
-
     true_plant = design.plant if plant is None else plant
     sim, kind = spec.simulation, design.reference
-    n = len(true_plant.positions)
-    motion = motion_of(spec, design)
-    ref: Reference = motion.reference if motion is not None else reference_for(kind, sim, n)
-    law = family(design.kind).law(design, sim.anti_windup) if law is None else law
+    motion = design.motion
+    ref = reference_of(spec, design) if reference is None else reference
+    law = design.law if law is None else law
+    if law is None:
+        raise ValueError(f"this {design.kind} design carries no law to simulate")
+    _check_anti_windup(sim.anti_windup, law)
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
-    rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant, law), reference_rate=ref.rate)
-    held_per_step = sim.sampling_period == 0 and (sim.delay > 0 or not element.continuous)
-    timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step)
+    rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
+    held_per_step = sim.sampling_period == 0 and (sim.delay > 0 or not element.continuous or law.discontinuous)
+    timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
+                     max_dt_reason=law.max_step_reason)
 
     t = grid(timing)
     if motion is None:  # a task-space path is checked on its joint path (the family's motion)
@@ -423,28 +349,37 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
     if timing.steps_per_sample:
         flag[:] = 0.0
         flag[0, :: timing.steps_per_sample] = 1.0
-    p_rows = np.repeat(np.asarray(true_plant.parameter_vector, dtype=float).reshape(-1, 1), N, axis=1)
-    inputs = np.vstack([ref.flat(t).T, ref.flat(t + 0.5 * dt).T, ref.flat(t + dt).T, noise, dist, flag,
-                        np.zeros((nu, N)), p_rows])
+    change, change_settings = _plant_change(sim.plant_change, true_plant, t, dt)
+    p_rows = _parameter_rows(true_plant, N, change)
+    stages = (ref.flat(t).T,) * 3 if ref.piecewise_constant else (
+        ref.flat(t).T, ref.flat(t + 0.5 * dt).T, ref.flat(t + dt).T)  # a jump acts from the step it falls on
+    inputs = np.vstack([*stages, noise, dist, flag, np.zeros((nu, N)), p_rows])
     x0 = np.asarray(true_plant.rest_state(ref.start), dtype=float)
-    z0 = np.concatenate([x0, np.zeros(law.n_state), np.asarray(law.initial_memory, dtype=float),
+    rest = rest_state(true_plant, law, x0, ref.rest())
+    z0 = np.concatenate([x0, rest.xc, np.asarray(law.initial_memory, dtype=float),
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
-    step = _step_function(true_plant, law, element, timing, spec.numerics)
+    step = step_function(true_plant, law, element, timing, spec.numerics)
     accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
 
-    unused = {"step": ("trajectory", "a servo is driven by simulation.step"),
-              "trajectory": ("step", "a tracking controller is driven by simulation.trajectory")}[kind]
-    ignored = [f"simulation.{unused[0]} ({unused[1]})"] if unused[0] in sim.model_fields_set else []
+    if kind == "trajectory":
+        ignored = (["simulation.step (a tracking controller is driven by simulation.trajectory)"]
+                   if "step" in sim.model_fields_set else [])
+    else:  # a servo follows simulation.trajectory when given (a square wave, a PRBS), else simulation.step
+        ignored = (["simulation.step (the reference is simulation.trajectory)"]
+                   if sim.trajectory is not None and "step" in sim.model_fields_set else [])
     numerics = spec.numerics
     integrator = ("rk4 (classical, fixed step)" if timing.integrator == "rk4" else
                   f"cvodes (variable-step BDF inside each step, rtol {numerics.rtol:g}, atol {numerics.atol:g})")
+    evaluation = ("chain inside every integration step" if not held_per_step and timing.steps_per_sample == 0
+                  else "controller output, nonlinear element and delay once per step, held over the step")
+    if law.discontinuous and timing.steps_per_sample == 0:
+        evaluation = ("discontinuous law: its command and state derivative evaluated once per step, at the step's "
+                      "start, and held over the step (the step is its sampling period)")
     settings = {
         "integrator": integrator,
         **timing.settings,
-        "evaluation": "chain inside every integration step" if (
-            timing.steps_per_sample == 0 and timing.delay_steps == 0 and element.continuous)
-        else "controller output, nonlinear element and delay once per step, held over the step",
+        "evaluation": evaluation,
         "plant": {q.name: q.value for q in true_plant.parameters},
         "nominal_plant": {q.name: q.value for q in design.plant.parameters},
         "controller": {"kind": law.kind, **law.settings},
@@ -454,21 +389,71 @@ def build(spec: Spec, design: Design, *, plant: Any = None, law: Law | None = No
         "sampling_period": float(sim.sampling_period),
         "noise": noise_settings,
         "perturbation": pert_settings,
+        "plant_change": change_settings,
         "initial_state": {**{s.name: float(v) for s, v in zip(true_plant.states, x0, strict=True)},
-                          **dict.fromkeys(law.state_names, 0.0)},
+                          **{name: float(v) for name, v in zip(law.state_names, rest.xc, strict=True)}},
+        "start": _start_words(law, rest),
         "ignored": ignored,
     }
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info), motion=motion)
+                     compiled=freeze(compile_info), motion=motion, change=change)
 
 
-def simulate(spec: Spec, design: Design, *, plant: Any = None) -> SimulationResult:
+def _plant_change(section: Any, plant: Any, t: np.ndarray, dt: float) -> tuple[Any, dict[str, Any] | None]:
+    """``(first step index, values)`` of ``simulation.plant_change`` (validated on ``plant``), and its settings."""
+    if section is None:
+        return None, None
+    from designkit.errors import ModelError
+
+    try:
+        plant.with_params(**section.values)
+    except ModelError as exc:
+        raise SpecError(f"simulation.plant_change.values.{exc.field}", exc.message) from None
+    on = np.flatnonzero(t >= section.time - 1e-9 * dt)
+    k = int(on[0]) if on.size else t.size
+    return (k, dict(section.values)), {"time": float(section.time), "values": dict(section.values),
+                                       "time_applied": float(t[k]) if k < t.size else None}
+
+
+def _parameter_rows(plant: Any, n: int, change: Any) -> np.ndarray:
+    """The true plant's parameter vector per step ``(np, n)``, changed from step ``change[0]`` on."""
+    rows = np.repeat(np.asarray(plant.parameter_vector, dtype=float).reshape(-1, 1), n, axis=1)
+    if change is not None and change[0] < n:
+        rows[:, change[0]:] = np.asarray(plant.with_params(**change[1]).parameter_vector, dtype=float)[:, None]
+    return rows
+
+
+def _check_anti_windup(section: Any, law: Law) -> None:
+    """The law carries the spec's anti-windup (it is part of the designed law), else :class:`SpecError`."""
+    carried = law.settings.get("anti_windup")
+    if carried is None:
+        return
+    wanted = "none" if section is None else section.kind
+    if carried.get("kind") != wanted or (section is not None and not np.allclose(
+            np.asarray(carried.get("value"), dtype=float), np.asarray(section.value, dtype=float))):
+        raise SpecError("simulation.anti_windup", f"the design's law carries anti-windup {carried.get('kind')!r} but "
+                        f"the spec asks for {wanted!r}: the anti-windup is part of the designed law, so synthesize "
+                        "the design from this spec (designkit.families.synthesize)")
+
+
+def _start_words(law: Law, rest: Any) -> dict[str, Any]:
+    """How the run starts, for the settings: at rest or not, and which controller states were solved for."""
+    solved = ", ".join(rest.solved)
+    how = (f"the loop starts at rest at the reference before the motion ({solved} solved for it)" if rest.solved
+           else "the loop starts from the law's initial state")
+    if not rest.at_rest:
+        how = (f"the loop does not start at rest: |dz/dt| = {rest.residual:.3g} at t = 0 with the plant at rest "
+               "at its initial position" + (f" ({solved} solved for the closest rest)" if rest.solved else ""))
+    return {"at_rest": rest.at_rest, "residual": rest.residual, "solved": list(rest.solved), "words": how}
+
+
+def simulate(spec: Any, design: Design, *, plant: Any = None) -> SimulationResult:
     """Simulate ``design`` in the scenario ``spec.simulation`` (see :func:`build`).
 
     Examples
     --------
-    >>> from designkit.spec.loader import parse_spec
+    >>> from designkit.schema.loader import parse_spec
     >>> from designkit.families import synthesize
     >>> spec = parse_spec(
     ...     "name: demo\\nplant: {kind: link, Km: 2, tau: 0.5}\\n"

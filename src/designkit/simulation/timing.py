@@ -41,7 +41,6 @@ from typing import Any
 import numpy as np
 
 from designkit.errors import SpecError
-from designkit.spec.schema import Spec
 
 DT_FACTOR = 0.02
 """Default step as a fraction of the fastest resolved time constant ``1/rate``."""
@@ -198,7 +197,7 @@ def _count(n: float) -> str:
     return f"{n:.0f}" if n < 1e9 else f"{n:.3g}"
 
 
-def _duration(spec: Spec, slow: float, horizon: float) -> tuple[float, str, float]:
+def _duration(spec: Any, slow: float, horizon: float) -> tuple[float, str, float]:
     """``(duration, why, start)``: ``start`` (s) is where the settling allowance begins, plus the delay."""
     sim, req = spec.simulation, spec.requirements
     start = max(horizon, sim.perturbation.time) if sim.perturbation is not None else horizon
@@ -212,7 +211,7 @@ def _duration(spec: Spec, slow: float, horizon: float) -> tuple[float, str, floa
             start + sim.delay)
 
 
-def _choose_integrator(spec: Spec, rates: Rates, stiff: tuple[float, ...], duration: float,
+def _choose_integrator(spec: Any, rates: Rates, stiff: tuple[float, ...], duration: float,
                        rk4_dt: float) -> tuple[str, str]:
     """``(integrator, why)``: the user's, else RK4 unless stiff poles make its grid too fine."""
     numerics, sim = spec.numerics, spec.simulation
@@ -233,7 +232,7 @@ def _choose_integrator(spec: Spec, rates: Rates, stiff: tuple[float, ...], durat
                       f"step, which follows the other poles and the reference (|p| <= {rates.resolved():.4g} 1/s)")
 
 
-def _bound_error(spec: Spec, duration: float, dt: float, steps: float, *, integrator: str, stiff_hint: bool,
+def _bound_error(spec: Any, duration: float, dt: float, steps: float, *, integrator: str, stiff_hint: bool,
                  held: bool) -> SpecError:
     """The resource-bound refusal, naming the field to change."""
     sim = spec.simulation
@@ -252,7 +251,8 @@ def _bound_error(spec: Spec, duration: float, dt: float, steps: float, *, integr
                                             "simulation.dt)")
 
 
-def resolve(spec: Spec, rates: Rates, ref_horizon: float, *, held_per_step: bool = False) -> Timing:
+def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool = False, max_dt: float | None = None,
+            max_dt_reason: str = "") -> Timing:
     """Integrator, step, number of samples, sampling and delay steps for ``spec.simulation``.
 
     Parameters
@@ -267,6 +267,9 @@ def resolve(spec: Spec, rates: Rates, ref_horizon: float, *, held_per_step: bool
         The control is evaluated once per step and held (a delay or a discontinuous element with a
         continuous controller): the step is then the control's update period and must follow every
         pole, so CVODES cannot take larger steps over stiff poles.
+    max_dt : float, optional
+        The largest step the law can be simulated with (s; :attr:`designkit.synthesis.law.Law.max_step`), and
+        ``max_dt_reason`` why: the default step is chosen at or below it, a larger ``simulation.dt`` is refused.
 
     Raises
     ------
@@ -281,6 +284,12 @@ def resolve(spec: Spec, rates: Rates, ref_horizon: float, *, held_per_step: bool
     g = _rational_gcd(list(periods.values()))
     stiff = () if held_per_step else rates.stiff()
     default_dt = sim.dt is None
+    if max_dt is not None and not default_dt and float(sim.dt) > max_dt * (1 + 1e-12):
+        raise SpecError("simulation.dt", f"{float(sim.dt):g} s is coarser than the {max_dt:.3g} s this control law "
+                        f"can be simulated with ({max_dt_reason or 'its own bound'}); leave dt out or set at most "
+                        f"{max_dt:.3g} s")
+    law_rate = DT_FACTOR / max_dt if max_dt is not None else 0.0
+    fast = max(fast, law_rate)
     rk4_dt = _default_dt(fast, duration, g) if default_dt else float(sim.dt)
     integrator, integrator_source = _choose_integrator(spec, rates, stiff, duration, rk4_dt)
     rate = rates.resolved() if integrator == "cvodes" and stiff else fast
@@ -291,6 +300,9 @@ def resolve(spec: Spec, rates: Rates, ref_horizon: float, *, held_per_step: bool
                      "sampling period and the delay; |p| = "
                      + ("|p|max" if rate == fast else "the fastest non-stiff pole or the reference rate")
                      + f" = {rate:.4g} 1/s")
+        if law_rate and rate == law_rate and law_rate > rates.fast:
+            dt_source += (f", set by the control law's largest step {max_dt:.3g} s (|p| = {DT_FACTOR:g}/max step): "
+                          f"{max_dt_reason}")
     else:
         dt, dt_source = float(sim.dt), "simulation.dt"
         if dt * rate > MAX_DT_RATE:

@@ -16,10 +16,37 @@ import numpy as np
 
 from designkit.simulation.result import SimulationResult
 
-__all__ = ["LearningRule", "TrialsResult", "run_trials"]
+__all__ = ["Learning", "LearningRule", "MAX_TRIALS", "TrialsResult", "run_trials"]
 
 LearningRule = Callable[[SimulationResult, np.ndarray], np.ndarray]
-"""``(result of trial k, feedforward of trial k) -> feedforward of trial k + 1``, arrays ``(N, nu)`` (N*m)."""
+"""``(result of trial k, feedforward of trial k) -> feedforward of trial k + 1``, arrays ``(N, nu)`` (the
+feedforward's unit is the law's: N*m added to the command, or what ``law.feedforward`` maps)."""
+
+MAX_TRIALS = 200
+"""Most trials one run may ask for (a bound on the work, checked before any is run)."""
+
+
+@dataclass(frozen=True)
+class Learning:
+    """What a learning design asks of the pipeline: repeated trials with an update between them.
+
+    Parameters
+    ----------
+    trials : int
+        Number of trials (1 to :data:`MAX_TRIALS`).
+    update : LearningRule
+        The learning update between trials.
+    description : str
+        The update in words, for the report.
+    """
+
+    trials: int
+    update: LearningRule
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not 1 <= int(self.trials) <= MAX_TRIALS:
+            raise ValueError(f"trials must be between 1 and {MAX_TRIALS}, got {self.trials}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,6 +68,11 @@ class TrialsResult:
     def max_tracking_errors(self) -> np.ndarray:
         """``max_t max_j |q_j - qD_j|`` of each trial (rad)."""
         return np.array([float(np.max(np.abs(r.tracking_errors))) for r in self.results])
+
+    @property
+    def error_norms(self) -> np.ndarray:
+        """Euclidean norm of each trial's sampled tracking error over every instant and joint (rad)."""
+        return np.array([float(np.linalg.norm(r.tracking_errors)) for r in self.results])
 
     @property
     def rms_tracking_errors(self) -> np.ndarray:
@@ -68,8 +100,8 @@ def run_trials(simulator: object, trials: int, learn: LearningRule,
     ValueError
         When ``trials < 1`` or the learning rule returns an array of the wrong shape.
     """
-    if trials < 1:
-        raise ValueError(f"trials must be at least 1, got {trials}")
+    if not 1 <= trials <= MAX_TRIALS:
+        raise ValueError(f"trials must be between 1 and {MAX_TRIALS}, got {trials}")
     shape = (simulator.time.size, simulator.n_inputs)
     ff = np.zeros(shape) if feedforward is None else np.asarray(feedforward, dtype=float).reshape(shape)
     results, used = [], []

@@ -1,25 +1,8 @@
-"""Spec format (pydantic models) and YAML loading.
+"""The spec's section models: numbers with ranges, plants, requirements, simulation, numerics.
 
-The building blocks (:mod:`~designkit.spec.fields`, :mod:`~designkit.spec.plants`,
-:mod:`~designkit.spec.sections`, :mod:`~designkit.spec.controllers`) come below the controller
-families, which declare their spec models with them; the assembled :class:`Spec`
-(:mod:`~designkit.spec.schema`) and the loader come above, since the ``controller`` union is
-derived from the registered families.  The names below are therefore resolved lazily (PEP 562).
+These are the building blocks the controller families declare their own sections with, so they
+sit below the families; the assembled :class:`~designkit.schema.spec.Spec`, whose ``controller``
+is the union of the registered families' sections, and the YAML loader are in
+:mod:`designkit.schema`, above the families.  :mod:`~designkit.spec.plant_builder` turns a plant
+section into a :class:`~designkit.models.plant.Plant`.
 """
-
-from __future__ import annotations
-
-from importlib import import_module
-from typing import Any
-
-__all__ = ["LoadedSpec", "Spec", "load_spec", "parse_spec"]
-
-_EXPORTS = {"LoadedSpec": "designkit.spec.loader", "load_spec": "designkit.spec.loader",
-            "parse_spec": "designkit.spec.loader", "Spec": "designkit.spec.schema"}
-
-
-def __getattr__(name: str) -> Any:
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'designkit.spec' has no attribute {name!r}")
-    return getattr(import_module(module), name)

@@ -10,7 +10,7 @@ value can be computed in double precision: products of poles and gains, step cou
 durations stay finite and do not underflow.  What cannot be computed whatever the bounds is
 refused by a rule of its own (:func:`check_poles`: the spread of a pole set).  The README's
 table of ranges is generated from these declarations (:func:`markdown_table`, run
-``python -m designkit.spec.ranges``) and a test keeps it in step.
+``python -m designkit.schema.ranges_table``) and a test keeps it in step.
 
 :class:`Range` is pydantic metadata: ``Annotated[float, Range(...)]`` validates after the base
 type (so a base such as :data:`~designkit.spec.fields.PositiveFinite` keeps its own message for
@@ -33,10 +33,9 @@ from pydantic_core import core_schema
 from designkit.spec.fields import PerJoint, fmt_pole
 
 __all__ = [
-    "ANGLE", "DURATION", "LENGTH", "POLE_MODULUS", "POLE_SPREAD", "PARAMETER", "Range", "RangeRow", "Ranged",
-    "RangedInt", "RangedPerJoint", "TORQUE", "check_interval", "check_poles", "declared_ranges", "fmt_number",
-    "fmt_value",
-    "markdown_table", "range_of",
+    "ANGLE", "DURATION", "LENGTH", "POLE_MODULUS", "POLE_SPREAD", "PARAMETER", "Range", "Ranged",
+    "RangedInt", "RangedPerJoint", "TORQUE", "check_interval", "check_poles", "fmt_number",
+    "fmt_value", "range_of", "ranges_in",
 ]
 
 
@@ -298,30 +297,8 @@ def range_of(model: type[BaseModel], name: str) -> Range | None:
     info = model.model_fields.get(name)
     if info is None:
         return None
-    found = [r for _, r in _ranges_in(info.annotation, info.metadata, "")]
+    found = [r for _, r in ranges_in(info.annotation, info.metadata, "")]
     return found[0] if found else None
-
-
-# ----------------------------------------------------------------------------- the table
-
-
-@dataclass(frozen=True)
-class RangeRow:
-    """One declared range.
-
-    Parameters
-    ----------
-    path : str
-        Key path of the value: ``[]`` stands for any index, ``[0..2]`` for some, ``<name>`` for any key.
-    where : tuple of str
-        The ``kind`` of each enclosing section of a union, e.g. ``("plant: link",)``.
-    range : Range
-        The declared range.
-    """
-
-    path: str
-    where: tuple[str, ...]
-    range: Range
 
 
 def _indices(indices: list[int], size: int) -> str:
@@ -330,118 +307,29 @@ def _indices(indices: list[int], size: int) -> str:
     return f"[{indices[0]}]" if len(indices) == 1 else f"[{indices[0]}..{indices[-1]}]"
 
 
-def _ranges_in(tp: Any, metadata: Sequence[Any], path: str) -> Iterator[tuple[str, Range]]:
+def ranges_in(tp: Any, metadata: Sequence[Any], path: str) -> Iterator[tuple[str, Range]]:
+    """Every :class:`Range` declared in the annotation ``tp`` (with ``metadata``), with its key path under ``path``."""
     for m in metadata:
         if isinstance(m, Range):
             yield path, m
     origin = get_origin(tp)
     if origin is Annotated:
         inner, *meta = get_args(tp)
-        yield from _ranges_in(inner, meta, path)
+        yield from ranges_in(inner, meta, path)
     elif origin in (typing.Union, types.UnionType):
         for member in get_args(tp):
-            yield from _ranges_in(member, (), path)
+            yield from ranges_in(member, (), path)
     elif origin is tuple and Ellipsis not in get_args(tp):  # fixed length: group the entries sharing a range
         members = get_args(tp)
         groups: dict[Range, list[int]] = {}
         for k, member in enumerate(members):
-            for _, rng in _ranges_in(member, (), ""):
+            for _, rng in ranges_in(member, (), ""):
                 groups.setdefault(rng, []).append(k)
         for rng, indices in groups.items():
             yield f"{path}{_indices(indices, len(members))}", rng
     elif origin in (list, tuple):
         for member in get_args(tp):
             if member is not Ellipsis:
-                yield from _ranges_in(member, (), f"{path}[]")
+                yield from ranges_in(member, (), f"{path}[]")
     elif origin is dict:
-        yield from _ranges_in(get_args(tp)[1], (), f"{path}.<name>")
-
-
-def _models_in(tp: Any, path: str) -> Iterator[tuple[str, type[BaseModel]]]:
-    origin = get_origin(tp)
-    if isinstance(tp, type) and issubclass(tp, BaseModel):
-        yield path, tp
-    elif origin is not None:
-        for arg in get_args(tp):
-            sub = f"{path}[]" if origin in (list, tuple) else path
-            if arg is not Ellipsis and not isinstance(arg, Range):
-                yield from _models_in(arg, sub)
-
-
-def _walk(model: type[BaseModel], path: str, where: tuple[str, ...]) -> Iterator[RangeRow]:
-    kind = model.model_fields.get("kind")
-    if kind is not None and get_origin(kind.annotation) is typing.Literal:
-        section = path.rsplit(".", 1)[-1].removesuffix("[]")
-        where = (*where, f"{section}: {' / '.join(get_args(kind.annotation))}")
-    for name, info in model.model_fields.items():
-        sub = f"{path}.{name}" if path else name
-        for p, r in _ranges_in(info.annotation, info.metadata, sub):
-            yield RangeRow(p, where, r)
-        for p, m in _models_in(info.annotation, sub):
-            yield from _walk(m, p, where)
-
-
-def declared_ranges() -> tuple[RangeRow, ...]:
-    """Every range declared in the spec format, walking :class:`~designkit.spec.schema.Spec` (every family)."""
-    from designkit.spec.schema import Spec
-
-    rows: list[RangeRow] = []
-    for row in _walk(Spec, "", ()):
-        if row not in rows:
-            rows.append(row)
-    return tuple(rows)
-
-
-_RULES = (
-    ("`controller.poles`, every pole (and the error poles that `damping` and `natural_frequency` give)",
-     f"\\|p\\| in {POLE_MODULUS.interval()}", POLE_MODULUS.unit),
-    ("`controller.poles`, all together", f"max \\|p\\| / min \\|Re p\\| ≤ {fmt_number(POLE_SPREAD)}", ""),
-    ("`plant.uncertainty.<name>`: `[low, high]`", "low ≤ high, both in the range of the parameter (`Km`, `tau`, "
-     "the elastic joint's fields; else `plant.parameters.<name>`)", ""),
-)
-
-
-def markdown_table() -> str:
-    """The README's table of ranges (markdown), generated from the declarations.
-
-    Rows with the same key and range are merged; the kinds they apply to are named unless the row
-    holds for every kind of its section (e.g. ``plant.uncertainty.seed``).
-    """
-    merged: dict[tuple[str, Range], list[tuple[str, ...]]] = {}
-    for row in declared_ranges():
-        merged.setdefault((row.path, row.range), []).append(row.where)
-    lines = ["| key | range | unit |", "|---|---|---|"]
-    for (path, rng), wheres in merged.items():
-        kinds: dict[str, list[str]] = {}
-        for where in wheres:
-            for w in where:
-                section, names = w.split(": ", 1)
-                kinds.setdefault(section, []).extend(n for n in names.split(" / ") if n not in kinds.get(section, []))
-        shown = [f"{section}: {', '.join(names)}" for section, names in kinds.items() if len(wheres) == 1 or
-                 not all(any(w.startswith(f"{section}: ") for w in where) for where in wheres) or
-                 len(names) < len(_kinds_of(section))]
-        ctx = f" ({'; '.join(shown)})" if shown else ""
-        unit = rng.unit + (f" ({rng.note})" if rng.note else "")
-        lines.append(f"| `{path}`{ctx} | {rng.interval()} | {unit} |")
-    lines += [f"| {key} | {text} | {unit} |" for key, text, unit in _RULES]
-    return "\n".join(lines)
-
-
-def _kinds_of(section: str) -> tuple[str, ...]:
-    """Every ``kind`` of a union section of the spec (``plant``, ``controller``, ``nonlinearity``, ``trajectory``)."""
-    from designkit.families import FAMILIES
-    from designkit.spec import plants, sections
-
-    unions = {"plant": plants.PlantSpec, "nonlinearity": sections.Nonlinearity, "trajectory": sections.Trajectory}
-    if section == "controller":
-        return tuple(FAMILIES)
-    if section not in unions:
-        return ()
-    members = get_args(get_args(unions[section])[0])
-    return tuple(k for m in members for k in get_args(m.model_fields["kind"].annotation))
-
-
-if __name__ == "__main__":  # pragma: no cover - prints the README table (from the imported module: its classes)
-    from designkit.spec import ranges
-
-    print(ranges.markdown_table())
+        yield from ranges_in(get_args(tp)[1], (), f"{path}.<name>")

@@ -23,8 +23,9 @@ from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPer
 
 __all__ = [
     "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "Noise", "Nonlinearity",
-    "Numerics", "Perturbation", "Quantizer", "QuinticTrajectory", "Relay", "Requirements", "Saturation",
-    "Simulation", "SineTrajectory", "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
+    "Numerics", "Perturbation", "PlantChange", "PrbsReference", "Quantizer", "QuinticTrajectory", "Relay",
+    "Requirements", "STEP_REFERENCES", "Saturation", "Simulation", "SineTrajectory", "SquareReference", "TASK_PATHS",
+    "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
 ]
 
 
@@ -38,6 +39,7 @@ _POSITION = (-100.0, 100.0, "rad or m")
 """A joint position, displacement or amplitude: within 100 rad (or m for a prismatic joint)."""
 _HOLD = (1e-6, 1e3, "s")
 """A delay or a sampling period when not 0: 1e-6 s to 1e3 s."""
+
 
 
 # ----------------------------------------------------------------------------- requirements
@@ -115,6 +117,15 @@ class Perturbation(Section):
 
     value: RangedPerJoint(-TORQUE.high, TORQUE.high, TORQUE.unit)
     time: Ranged(0, DURATION.high, "s", base=NonNegativeFinite) = 0.0
+
+
+class PlantChange(Section):
+    """A step change of the true plant's parameters during the run: from ``time`` (s, 0 to 1e9) on, the named
+    parameters take the given ``values`` (``{Km: 3.0}``, ``{tau: 0.8}``; any named plant parameter, each in its
+    own range), the others keep theirs.  The controller is not told (what an adaptive law must cope with)."""
+
+    time: Ranged(0, DURATION.high, "s", base=NonNegativeFinite)
+    values: dict[str, Ranged(-1e6, 1e6, "(in the parameter's SI unit)")] = Field(min_length=1, max_length=100)
 
 
 class AntiWindup(Section):
@@ -226,11 +237,41 @@ class CircleTrajectory(Section):
         return v
 
 
+class SquareReference(Section):
+    """A square wave of positions about the initial position: ``q0 + amplitude`` for the first half of every
+    ``period``, ``q0 - amplitude`` for the second (rad per joint, within 100; s, 1e-3 to 1e9); zero velocity and
+    acceleration.  For servo controllers (and the persistent excitation an adaptive law needs)."""
+
+    kind: Literal["square"]
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    period: Ranged(*_MOVE, base=PositiveFinite) = 4.0
+
+
+class PrbsReference(Section):
+    """A pseudo-random binary sequence of positions about the initial position: ``q0 +- amplitude`` (rad per
+    joint, within 100), switching at multiples of ``bit`` (s, 1e-3 to 1e9) as the maximal-length shift register
+    of ``order`` stages (3 to 16; period ``2^order - 1`` bits) started from a state drawn from ``seed`` (0 to
+    2**32 - 1).  For servo controllers: the persistent excitation of an adaptive or identifying law."""
+
+    kind: Literal["prbs"]
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    bit: Ranged(*_MOVE, base=PositiveFinite) = 1.0
+    order: RangedInt(3, 16) = 7
+    seed: RangedInt(0, 2**32 - 1) = 0
+
+
 Trajectory = Annotated[QuinticTrajectory | SineTrajectory | TrapezoidalTrajectory | ViaPointsTrajectory
-                       | LineTrajectory | CircleTrajectory, Field(discriminator="kind")]
+                       | LineTrajectory | CircleTrajectory | SquareReference | PrbsReference,
+                       Field(discriminator="kind")]
 
 JOINT_TRAJECTORIES = ("quintic", "sine", "trapezoidal", "via_points")
-"""Trajectory kinds given per joint; the others (``line``, ``circle``) are end-effector paths."""
+"""Smooth trajectory kinds given per joint (a tracking controller follows them with their velocity and
+acceleration); ``line`` and ``circle`` are end-effector paths; ``square`` and ``prbs`` piecewise constant
+positions (for servos)."""
+STEP_REFERENCES = ("step", "square", "prbs")
+"""The references a servo follows: ``simulation.step``, or a piecewise-constant ``simulation.trajectory``."""
+TASK_PATHS = ("line", "circle")
+"""End-effector paths (task-space controllers)."""
 
 
 class Simulation(Section):
@@ -239,7 +280,9 @@ class Simulation(Section):
     duration (s, 1e-6 to 1e9), step (commanded displacement of each joint from its initial position,
     rad, within 100), initial_position (rad per joint, within 100; default 0), dt (integration step,
     s, 1e-9 to 1e3; default from the fastest closed-loop pole), delay (s, 0 or 1e-6 to 1e3),
-    sampling_period (s, 0 = continuous, else 1e-6 to 1e3).
+    sampling_period (s, 0 = continuous, else 1e-6 to 1e3), trajectory (the reference when not a step:
+    a joint trajectory, an end-effector path, a square wave or a PRBS; each controller family says which
+    it follows), plant_change (a step change of the true plant's parameters during the run).
     """
 
     duration: Ranged(*_TIME, base=PositiveFinite) | None = None
@@ -251,6 +294,7 @@ class Simulation(Section):
     sampling_period: Ranged(*_HOLD, zero=True, base=NonNegativeFinite) = 0.0
     noise: Noise | None = None
     perturbation: Perturbation | None = None
+    plant_change: PlantChange | None = None
     anti_windup: AntiWindup | None = None
     trajectory: Trajectory | None = None
 

@@ -15,6 +15,11 @@ whole batch of parameter vectors at once (a loop over iterations, never over pla
 At ``z*`` the Jacobians give the linear closed loop (:func:`linearize`): inputs the reference
 signals and the disturbances, outputs the joint positions and the plant inputs -- exactly the
 python-control interconnection of the linearized plant with the law, which the tests check.
+
+Where a run starts (:func:`rest_state`): the plant at rest at its initial position, the controller
+states a law names in ``rest_start`` solved so that the whole loop is at rest at the reference
+before the motion (Gauss--Newton on ``z_dot = 0`` in those states only), the others at the law's
+``initial_state``.  That makes the simulated loop the designed one wherever the arm starts.
 """
 
 from __future__ import annotations
@@ -29,9 +34,10 @@ import numpy as np
 from designkit.models.linear_system import LinearSystem
 from designkit.synthesis.design import Design
 from designkit.synthesis.law import Law
+from designkit.synthesis.linearization import EXACT, Linearization
 
-__all__ = ["Equilibria", "LoopFunctions", "equilibria", "linearize", "loop_functions", "reference_names",
-           "with_closed_loop"]
+__all__ = ["Equilibria", "LoopFunctions", "RestState", "equilibria", "linearize", "loop_functions", "reference_names",
+           "rest_state", "with_closed_loop", "with_law"]
 
 BATCH = 4096
 """Largest block of plants evaluated by one mapped CasADi call."""
@@ -251,7 +257,7 @@ def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearS
     nx, nc, n = fns.n_state, fns.n_controller, fns.n_joints
     r0 = np.asarray(r0, dtype=float).reshape(3 * n)
     if z0 is None:
-        z0 = np.zeros(nx + nc)
+        z0 = np.concatenate([np.zeros(nx), np.asarray(law.initial_state, dtype=float)])
         z0[list(plant.positions)] = r0[:n]
     eq = equilibria(fns, np.asarray(z0, dtype=float), r0, np.asarray(plant.parameter_vector)[None, :])
     if not bool(eq.converged[0]):
@@ -279,21 +285,109 @@ def linearize(plant: Any, law: Law, r0: Any, *, z0: Any = None) -> tuple[LinearS
 
 
 def with_closed_loop(design: Design, law: Law, r0: Any, *, z0: Any = None, field: str = "controller",
-                     hint: str = "") -> Design:
-    """``design`` with ``closed_loop``, ``input_loop`` and ``operating_point`` from :func:`linearize`
-    (``z0``: Newton's starting guess, see there).
+                     hint: str = "", linearization: Linearization = EXACT) -> Design:
+    """``design`` with its ``law``, ``linearization`` and the ``closed_loop``, ``input_loop`` and
+    ``operating_point`` of :func:`linearize` (``z0``: Newton's starting guess, see there).
+
+    With a ``frozen`` linearization the loop linearized is ``linearization.freeze(linearization.initial)``
+    (the law with its adaptation held at the initial values), and ``law`` is stored as given.
 
     Raises
     ------
     SpecError
         On ``field`` (the spec key that sets the operating point), followed by ``hint``, when the
         closed loop has no equilibrium there: nothing can be linearized or certified.
+    ValueError
+        ``linearization`` is ``none`` (use :func:`with_law`).
     """
     from designkit.errors import SpecError
 
+    if not linearization.linear:
+        raise ValueError("a design without a linearization has no closed loop: use with_law")
+    linear = law if linearization.kind == "exact" else linearization.freeze(linearization.initial)
     try:
-        closed, input_loop, point = linearize(design.plant, law, r0, z0=z0)
+        closed, input_loop, point = linearize(design.plant, linear, r0, z0=z0)
     except ValueError as exc:
         raise SpecError(field, f"{exc} at the operating point: the control law is not defined there or the "
                                f"closed loop has a pole at 0{hint}") from None
-    return dataclasses.replace(design, closed_loop=closed, input_loop=input_loop, operating_point=point)
+    return dataclasses.replace(design, closed_loop=closed, input_loop=input_loop, operating_point=point, law=law,
+                               linearization=linearization)
+
+
+def with_law(design: Design, law: Law, linearization: Linearization = EXACT) -> Design:
+    """``design`` with its ``law`` and ``linearization`` and no linear loop (a switching law: ``none``)."""
+    return dataclasses.replace(design, law=law, linearization=linearization)
+
+
+@dataclass(frozen=True)
+class RestState:
+    """Where a run of ``plant`` under a law starts (module docstring).
+
+    Parameters
+    ----------
+    xc : ndarray
+        The controller's initial state.
+    residual : float
+        ``max |z_dot|`` there (1/s in state units): 0 when the loop starts at rest.
+    at_rest : bool
+        ``residual`` below :data:`REST_TOL` scaled by the state's size.
+    solved : tuple of str
+        The states solved for (the law's ``rest_start``).
+    """
+
+    xc: np.ndarray
+    residual: float
+    at_rest: bool
+    solved: tuple[str, ...] = ()
+
+
+REST_TOL = 1e-9
+"""The loop starts at rest when ``max |z_dot| <= REST_TOL (1 + max |z|)``."""
+
+
+def rest_state(plant: Any, law: Law, x0: Any, r0: Any, *, parameters: Any = None) -> RestState:
+    """The controller state that starts the loop at rest with the plant state ``x0`` and reference ``r0``.
+
+    The states in ``law.rest_start`` are found by Gauss--Newton on ``z_dot(x0, xc, r0) = 0`` (the plant
+    state is not moved: the arm starts where the spec puts it), the others are ``law.initial_state``.
+
+    Parameters
+    ----------
+    plant : Plant
+        The simulated plant.
+    law : Law
+    x0 : array_like
+        The plant's initial state (at rest).
+    r0 : array_like, shape (3 n,)
+        The reference before the motion (positions, zero velocity and acceleration).
+    parameters : array_like, optional
+        Plant parameter vector (default the plant's).
+
+    Returns
+    -------
+    RestState
+    """
+    x0 = np.asarray(x0, dtype=float).ravel()
+    xc = np.asarray(law.initial_state, dtype=float).copy()
+    idx = list(law.rest_indices())
+    fns = loop_functions(plant, law)
+    nx = fns.n_state
+    p = np.asarray(plant.parameter_vector if parameters is None else parameters, dtype=float)
+    r0 = np.asarray(r0, dtype=float).ravel()
+    d0 = np.zeros(len(plant.disturbances))
+
+    def evaluate(xc_now: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        z_dot, A = (np.asarray(m, dtype=float) for m in fns.jacobians(np.concatenate([x0, xc_now]), r0, d0, p)[:2])
+        return z_dot.ravel(), A[:, [nx + i for i in idx]]
+
+    f, J = evaluate(xc)
+    for _ in range(NEWTON_ITERATIONS if idx else 0):
+        step, *_ = np.linalg.lstsq(J, f, rcond=None)
+        xc[idx] -= step
+        f, J = evaluate(xc)
+        if not np.all(np.isfinite(f)) or np.max(np.abs(step)) <= 1e-15 * (1 + np.max(np.abs(xc))):
+            break
+    residual = float(np.max(np.abs(f))) if f.size else 0.0
+    scale = 1.0 + float(np.max(np.abs(np.concatenate([x0, xc])))) if xc.size or x0.size else 1.0
+    return RestState(xc=xc, residual=residual, at_rest=bool(np.isfinite(residual) and residual <= REST_TOL * scale),
+                     solved=tuple(law.rest_start))

@@ -45,7 +45,7 @@ from designkit.synthesis.law import Law
 
 __all__ = [
     "LAW_ROLES", "MODEL_TERMS", "GeneratedFunction", "LawCode", "ModelTerm", "Port",
-    "c_identifier", "generate_law_code", "generate_spec_code",
+    "c_identifier", "check_name", "generate_law_code",
 ]
 
 LAW_ROLES: tuple[str, ...] = ("command", "derivative", "gate", "project", "update")
@@ -205,7 +205,7 @@ def c_identifier(name: str) -> str:
     return out[:_MAX_NAME]
 
 
-def _check_name(name: str) -> str:
+def check_name(name: str) -> str:
     if not isinstance(name, str) or not _IDENTIFIER.match(name) or len(name) > _MAX_NAME:
         raise SpecError("name", f"must be a C identifier (a letter, then letters, digits or _; at most "
                         f"{_MAX_NAME} characters), got {name!r}")
@@ -341,19 +341,20 @@ def _number(value: Any) -> str:
     return f"{float(arr):.17g}" if arr.ndim == 0 else "[" + ", ".join(f"{x:.17g}" for x in arr.ravel()) + "]"
 
 
-def _header_comment(code: LawCode, design: Design, law: Law) -> str:
-    from designkit import __version__
+def _header_comment(code: LawCode, design: Design, law: Law, law_lines: tuple[str, ...]) -> str:
+    from importlib import metadata
 
-    lines = [f"designkit {__version__}: C code of the {design.kind} controller"
+    try:
+        version = metadata.version("designkit")
+    except metadata.PackageNotFoundError:  # a source tree that was never installed
+        version = "(not installed)"
+    lines = [f"designkit {version}: C code of the {design.kind} controller"
              + (f" of spec {code.spec_name!r}" if code.spec_name else "") + ".",
              f"spec sha256: {code.spec_sha256 or 'unknown (not generated from a spec file)'}",
              f"plant: {design.plant.kind}; CasADi {ca.__version__}; see docs/codegen.md for the calling convention."]
-    from designkit.families import FAMILIES
-
-    family = FAMILIES.get(design.kind)  # None for a design built outside the registry (a user's own law)
-    if family is not None:
-        lines.append(f"family: {family.display.label}")
-        lines += [f"  law: {line}" for line in family.display.law]
+    if design.label:
+        lines.append(f"family: {design.label}")
+    lines += [f"  law: {line}" for line in law_lines]
     lines += ["", "Gains:"]
     for k in design.gains:
         unit, meaning = design.gains.unit(k), design.gains.meaning(k)
@@ -451,6 +452,7 @@ def generate_law_code(
     name: str | None = None,
     spec_name: str | None = None,
     spec_sha256: str | None = None,
+    law_lines: tuple[str, ...] = (),
 ) -> LawCode:
     """Write the C code of ``law`` (and the model terms its family uses) to ``out_dir/<spec name>/``.
 
@@ -459,7 +461,7 @@ def generate_law_code(
     design : Design
         The design (gains, plant, kind) the law was built from.
     law : Law
-        Its control law (``designkit.families.family(design.kind).law(design, anti_windup)``).
+        Its control law (``design.law``, which carries the spec's anti-windup).
     out_dir : path-like
         Root folder; created when missing.
     name : str, optional
@@ -469,6 +471,8 @@ def generate_law_code(
         Folder name under ``out_dir`` and the spec named in the header; default ``name``.
     spec_sha256 : str, optional
         Hash of the spec text, written into the header.
+    law_lines : tuple of str
+        The control law in words (the family's ``display.law``), written into the header.
 
     Returns
     -------
@@ -481,7 +485,7 @@ def generate_law_code(
         ``name`` not a C identifier, ``spec_name`` not a folder name, or ``out_dir`` not
         writable (path ``"out_dir"``); nothing is written.
     """
-    name = _check_name(name if name is not None else c_identifier(spec_name) if spec_name else design.kind)
+    name = check_name(name if name is not None else c_identifier(spec_name) if spec_name else design.kind)
     folder = Path(out_dir) / _check_folder(spec_name if spec_name is not None else name)
 
     docs = _port_docs(design, law)
@@ -504,7 +508,7 @@ def generate_law_code(
                    kind=design.kind, spec_name=spec_name, spec_sha256=spec_sha256, functions=generated)
 
     source, header = _generate(functions, name)
-    comment = _header_comment(code, design, law)
+    comment = _header_comment(code, design, law, tuple(law_lines))
     guard = f"DESIGNKIT_{name.upper()}_H"
     header_text = (f"{comment}\n#ifndef {guard}\n#define {guard}\n\n{header}\n{_sizes(code, law)}\n"
                    f"#endif /* {guard} */\n")
@@ -516,37 +520,3 @@ def generate_law_code(
     except OSError as exc:
         raise SpecError("out_dir", f"cannot write the C code to {folder}: {exc.strerror or exc}") from None
     return code
-
-
-def generate_spec_code(spec: Any, out_dir: str | os.PathLike[str], *, name: str | None = None) -> LawCode:
-    """Design the controller of a spec and write its C code (the body of ``designkit codegen``).
-
-    Parameters
-    ----------
-    spec : LoadedSpec or path-like
-        A loaded spec (:func:`designkit.spec.loader.load_spec`) or the path of a YAML spec.
-    out_dir : path-like
-        Root folder; the code goes to ``out_dir/<spec name>/``.
-    name : str, optional
-        C prefix; default the spec name made a C identifier (:func:`c_identifier`).
-
-    Returns
-    -------
-    LawCode
-        See :func:`generate_law_code`.
-
-    Raises
-    ------
-    SpecError
-        Bad spec (its key path), bad ``name`` or unwritable ``out_dir``; nothing is written.
-    """
-    from designkit.families import family
-    from designkit.pipeline import design as design_of
-    from designkit.spec.loader import LoadedSpec, load_spec
-
-    if name is not None:
-        _check_name(name)
-    loaded = spec if isinstance(spec, LoadedSpec) else load_spec(spec)
-    dsn = design_of(loaded)
-    law = family(dsn.kind).law(dsn, loaded.spec.simulation.anti_windup)
-    return generate_law_code(dsn, law, out_dir, name=name, spec_name=loaded.spec.name, spec_sha256=loaded.sha256)

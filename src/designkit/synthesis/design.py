@@ -18,8 +18,10 @@ from typing import Any
 import numpy as np
 
 from designkit.models.linear_system import LinearSystem
+from designkit.synthesis.linearization import EXACT, Linearization
 
-__all__ = ["Characteristic", "Design", "FrozenDict", "Gain", "Gains", "LinearCondition", "freeze", "thaw"]
+__all__ = ["Characteristic", "Design", "FrozenDict", "Gain", "Gains", "LinearCondition", "freeze", "loop_matrices",
+           "thaw"]
 
 
 class FrozenDict(dict):
@@ -230,6 +232,21 @@ class Characteristic:
         return tuple(float(np.asarray(c)) for c in self.coefficients(gains, **theta))
 
 
+def loop_matrices(design: Any, channel: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(A_i, b_i, c_i)`` of the loop broken at plant input ``channel`` of ``design.input_loop``, or ``None``.
+
+    With ``input_loop`` = ``(A, B, C)`` (``A`` the closed loop, ``B`` where the plant inputs enter,
+    ``C = -du/dz``): ``b_i = B[:, i]``, ``c_i = C[i, :]`` and ``A_i = A + b_i c_i`` (the loop opened at
+    input ``i``, the others closed), so ``L_i(s) = c_i (sI - A_i)^-1 b_i``.
+    """
+    lp = design.input_loop
+    if lp is None or channel >= lp.B.shape[1]:
+        return None
+    b = lp.B[:, [channel]]
+    c = lp.C[[channel], :]
+    return lp.A + b @ c, b, c
+
+
 @dataclass(frozen=True, eq=False)
 class Design:
     """A synthesised controller.
@@ -271,6 +288,23 @@ class Design:
         Design equations and the choices made on the user's behalf.
     extra : Mapping
         Family-specific data (deeply frozen).
+    law : Law or None
+        The control law as designed (no anti-windup; the simulation adds the spec's), set with the
+        closed loop (:func:`~designkit.synthesis.closed_loop.with_closed_loop`) or alone
+        (:func:`~designkit.synthesis.closed_loop.with_law`).  Checks and analyses read it instead of
+        rebuilding the law.
+    linearization : Linearization
+        What ``closed_loop`` means (:mod:`designkit.synthesis.linearization`): ``exact``, ``frozen``
+        (the adaptation held at ``linearization.initial``) or ``none`` (then there is no closed loop,
+        input loop or characteristic, and no linear check is offered).
+    motion : TaskMotion or None
+        What a task-space design tracks (:class:`designkit.simulation.motion.TaskMotion`), computed
+        at synthesis; ``None`` for a joint-space design.
+    learning : Learning or None
+        Repeated trials with a learning update between them (:class:`designkit.simulation.trials.Learning`);
+        ``None`` for a design run once.
+    label : str
+        The family in words (``"PID position servo"``), for views of the design alone.
     """
 
     kind: str
@@ -288,6 +322,11 @@ class Design:
     formulas: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
+    law: Any = None
+    linearization: Linearization = EXACT
+    motion: Any = None
+    learning: Any = None
+    label: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "poles", tuple(complex(p) for p in self.poles))
@@ -298,6 +337,21 @@ class Design:
             object.__setattr__(self, name, freeze(dict(getattr(self, name))))
         if self.reference not in ("step", "trajectory"):
             raise ValueError(f"reference must be 'step' or 'trajectory', got {self.reference!r}")
+        if not self.linearization.linear:
+            present = [n for n in ("closed_loop", "input_loop", "characteristic") if getattr(self, n) is not None]
+            if present:
+                raise ValueError(f"a design without a linearization has no {', '.join(present)}")
+
+    @property
+    def linear_law(self) -> Any:
+        """The law whose linearization ``closed_loop`` is: the law itself (``exact``), the law with its
+        adaptation frozen at the initial values (``frozen``), or ``None`` (``none``)."""
+        lin = self.linearization
+        if lin.kind == "exact":
+            return self.law
+        if lin.kind == "frozen":
+            return lin.freeze(lin.initial)
+        return None
 
     # ------------------------------------------------------------------ python-control interop
 
@@ -374,8 +428,6 @@ class Design:
         ValueError
             When the design has no ``input_loop`` or no such input.
         """
-        from designkit.verification.loop import loop_matrices
-
         lp = self.input_loop
         if lp is None:
             raise ValueError(f"this {self.kind} design has no loop at the plant input")
@@ -427,6 +479,6 @@ class Design:
 
     def _repr_html_(self) -> str:
         """Jupyter view: gains with units, poles and the closed-loop summary (no check is run)."""
-        from designkit.report.notebook import design_html
+        from designkit.display.design_view import design_html
 
         return design_html(self)

@@ -1,10 +1,16 @@
 """What a controller family declares: the single registration point of a controller kind.
 
-One module of :mod:`designkit.families` per family defines ``FAMILY = Family(...)``; the
-registry (:mod:`designkit.families`) collects them, and everything that depends on the kind --
-the spec's ``controller`` union and its JSON Schema, the loader's error paths, which checks run,
-the report's law, gain table and loop formula -- is derived from these declarations.  Nothing
-outside the family's module names its kind.
+One module (or package) of :mod:`designkit.families` per family defines ``FAMILY = Family(...)``;
+the registry (:mod:`designkit.families`) collects them, and everything that depends on the kind --
+the spec's ``controller`` union and its JSON Schema, the loader's error paths, the references it
+may be driven by, which checks run, the report's law, gain table, loop formula, figures, sections
+and diagnoses -- is derived from these declarations.  Nothing outside the family's module names its
+kind.
+
+A family brings what is its own: checks (:class:`~designkit.verification.suite.CheckRule` values,
+next to the generic ones it names), figures drawn from a run, report sections (its lab answers),
+and diagnoses of a failed check.  These are plain callables on the run (the pipeline's result), so
+this module imports none of the layers that define them.
 """
 
 from __future__ import annotations
@@ -16,15 +22,12 @@ from typing import Any
 from designkit.synthesis.design import Design
 from designkit.synthesis.law import Law
 
-__all__ = ["CHECK_NAMES", "Display", "Family"]
+__all__ = ["Display", "Family", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
 
-CHECK_NAMES = frozenset({
-    "pole_placement", "routh_hurwitz", "lyapunov", "robust_box", "robustness", "loop_margins", "time_domain",
-    "loops", "coupling", "error_poles", "tracking_bounds", "torque_limits",
-    "singularity",
-    "workspace",
-})
-"""Checks a family may offer (see :mod:`designkit.verification.suite` for what each needs from a design)."""
+STEP_REFERENCES = ("step", "square", "prbs")
+"""References a servo (a ``"step"`` design) follows by default: ``simulation.step``, a square wave, a PRBS."""
+TRAJECTORY_REFERENCES = ("quintic", "sine", "trapezoidal", "via_points")
+"""References a joint tracker (a ``"trajectory"`` design) follows by default."""
 
 
 @dataclass(frozen=True)
@@ -63,24 +66,38 @@ class Family:
     plants : tuple of str
         Plant kinds it can be designed for (``("link",)``, ``("robot",)``).
     reference : str
-        ``"step"`` (driven by ``simulation.step``) or ``"trajectory"`` (by ``simulation.trajectory``).
+        What its law reads of the reference: ``"step"`` (a servo: positions) or ``"trajectory"`` (a tracker:
+        positions, velocities and accelerations).
     synthesize : callable
-        ``(spec, plant) -> Design``: the gains, for the nominal plant built from the spec.
+        ``(spec, plant) -> Design``: the gains, for the nominal plant built from the spec, with the design's
+        ``law`` (and its linearization contract).
     law : callable
-        ``(design, anti_windup) -> Law``: the control law, written once as CasADi functions.
-    checks : tuple of str
-        The checks it offers (names of :data:`CHECK_NAMES`); each is run when the design
-        exposes what it needs.
+        ``(design, anti_windup) -> Law``: the control law, written once as CasADi functions (the registry's
+        :func:`~designkit.families.synthesize` gives the design the law with the spec's anti-windup).
+    checks : tuple of str or CheckRule
+        The checks it offers: names of the generic checks (:data:`designkit.verification.suite.GENERIC`) and
+        rules of its own; each runs when the design exposes what it needs.
     display : Display
         Report data.
     validate : callable or None
         ``spec -> None``: cross-section rules of the parsed spec (raise ``ValueError("key.path:
         message")``), e.g. "poles or requirements".
+    references : tuple of str
+        The ``simulation.trajectory`` kinds (and ``"step"`` for ``simulation.step``) it can follow; a spec
+        giving another is refused when it is read.  Default: :data:`STEP_REFERENCES` for a servo,
+        :data:`TRAJECTORY_REFERENCES` for a tracker.
+    figures : tuple of callable
+        ``result -> Figure | None``: figures of its own drawn from a run (a phase portrait, adaptation traces).
+    sections : tuple of callable
+        ``result -> ReportSection | None``: report sections of its own (lab questions answered from the run).
+    diagnoses : tuple of callable
+        ``(result, check) -> (cause, fix) | None``: why one of its checks failed, and what would fix it.
     motion : callable or None
-        Task-space families: ``(spec, design) -> TaskMotion``
-        (:class:`~designkit.simulation.motion.TaskMotion`: the reference in task coordinates, the
-        tracked output and the joint path that tracks it).  ``None``: the joints are tracked and
-        the reference is :func:`~designkit.simulation.reference.reference_for`'s.
+        Task-space families: ``(spec, design) -> TaskMotion``, also stored in ``design.motion`` at synthesis.
+    json : callable or None
+        ``result -> Mapping``: top-level fields it adds to ``synth --json`` / ``verify --json`` (what its
+        results are, for checking from outside: an adaptive law's initial and final parameters, a learning
+        law's error per trial), JSON types only.
     """
 
     kind: str
@@ -89,14 +106,26 @@ class Family:
     reference: str
     synthesize: Callable[[Any, Any], Design]
     law: Callable[[Design, Any], Law]
-    checks: tuple[str, ...]
+    checks: tuple[Any, ...]
     display: Display
     validate: Callable[[Any], None] | None = None
+    references: tuple[str, ...] = ()
+    figures: tuple[Callable[[Any], Any], ...] = ()
+    sections: tuple[Callable[[Any], Any], ...] = ()
+    diagnoses: tuple[Callable[[Any, Any], Any], ...] = ()
     motion: Callable[[Any, Design], Any] | None = None
+    json: Callable[[Any], Any] | None = None
 
     def __post_init__(self) -> None:
-        unknown = set(self.checks) - CHECK_NAMES
-        if unknown:
-            raise ValueError(f"family {self.kind!r} offers unknown checks {sorted(unknown)}")
         if self.reference not in ("step", "trajectory"):
             raise ValueError(f"family {self.kind!r}: reference must be 'step' or 'trajectory'")
+        if not self.references:
+            default = STEP_REFERENCES if self.reference == "step" else TRAJECTORY_REFERENCES
+            object.__setattr__(self, "references", default)
+        for name in ("checks", "references", "figures", "sections", "diagnoses"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+
+    @property
+    def check_names(self) -> tuple[str, ...]:
+        """Names of the checks it offers, generic and its own."""
+        return tuple(c if isinstance(c, str) else c.name for c in self.checks)

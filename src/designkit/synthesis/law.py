@@ -5,7 +5,8 @@ linearized with it for the linear checks (:mod:`designkit.synthesis.closed_loop`
 its family's display data in the report.  A law sees
 
 * ``y`` -- the measured plant state (all states, noise added), in the plant's state order;
-* ``xc`` -- its continuous state (integrals, filters), integrated with the plant;
+* ``xc`` -- its continuous state (integrals, filters, reference models, sensitivity states,
+  parameter estimates), integrated with the plant;
 * ``m`` -- its discrete memory (held values, estimates, a learning controller's tables), updated
   at each controller sample by ``update`` (every integration step for a continuous controller);
 * ``r`` -- the reference, ``3 n`` numbers for ``n`` joints: positions ``xD``, then velocities
@@ -18,7 +19,32 @@ Functions (all ``casadi.Function``, named ``<kind>_<what>``):
   anti-windup switch) multiplies each integrand;
 * ``gate(y, xc, m, r) -> gate``: evaluated once per integration step, at its start;
 * ``project(xc) -> xc``: applied after every step (clamps integral states);
-* ``update(y, xc, m, r) -> m_next``: the discrete memory's update.
+* ``update(y, xc, m, r) -> m_next``: the discrete memory's update;
+* ``signals(y, xc, m, r) -> s`` (optional): named signals of the law recorded along a run (a
+  sliding function, the adapted gains, a reference model's output), ``signal_names`` naming them;
+* ``feedforward(y, xc, m, r, v) -> u`` (optional): how a per-step feedforward ``v`` (one value per
+  plant input, supplied by a trial: :mod:`designkit.simulation.trials`) enters the command; without
+  it ``v`` is added to ``u`` as a torque.  A learning controller whose learned signal is an
+  acceleration maps it through its model's inertia here.
+
+**Initial state.**  ``initial_state`` gives ``xc(0)`` (zeros when empty).  The states named in
+``rest_start`` are instead solved for so that the loop starts *at rest* at the reference's value
+before the motion (:func:`designkit.synthesis.closed_loop.rest_state`): an integral starts where it
+holds the plant still (``x3(0) = K4 q0`` for the PID servo at ``q0``, plus the share of a constant
+load), a reference model starts at the plant's position.  So the simulated loop is the loop that
+was designed, in deviations about where the arm starts, wherever that is.
+
+**Discontinuous laws.**  A law that switches (``sign`` of a sliding function, a relay inside the
+controller) declares ``discontinuous=True``: the simulator then evaluates its command (and its
+state derivative) once per integration step, at the step's start, and holds both over the step --
+as a sampled controller with the integration step as its period would -- so no integrator stage
+ever straddles a switch, and a variable-step integrator (CVODES) integrates a smooth right-hand
+side inside each step.  ``max_step`` (s) bounds the step the law can be simulated with and
+``max_step_reason`` says why (e.g. the chattering band the hold leaves on the sliding function);
+the simulation takes the smaller of it and its own choice and reports both.
+
+:func:`dynamic_law` builds a law from CasADi expressions (its states' derivatives, the command,
+the recorded signals), so no family hand-assembles the functions.
 
 Anti-windup of integral states (spec ``simulation.anti_windup``), per joint ``j``:
 ``threshold`` -- ``gate_j = 1`` while ``|e_j| <= value_j`` else 0; ``saturation`` -- the integral
@@ -36,7 +62,7 @@ import numpy as np
 
 from designkit.synthesis.design import freeze
 
-__all__ = ["Law", "integral_law", "law_symbols", "stateless_law"]
+__all__ = ["Law", "LawSymbols", "State", "dynamic_law", "integral_law", "law_symbols", "stateless_law"]
 
 
 @dataclass(frozen=True)
@@ -49,13 +75,25 @@ class Law:
         Controller kind (``design.kind``).
     state_names : tuple of str
         Continuous controller states.
+    command, derivative, gate, project, update : casadi.Function
     memory_names : tuple of str
         Discrete memory entries.
     initial_memory : tuple of float
         Memory at ``t = 0``.
-    command, derivative, gate, project, update : casadi.Function
     settings : Mapping
         Gains and options, JSON-serialisable (deeply frozen).
+    initial_state : tuple of float
+        ``xc(0)``, one value per state (empty: zeros).
+    rest_start : tuple of str
+        States whose initial value is solved so that the loop starts at rest (module docstring).
+    discontinuous : bool
+        The command switches: held over each integration step.
+    max_step : float or None
+        Largest integration step (s) the law can be simulated with, and ``max_step_reason`` why.
+    signals : casadi.Function or None
+        ``(y, xc, m, r) -> s``, the recorded signals named by ``signal_names`` (units in ``signal_units``).
+    feedforward : casadi.Function or None
+        ``(y, xc, m, r, v) -> u``: how a trial's feedforward ``v`` enters the command (default: added).
     """
 
     kind: str
@@ -68,9 +106,35 @@ class Law:
     memory_names: tuple[str, ...] = ()
     initial_memory: tuple[float, ...] = ()
     settings: Mapping[str, Any] = field(default_factory=dict)
+    initial_state: tuple[float, ...] = ()
+    rest_start: tuple[str, ...] = ()
+    discontinuous: bool = False
+    max_step: float | None = None
+    max_step_reason: str = ""
+    signals: ca.Function | None = None
+    signal_names: tuple[str, ...] = ()
+    signal_units: tuple[str, ...] = ()
+    feedforward: ca.Function | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
+        n = len(self.state_names)
+        initial = tuple(float(v) for v in self.initial_state) or (0.0,) * n
+        if len(initial) != n:
+            raise ValueError(f"law {self.kind!r}: initial_state has {len(initial)} values for {n} states")
+        object.__setattr__(self, "initial_state", initial)
+        unknown = set(self.rest_start) - set(self.state_names)
+        if unknown:
+            raise ValueError(f"law {self.kind!r}: rest_start names unknown states {sorted(unknown)}")
+        if self.max_step is not None and not self.max_step > 0:
+            raise ValueError(f"law {self.kind!r}: max_step must be positive, got {self.max_step}")
+        size = 0 if self.signals is None else self.signals.size1_out(0)
+        if size != len(self.signal_names):
+            raise ValueError(f"law {self.kind!r}: {size} signals for {len(self.signal_names)} names")
+        units = tuple(self.signal_units) or ("",) * size
+        if len(units) != size:
+            raise ValueError(f"law {self.kind!r}: {len(units)} signal units for {size} signals")
+        object.__setattr__(self, "signal_units", units)
 
     @property
     def n_state(self) -> int:
@@ -82,10 +146,164 @@ class Law:
         """Size of the discrete memory."""
         return len(self.memory_names)
 
+    @property
+    def n_signals(self) -> int:
+        """Number of recorded signals."""
+        return len(self.signal_names)
+
+    def rest_indices(self) -> tuple[int, ...]:
+        """Indices of the ``rest_start`` states in ``xc``."""
+        return tuple(self.state_names.index(name) for name in self.rest_start)
+
 
 def law_symbols(n_y: int, n_c: int, n_m: int, n_joints: int) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     """Symbols ``y, xc, m, r`` of a law's functions."""
     return ca.SX.sym("y", n_y), ca.SX.sym("xc", n_c), ca.SX.sym("m", n_m), ca.SX.sym("r", 3 * n_joints)
+
+
+@dataclass(frozen=True)
+class LawSymbols:
+    """The symbols a law's expressions are written in, with the plant's layout.
+
+    Attributes
+    ----------
+    y, xc, m, r : casadi.SX
+        Measured state, controller state, memory, reference (module docstring).
+    positions, velocities : tuple of int
+        Indices of the joint positions and velocities in ``y``.
+    names : tuple of str
+        Controller state names (for :meth:`state`).
+    """
+
+    y: ca.SX
+    xc: ca.SX
+    m: ca.SX
+    r: ca.SX
+    positions: tuple[int, ...]
+    velocities: tuple[int, ...]
+    names: tuple[str, ...] = ()
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return len(self.positions)
+
+    @property
+    def q(self) -> ca.SX:
+        """Measured joint positions (rad or m)."""
+        return ca.vertcat(*[self.y[i] for i in self.positions])
+
+    @property
+    def qd(self) -> ca.SX:
+        """Measured joint velocities."""
+        return ca.vertcat(*[self.y[i] for i in self.velocities])
+
+    @property
+    def qD(self) -> ca.SX:
+        """Reference positions."""
+        return self.r[0:self.n]
+
+    @property
+    def qDd(self) -> ca.SX:
+        """Reference velocities."""
+        return self.r[self.n:2 * self.n]
+
+    @property
+    def qDdd(self) -> ca.SX:
+        """Reference accelerations."""
+        return self.r[2 * self.n:3 * self.n]
+
+    def state(self, name: str) -> ca.SX:
+        """The controller state ``name``."""
+        return self.xc[self.names.index(name)]
+
+
+@dataclass(frozen=True)
+class State:
+    """One continuous state of a :func:`dynamic_law`.
+
+    Parameters
+    ----------
+    name : str
+        As recorded (``"a1"``, ``"ym1"``).
+    derivative : callable
+        ``LawSymbols -> SX`` scalar: the state's time derivative.
+    initial : float or None
+        ``xc(0)``; ``None`` starts the state at the loop's rest (``rest_start``).
+    """
+
+    name: str
+    derivative: Callable[[LawSymbols], ca.SX]
+    initial: float | None = None
+
+
+def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX], states: Sequence[State] = (),
+                settings: Mapping[str, Any] | None = None, signals: Mapping[str, Callable[[LawSymbols], ca.SX]]
+                | None = None, signal_units: Sequence[str] = (), discontinuous: bool = False,
+                max_step: float | None = None, max_step_reason: str = "",
+                feedforward: Callable[[LawSymbols, ca.SX], ca.SX] | None = None) -> Law:
+    """A law from CasADi expressions: its states' derivatives, its command and its recorded signals.
+
+    Parameters
+    ----------
+    kind : str
+        Controller kind.
+    plant : Plant
+        Gives the layout (states, positions, velocities, joints).
+    command : callable
+        ``LawSymbols -> SX``: the plant inputs (one per input).
+    states : sequence of State
+        The controller's continuous states, in order.
+    settings : Mapping, optional
+        Gains and options for the record.
+    signals : Mapping, optional
+        Name -> ``LawSymbols -> SX`` scalar, recorded along the run; ``signal_units`` their units.
+    discontinuous, max_step, max_step_reason
+        See :class:`Law`.
+    feedforward : callable, optional
+        ``(LawSymbols, v) -> SX``: how a trial's feedforward ``v`` (one per plant input) enters the command.
+
+    Examples
+    --------
+    A PD law with a first-order reference filter ``xf' = 10 (xD - xf)`` that starts at rest:
+
+    >>> from designkit.models.link import LinkPlant
+    >>> law = dynamic_law("demo", LinkPlant(Km=2.0, tau=0.5),
+    ...                   states=[State("xf", lambda s: 10 * (s.qD[0] - s.state("xf")))],
+    ...                   command=lambda s: -20 * (s.q[0] - s.state("xf")) - 2 * s.qd[0])
+    >>> law.state_names, law.rest_start
+    (('xf',), ('xf',))
+    """
+    n = len(plant.positions)
+    names = tuple(s.name for s in states)
+    y, xc, m, r = law_symbols(len(plant.states), len(states), 0, n)
+    sym = LawSymbols(y, xc, m, r, tuple(plant.positions), tuple(plant.velocities), names)
+    args, arg_names = [y, xc, m, r], ["y", "xc", "m", "r"]
+    g = ca.SX.sym("gate", len(states))
+    xc_dot = ca.vertcat(*[s.derivative(sym) for s in states]) if states else ca.SX(0, 1)
+    ff_fn = None
+    if feedforward is not None:
+        v = ca.SX.sym("v", len(plant.inputs))
+        ff_fn = ca.Function(f"{kind}_feedforward", [*args, v], [feedforward(sym, v)], [*arg_names, "v"], ["u"])
+    signal_fn = None
+    if signals:
+        signal_fn = ca.Function(f"{kind}_signals", args, [ca.vertcat(*[f(sym) for f in signals.values()])],
+                                arg_names, ["s"])
+    return Law(
+        kind=kind, state_names=names,
+        command=ca.Function(f"{kind}_command", args, [command(sym)], arg_names, ["u"]),
+        derivative=ca.Function(f"{kind}_derivative", [*args, g], [g * xc_dot if states else xc_dot],
+                               [*arg_names, "gate"], ["xc_dot"]),
+        gate=ca.Function(f"{kind}_gate", args, [ca.SX.ones(len(states)) if states else ca.SX(0, 1)], arg_names,
+                         ["gate"]),
+        project=ca.Function(f"{kind}_project", [xc], [xc], ["xc"], ["xc_projected"]),
+        update=ca.Function(f"{kind}_update", args, [m], arg_names, ["m_next"]),
+        settings=settings or {},
+        initial_state=tuple(0.0 if s.initial is None else float(s.initial) for s in states),
+        rest_start=tuple(s.name for s in states if s.initial is None),
+        discontinuous=discontinuous, max_step=max_step, max_step_reason=max_step_reason,
+        signals=signal_fn, signal_names=tuple(signals or ()), signal_units=tuple(signal_units), feedforward=ff_fn,
+    )
 
 
 def _anti_windup(section: Any, n: int, K3: np.ndarray) -> tuple[Callable, Callable, dict[str, Any]]:
@@ -107,6 +325,9 @@ def integral_law(
     output: Callable[[ca.SX, ca.SX, ca.SX, ca.SX], ca.SX], settings: Mapping[str, Any],
 ) -> Law:
     """The frame of the PID laws: one integral state per joint, ``x3_j' = gate_j (y_pos_j - xD_j)``.
+
+    The integrals start at the loop's rest (``rest_start``): where they hold the plant still at the
+    reference before the motion, so that a step from any initial position is the designed step.
 
     Parameters
     ----------
@@ -131,15 +352,17 @@ def integral_law(
     g = ca.SX.sym("gate", n)
     names = ["y", "xc", "m", "r"]
     args = [y, xc, m, r]
+    states = tuple("x3" if n == 1 else f"x3_{j + 1}" for j in range(n))
     return Law(
         kind=kind,
-        state_names=tuple("x3" if n == 1 else f"x3_{j + 1}" for j in range(n)),
+        state_names=states,
         command=ca.Function(f"{kind}_command", args, [output(y, xc, r, e)], names, ["u"]),
         derivative=ca.Function(f"{kind}_derivative", [*args, g], [g * e], [*names, "gate"], ["xc_dot"]),
         gate=ca.Function(f"{kind}_gate", args, [gate_of(e)], names, ["gate"]),
         project=ca.Function(f"{kind}_project", [xc], [project_of(xc)], ["xc"], ["xc_projected"]),
         update=ca.Function(f"{kind}_update", args, [m], names, ["m_next"]),
         settings={**settings, "anti_windup": aw},
+        rest_start=states,
     )
 
 
@@ -157,17 +380,4 @@ def stateless_law(kind: str, plant: Any, output: Callable[[ca.SX, ca.SX], ca.SX]
     settings : Mapping
         Gains and options for the record.
     """
-    n = len(plant.positions)
-    y, xc, m, r = law_symbols(len(plant.states), 0, 0, n)
-    names, args = ["y", "xc", "m", "r"], [y, xc, m, r]
-    g = ca.SX.sym("gate", 0)
-    empty = ca.SX(0, 1)
-    return Law(
-        kind=kind, state_names=(),
-        command=ca.Function(f"{kind}_command", args, [output(y, r)], names, ["u"]),
-        derivative=ca.Function(f"{kind}_derivative", [*args, g], [empty], [*names, "gate"], ["xc_dot"]),
-        gate=ca.Function(f"{kind}_gate", args, [empty], names, ["gate"]),
-        project=ca.Function(f"{kind}_project", [xc], [xc], ["xc"], ["xc_projected"]),
-        update=ca.Function(f"{kind}_update", args, [m], names, ["m_next"]),
-        settings=settings,
-    )
+    return dynamic_law(kind, plant, command=lambda s: output(s.y, s.r), settings=settings)

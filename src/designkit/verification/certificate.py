@@ -29,9 +29,9 @@ import numpy as np
 _KINDS: dict[str, str] = {
     "lyapunov": "designkit.verification.lmi:LyapunovCertificate",
     "kyp": "designkit.verification.lmi:KypCertificate",
-    "lp_lower_bound": "designkit.verification.lp:LowerBoundCertificate",
-    "feasible_point": "designkit.verification.lp:FeasiblePointCertificate",
-    "farkas": "designkit.verification.lp:FarkasCertificate",
+    "lp_lower_bound": "designkit.verification.lp_certificates:LowerBoundCertificate",
+    "feasible_point": "designkit.verification.lp_certificates:FeasiblePointCertificate",
+    "farkas": "designkit.verification.lp_certificates:FarkasCertificate",
 }
 
 

@@ -36,6 +36,8 @@ class Check:
     data : Mapping
         Bulk data behind the check for the report's figures (time series, frequency responses);
         not part of :meth:`to_dict`.
+    label : str
+        The check in words, for the report (stamped by the runner from its rule when empty).
     required : bool
         Whether the verdict depends on this check.  An informational check (``False``) is
         reported with its status but does not make a design unverified, e.g. the common
@@ -53,6 +55,7 @@ class Check:
     certificate: Mapping[str, Any] = field(default_factory=dict)
     required: bool = True
     data: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    label: str = ""
 
     @property
     def status(self) -> Status:
@@ -74,6 +77,7 @@ class Check:
             "detail": self.detail,
             "certificate": dict(self.certificate),
             "required": self.required,
+            "label": self.label,
         }
 
 

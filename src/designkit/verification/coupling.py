@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.display.numbers import fmt_complex
 from designkit.simulation.linear import linear_response
 from designkit.verification.check import Check
 
@@ -67,7 +68,7 @@ def coupling_check(design: Any, simulation: Any = None) -> Check:
                                   "coupled": [coupled[c].real, coupled[c].imag], "shift": float(shift[i])}
                                  for i, (c, r) in enumerate(zip(ci, ri, strict=True))]
         parts.append(f"coupling moves the requested poles by up to {100 * rel[k]:.3g} % "
-                     f"({requested[ri[k]]:.4g} -> {coupled[ci[k]]:.4g} 1/s)")
+                     f"({fmt_complex(requested[ri[k]])} -> {fmt_complex(coupled[ci[k]])} 1/s)")
     stable = bool(np.all(coupled.real < 0)) if coupled.size else None
     data: dict[str, Any] = {}
     achieved = None

@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.display.numbers import fmt_complex
 from designkit.verification.check import Check
 from designkit.verification.lmi import KypCertificate, coordinates, solve_kyp, symmetrise, unstable_eigenvalue
 from designkit.verification.tolerances import (
@@ -294,7 +295,7 @@ def positive_real(A: Any, B: Any, C: Any, *, eps: float = LMI_EPS, solver: str =
         band = EIG_RECHECK_TOL * float(np.linalg.norm(A, 2))
         kind = "on the imaginary axis within rounding" if lam.real <= band else "in the right half plane"
         return _fail(
-            target, lam.real, "1/s", f"not SPR: eigenvalue {lam:.6g} of A is {kind} (Re >= 0)", cert,
+            target, lam.real, "1/s", f"not SPR: eigenvalue {fmt_complex(lam, 6)} of A is {kind} (Re >= 0)", cert,
             {"eigenvalue": [lam.real, lam.imag]},
         )
 

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.synthesis.design import loop_matrices
 from designkit.verification.check import Check
 
 __all__ = ["LoopMargins", "achieved_zeros", "classical_margins", "crossovers", "frequency_grid",
@@ -81,16 +82,6 @@ def achieved_zeros(design: Any) -> np.ndarray:
     if not design.zeros or cl is None:
         return np.array([], dtype=complex)
     return siso_zeros(cl.A, cl.B[:, 0], cl.C[0], float(cl.D[0, 0]))
-
-
-def loop_matrices(design: Any, channel: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """``(A_i, b_i, c_i)`` of the loop broken at plant input ``channel`` (module docstring), or ``None``."""
-    lp = design.input_loop
-    if lp is None or channel >= lp.B.shape[1]:
-        return None
-    b = lp.B[:, [channel]]
-    c = lp.C[[channel], :]
-    return lp.A + b @ c, b, c
 
 
 def loop_frequency_response(design: Any, w: np.ndarray, channel: int = 0) -> np.ndarray | None:

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from designkit.display.numbers import fmt_complex
 from designkit.verification.check import Check
 from designkit.verification.lmi import (
     Coordinates,
@@ -131,7 +132,7 @@ def _common_check(name: str, As: Sequence[np.ndarray], eps: float, solver: str, 
             cert["evidence"] = {"vertex": i, "eigenvalue": [lam.real, lam.imag]}
             return Check(
                 name=name, passed=False, target=target, achieved=lam.real, margin=-lam.real, unit="1/s",
-                detail=f"no {what} exists: eigenvalue {lam:.6g}{where} is {kind} (Re >= 0)",
+                detail=f"no {what} exists: eigenvalue {fmt_complex(lam, 6)}{where} is {kind} (Re >= 0)",
                 certificate=cert,
             )
     sol = solve_lmi(As, solver=solver)

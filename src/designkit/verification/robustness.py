@@ -172,7 +172,8 @@ class Sweeper:
     Parameters
     ----------
     design : Design
-        Its law (from its family) and operating point.
+        Its linear law (``design.linear_law``: the law, or the adaptive law with its adaptation frozen at
+        the initial values) and operating point.
     names : sequence of str
         The plant parameters that vary.
     plant : Plant, optional
@@ -180,11 +181,12 @@ class Sweeper:
     """
 
     def __init__(self, design: Any, names: tuple[str, ...], plant: Any = None) -> None:
-        from designkit.families import family
-
         self.design = design
         self.names = tuple(names)
-        self.law = family(design.kind).law(design, None)
+        self.law = design.linear_law
+        if self.law is None:
+            raise ValueError(f"this {design.kind} design has no linearization to sweep "
+                             f"({design.linearization.reason})")
         plant = design.plant if plant is None else plant
         self.plant = plant
         self._index = [plant.parameter_names.index(plant.parameter(n).name) for n in self.names]  # ModelError

@@ -1,214 +1,236 @@
-"""Every verification check of a design, chosen by what the design exposes, in report order.
+"""The check registry: what a check declares, the generic checks, and the runner.
 
-A check runs when the design's family offers it (``Family.checks``) *and* the design exposes what
-it needs (:data:`CHECKS`, the ``applies`` column); the solver or simulation results never decide
-which checks exist.  In report order:
+A check is a :class:`CheckRule`: its name, where it stands in the report, what it needs from a
+design (``applies``), whether it reads the design's linearization (``linear``), how it runs
+(``run``), and what the report says and draws of it (``label``, ``labels``, ``glossary``,
+``figures``, ``diagnose``).  The generic checks are one module each in
+:mod:`designkit.verification.checks`, discovered like the controller families (every module there
+defines ``RULE``); a family offers generic checks by name and brings rules of its own in
+``Family.checks``.  Nothing here knows a family: the caller (the pipeline) hands :func:`run_checks`
+the rules the design's family offers.
 
-================== ===================================== ==============================================
-check              needs                                 what it proves
-================== ===================================== ==============================================
-pole_placement     requested ``poles``, ``closed_loop``  closed-loop poles/zeros are the requested ones
-routh_hurwitz      a closed-form ``characteristic``      Routh array + the notes' gain conditions
-lyapunov           ``closed_loop``                       quadratic Lyapunov function (LMI, NumPy re-check)
-loops              per-joint ``loops``                   the three above for each joint loop
-robust_box         ``characteristic.linear_conditions``  stability on the whole (Km, tau) box (LP + duality)
-                   and an uncertainty on its parameters
-robustness         ``plant.uncertainty``                 corners, lattice, samples; common Lyapunov P
-workspace          per-joint ``loops`` and a workspace   every joint loop stable for every configuration of
-                   box (``extra["workspace"]``)          the box (D_ii range; affine conditions at its ends)
-error_poles        a trajectory design with poles        error poles along the path (joint or task space)
-singularity        a task-space design (``motion``)      conditioning of J along the path; DLS bound
-tracking_bounds    a trajectory design + uncertainty     tracking error over the box by simulation
-loop_margins       ``input_loop``                        gain/phase/modulus margins (informational)
-coupling           per-joint ``loops``                   intercoupling left to the loops (informational)
-time_domain        a simulation and ``requirements``     overshoot, settling, rise, error, peak control
-torque_limits      a simulation and ``plant.limits``     commanded torques within the actuator limits
-================== ===================================== ==============================================
+A check runs when it is offered *and* the design exposes what it needs: a ``linear`` check only
+when the design's linearization contract gives a loop (``exact`` or ``frozen``,
+:mod:`designkit.synthesis.linearization`), never on a switching law.  The solver or the simulation
+never decides which checks exist.  Rules run in ``order``; the generic ones in report order:
+
+================== ===== ======================================= ==============================================
+check              order needs                                   what it proves
+================== ===== ======================================= ==============================================
+pole_placement     10    requested ``poles``, ``closed_loop``    closed-loop poles/zeros are the requested ones
+routh_hurwitz      20    a closed-form ``characteristic``        Routh array + the notes' gain conditions
+lyapunov           30    ``closed_loop``                         quadratic Lyapunov function (LMI, NumPy re-check)
+frozen_final       35    a ``frozen`` contract and a run         the loop frozen at the run's final gains
+loops              40    per-joint ``loops``                     the three above for each joint loop
+robust_box         50    ``characteristic.linear_conditions``    stability on the whole (Km, tau) box (LP + duality)
+                         and an uncertainty on its parameters
+robustness         60    ``plant.uncertainty``                   corners, lattice, samples; common Lyapunov P
+error_poles        80    a trajectory design with poles          error poles along the path (joint or task space)
+singularity        90    a task-space design (``motion``)        conditioning of J along the path; DLS bound
+tracking_bounds    100   a trajectory design + uncertainty       tracking error over the box by simulation
+loop_margins       110   ``input_loop``                          gain/phase/modulus margins (informational)
+coupling           120   per-joint ``loops``                     intercoupling left to the loops (informational)
+designed_loop      125   a linear loop and a run                 the simulated loop is the designed one
+time_domain        130   a simulation and ``requirements``       overshoot, settling, rise, error, peak control
+torque_limits      140   a simulation and ``plant.limits``       commanded torques within the actuator limits
+================== ===== ======================================= ==============================================
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
-from dataclasses import dataclass
+import pkgutil
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from importlib import import_module
 from typing import Any
 
 from designkit.verification.check import Check
 
-__all__ = ["CHECKS", "CheckRule", "applicable", "run_checks"]
+__all__ = ["CheckRule", "Context", "GENERIC", "applicable", "generic", "owner", "resolve", "run_checks", "words_of"]
 
 
 @dataclass(frozen=True)
 class Context:
-    """What a check may read besides the design: the spec, the simulation and the true plant."""
+    """What a check may read besides the design.
+
+    Parameters
+    ----------
+    spec : Spec
+        The validated spec (``plant.uncertainty``, ``requirements``, ``simulation``, ``numerics``).
+    simulation : SimulationResult or None
+        The run (the last trial's, for a learning design).
+    solver : str
+        The conic solver of the LMIs and LPs.
+    plant : Plant or None
+        The true plant (None: the design's).
+    law : Law or None
+        The simulated law (the design's, with the spec's anti-windup; None: ``design.law``).
+    trials : TrialsResult or None
+        Every trial of a learning design.
+    """
 
     spec: Any
-    simulation: Any
-    solver: str
+    simulation: Any = None
+    solver: str = "CLARABEL"
     plant: Any = None
+    law: Any = None
+    trials: Any = None
+
+    def true_plant(self, design: Any) -> Any:
+        """The true plant (the design's when none was given)."""
+        return design.plant if self.plant is None else self.plant
+
+    def uncertainty(self) -> Any:
+        """The spec's ``plant.uncertainty`` (None without one)."""
+        return getattr(self.spec.plant, "uncertainty", None)
 
 
 @dataclass(frozen=True)
 class CheckRule:
-    """One entry of :data:`CHECKS`: when it applies and how to run it."""
+    """One check (see the module docstring).
 
+    Parameters
+    ----------
+    name : str
+        The check's name (the names of the :class:`Check` values it returns may add a suffix).
+    order : float
+        Position in the report (the generic checks' are in the module docstring).
+    applies : callable
+        ``(design, Context) -> bool``: the design exposes what the check needs.
+    run : callable
+        ``(design, Context) -> tuple of Check``.
+    linear : bool
+        It reads the design's linear loop: offered only when the linearization contract gives one.
+    label : str
+        The check in words, for the report (``"Lyapunov function (LMI)"``).
+    labels : Mapping
+        Words for the names of the checks it returns when they differ from ``name`` (``overshoot`` ...).
+    glossary : tuple of (str, str)
+        Terms its evidence uses and what they mean.
+    figures : tuple of callable
+        ``(result, check) -> Figure | None``: figures drawn from one of its checks.
+    diagnose : callable or None
+        ``(result, check) -> (cause, fix) | None``: why one of its checks failed and what would fix it.
+    """
+
+    name: str
+    order: float
     applies: Callable[[Any, Context], bool]
     run: Callable[[Any, Context], tuple[Check, ...]]
+    linear: bool = False
+    label: str = ""
+    labels: Mapping[str, str] = field(default_factory=dict)
+    glossary: tuple[tuple[str, str], ...] = ()
+    figures: tuple[Callable[[Any, Any], Any], ...] = ()
+    diagnose: Callable[[Any, Any], Any] | None = None
+
+    def offered_for(self, design: Any, ctx: Context) -> bool:
+        """True when the check runs for ``design``: its linearization (if it needs one) and what ``applies`` asks."""
+        if self.linear and not design.linearization.linear:
+            return False
+        return bool(self.applies(design, ctx))
+
+    def label_for(self, check_name: str) -> str:
+        """The words of a check this rule returned: its ``labels`` entry, its ``label``, or the name in words; a
+        suffix ``[joint1]`` is kept as ``(joint1)``."""
+        base, _, suffix = check_name.partition("[")
+        words = self.labels.get(base) or (self.label if base == self.name else "") or words_of(base)
+        return f"{words} ({suffix.rstrip(']')})" if suffix else words
+
+    def owns(self, check_name: str) -> bool:
+        """True when a :class:`Check` named ``check_name`` comes from this rule."""
+        base = check_name.split("[", 1)[0]
+        return base == self.name or base in self.labels
 
 
-def _uncertainty(ctx: Context) -> Any:
-    return getattr(ctx.spec.plant, "uncertainty", None)
+def words_of(name: str) -> str:
+    """A check name without a declared label, in words (``"steady_state_error"`` -> ``"Steady state error"``)."""
+    return name.replace("_", " ").capitalize()
 
 
-def _pole_placement(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.pole_zero import pole_placement
+def _discover() -> dict[str, CheckRule]:
+    from designkit.verification import checks
 
-    return (pole_placement(design),)
-
-
-def _routh(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.hurwitz_conditions import routh_hurwitz_design
-
-    return (routh_hurwitz_design(design),)
-
-
-def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.lyapunov import lyapunov_lmi
-
-    return (lyapunov_lmi(design.closed_loop.A, solver=ctx.solver),)
-
-
-def _loops(design: Any, ctx: Context) -> tuple[Check, ...]:
-    out: list[Check] = []
-    for name, loop in zip(design.loop_names, design.loops, strict=True):
-        for key in ("pole_placement", "routh_hurwitz", "lyapunov"):
-            rule = CHECKS[key]
-            if rule.applies(loop, ctx):
-                out.extend(dataclasses.replace(c, name=f"{c.name}[{name}]",
-                                               detail=f"{name} on its simplified link model: {c.detail}")
-                           for c in rule.run(loop, ctx))
-    return tuple(out)
+    found: dict[str, CheckRule] = {}
+    for info in sorted(pkgutil.iter_modules(checks.__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        module = import_module(f"{checks.__name__}.{info.name}")
+        rule = getattr(module, "RULE", None)
+        if not isinstance(rule, CheckRule):
+            raise TypeError(f"{module.__name__} defines no RULE")
+        if rule.name in found:
+            raise TypeError(f"check {rule.name!r} registered twice ({module.__name__})")
+        found[rule.name] = rule
+    return dict(sorted(found.items(), key=lambda item: item[1].order))
 
 
-def _box_applies(design: Any, ctx: Context) -> bool:
-    unc = _uncertainty(ctx)
-    ch = design.characteristic
-    return (unc is not None and ch is not None and ch.linear_conditions is not None
-            and set(unc.intervals) <= set(ch.parameters))
+_GENERIC: dict[str, CheckRule] = {}
 
 
-def _robust_box(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.lp import Polytope, robust_linear_conditions
-
-    intervals = _uncertainty(ctx).intervals
-    names = tuple(design.characteristic.parameters)
-    lo = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[0] for n in names]
-    hi = [intervals.get(n, (design.plant.parameter(n).value,) * 2)[1] for n in names]
-    conditions = design.characteristic.linear_conditions(design.gains)
-    check = robust_linear_conditions("robust_box", conditions, Polytope.box(names, lo, hi), solver=ctx.solver)
-    what = ("the closed-loop Hurwitz conditions, affine in " + ", ".join(names) + " for fixed gains, hold on the "
-            "whole box (every plant in it, not a sample)")
-    return (dataclasses.replace(check, detail=f"{what}: {check.detail}"),)
+def generic() -> Mapping[str, CheckRule]:
+    """The generic checks, name -> :class:`CheckRule`, in report order (discovered on first use)."""
+    if not _GENERIC:
+        _GENERIC.update(_discover())
+    return _GENERIC
 
 
-def _robustness(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.robustness import robustness_checks
+class _Generic(Mapping[str, CheckRule]):
+    """Read-only view of :func:`generic` (discovery deferred to first access)."""
 
-    return robustness_checks(design, _uncertainty(ctx), solver=ctx.solver, plant=ctx.plant)
+    def __getitem__(self, name: str) -> CheckRule:
+        return generic()[name]
 
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(generic())
 
-def _workspace(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.workspace import workspace_check
-
-    return (workspace_check(design),)
-
-
-def _error_poles(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.tracking import error_poles_check
-
-    return (error_poles_check(ctx.spec, design, ctx.plant),)
+    def __len__(self) -> int:
+        return len(generic())
 
 
-def _singularity(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.simulation.motion import motion_of
-    from designkit.verification.singularity import singularity_check
-
-    return (singularity_check(design, motion_of(ctx.spec, design)),)
+GENERIC: Mapping[str, CheckRule] = _Generic()
+"""Check name -> the generic :class:`CheckRule`, in report order."""
 
 
-def _task_space(design: Any, ctx: Context) -> bool:
-    from designkit.families import family
+def resolve(offered: Sequence[str | CheckRule]) -> tuple[CheckRule, ...]:
+    """The rules of ``offered`` (generic names and rules of a family's own), in report order.
 
-    return family(design.kind).motion is not None
-
-
-def _tracking_bounds(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.tracking import tracking_bounds_check
-
-    return (tracking_bounds_check(ctx.spec, design, ctx.plant if ctx.plant is not None else design.plant),)
-
-
-def _torque_limits(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.tracking import torque_limits_check
-
-    return (torque_limits_check(ctx.spec, ctx.simulation),)
-
-
-def _limits(ctx: Context) -> Any:
-    limits = getattr(ctx.spec.plant, "limits", None)
-    return None if limits is None else limits.torque
+    Raises
+    ------
+    ValueError
+        A name that is no generic check.
+    """
+    rules = []
+    for item in offered:
+        if isinstance(item, CheckRule):
+            rules.append(item)
+        elif item in generic():
+            rules.append(generic()[item])
+        else:
+            raise ValueError(f"unknown check {item!r}; the generic checks are {sorted(generic())}")
+    return tuple(sorted(rules, key=lambda r: r.order))
 
 
-def _loop_margins(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.loop import loop_margins_check
-
-    return (loop_margins_check(design),)
-
-
-def _coupling(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.coupling import coupling_check
-
-    return (coupling_check(design, ctx.simulation),)
+def owner(rules: Sequence[CheckRule], check_name: str) -> CheckRule | None:
+    """The rule among ``rules`` that returns checks named ``check_name`` (the first that owns it)."""
+    return next((r for r in rules if r.owns(check_name)), None)
 
 
-def _time_domain(design: Any, ctx: Context) -> tuple[Check, ...]:
-    from designkit.verification.time_domain import time_domain_checks
-
-    return time_domain_checks(ctx.spec.requirements, ctx.simulation)
+def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any) -> Context:
+    return Context(spec, simulation, spec.numerics.solver, plant, law, trials)
 
 
-CHECKS: dict[str, CheckRule] = {
-    "pole_placement": CheckRule(lambda d, c: bool(d.poles) and d.closed_loop is not None, _pole_placement),
-    "routh_hurwitz": CheckRule(lambda d, c: d.characteristic is not None, _routh),
-    "lyapunov": CheckRule(lambda d, c: d.closed_loop is not None, _lyapunov),
-    "loops": CheckRule(lambda d, c: bool(d.loops), _loops),
-    "robust_box": CheckRule(_box_applies, _robust_box),
-    "robustness": CheckRule(lambda d, c: _uncertainty(c) is not None and d.operating_point != {}, _robustness),
-    "workspace": CheckRule(lambda d, c: bool(d.loops) and d.extra.get("workspace") is not None, _workspace),
-    "error_poles": CheckRule(lambda d, c: d.reference == "trajectory" and bool(d.poles), _error_poles),
-    "singularity": CheckRule(_task_space, _singularity),
-    "tracking_bounds": CheckRule(lambda d, c: _uncertainty(c) is not None and d.reference == "trajectory",
-                                 _tracking_bounds),
-    "loop_margins": CheckRule(lambda d, c: d.input_loop is not None, _loop_margins),
-    "coupling": CheckRule(lambda d, c: bool(d.loops), _coupling),
-    "time_domain": CheckRule(lambda d, c: c.simulation is not None and c.spec.requirements is not None,
-                             _time_domain),
-    "torque_limits": CheckRule(lambda d, c: c.simulation is not None and _limits(c) is not None, _torque_limits),
-}
-"""Check name -> :class:`CheckRule`, in report order (a table, not if/elif)."""
+def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None, *,
+               rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None) -> tuple[str, ...]:
+    """Names of the checks among ``rules`` that run for ``design`` (offered and exposed)."""
+    ctx = _context(spec, simulation, plant, law, trials)
+    return tuple(r.name for r in resolve(rules) if r.offered_for(design, ctx))
 
 
-def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None) -> tuple[str, ...]:
-    """Names of the checks that run for ``design`` (offered by its family and exposed by the design)."""
-    from designkit.families import family
-
-    offered = set(family(design.kind).checks)
-    ctx = Context(spec, simulation, spec.numerics.solver, plant)
-    return tuple(name for name, rule in CHECKS.items() if name in offered and rule.applies(design, ctx))
-
-
-def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None) -> tuple[Check, ...]:
-    """Run every applicable check (see the module docstring).
+def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None, *,
+               rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None) -> tuple[Check, ...]:
+    """Run every check of ``rules`` that applies (see the module docstring).
 
     Parameters
     ----------
@@ -220,13 +242,21 @@ def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None
         Closed-loop run for the time-domain and coupling checks.
     plant : Plant, optional
         The true plant (default: the design's); differs when the controller's model does.
+    rules : sequence of str or CheckRule
+        The checks the design's family offers (``Family.checks``).
+    law : Law, optional
+        The simulated law (default ``design.law``).
+    trials : TrialsResult, optional
+        The trials of a learning design.
 
     Returns
     -------
     tuple of Check
     """
-    ctx = Context(spec, simulation, spec.numerics.solver, plant)
+    ctx = _context(spec, simulation, plant, law, trials)
     checks: list[Check] = []
-    for name in applicable(design, spec, simulation, plant):
-        checks.extend(CHECKS[name].run(design, ctx))
+    for rule in resolve(rules):
+        if rule.offered_for(design, ctx):
+            checks.extend(c if c.label else dataclasses.replace(c, label=rule.label_for(c.name))
+                          for c in rule.run(design, ctx))
     return tuple(checks)

@@ -111,14 +111,12 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
     not.  The pole moves reported (true plant, damped least squares) are eigenvalue distances after
     an optimal pairing (:func:`pole_move`).
     """
-    from designkit.families import family
-    from designkit.simulation.motion import motion_of
     from designkit.simulation.reference import reference_for
     from designkit.verification.tolerances import ERROR_DYNAMICS_REL
 
     n = design.plant.n_joints
-    motion = motion_of(spec, design)
-    law = family(design.kind).law(design, None)
+    motion = design.motion
+    law = design.linear_law
     requested = np.asarray(design.poles, dtype=complex)
     if motion is not None:
         t = motion.path.time
@@ -198,14 +196,14 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
                  detail=detail, certificate=cert)
 
 
-def tracking_bounds_check(spec: Any, design: Any, plant: Any) -> Check:
-    """Check ``"tracking_bounds"`` (see the module docstring)."""
+def tracking_bounds_check(spec: Any, design: Any, plant: Any, law: Any = None) -> Check:
+    """Check ``"tracking_bounds"`` (see the module docstring); ``law`` the simulated law (default ``design.law``)."""
     from designkit.simulation.run import build
     from designkit.verification.robustness import box_from_uncertainty
 
     box = box_from_uncertainty(plant, spec.plant.uncertainty)
     thetas = np.vstack([box.vertices, box.random]) if box.samples else box.vertices
-    simulator = build(spec, design, plant=plant, expected_runs=len(thetas))
+    simulator = build(spec, design, plant=plant, law=law, expected_runs=len(thetas))
     peaks, runs = [], []
     for theta in thetas:
         res = simulator.run(parameters=dict(zip(box.names, map(float, theta), strict=True)))

@@ -1,0 +1,167 @@
+"""Why it failed: one row per required check that failed or is undecided, with the diagnosed cause and fix.
+
+The causes and fixes come from :func:`designkit.analysis.diagnosis.diagnose`; a fix found under several
+rows is numbered once below the table (:func:`share_fixes`) and a long cause already stated by an earlier
+row is referred to (:func:`share_causes`).  The metrics of the linear model against the nonlinear
+simulation (:func:`metric_rows`) come from the same diagnosis.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import Any
+
+from designkit.display.numbers import fmt_number, is_real, unit
+from designkit.report.compliance import achieved_text, limit_of, percent_of, unit_suffix
+from designkit.report.labels import check_label
+from designkit.report.rows import MetricRow, WhyFix, WhyRow
+
+__all__ = ["REPEATED_CAUSE_MIN", "diagnose_run", "metric_rows", "share_causes", "share_fixes", "why_section"]
+
+
+def _why_from_check(check: Any) -> WhyRow:
+    """Requirement, achieved value and shortfall of a failing check, from the check alone."""
+    limit, number = limit_of(check)
+    margin = check.margin if is_real(check.margin) else None
+    if margin is not None and margin < 0:
+        shortfall, percent = fmt_number(-margin, 4) + unit_suffix(check.unit), percent_of(-margin, number)
+    elif check.passed is None:
+        shortfall, percent = "not decided", ""
+    else:
+        shortfall, percent = "not measurable", ""
+    return WhyRow(check.name, check_label(check), check.status, limit, achieved_text(check), shortfall,
+                  percent.lstrip("+"), "", "")
+
+
+def diagnose_run(result: Any) -> Any:
+    """``designkit.analysis.diagnosis.diagnose(result)``; None when that module is not installed,
+    the exception itself when the diagnosis failed (the report then says so instead of failing)."""
+    try:
+        from designkit.analysis.diagnosis import diagnose
+    except ImportError:
+        return None
+    try:
+        return diagnose(result)
+    except Exception as exc:  # noqa: BLE001 - a failed diagnosis must not cost the user the report
+        return exc
+
+
+def why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, tuple[WhyFix, ...]]:
+    """The rows of "why it failed", where their causes come from, and the fixes shared by several rows."""
+    failing = [c for c in result.checks if getattr(c, "required", True) and c.passed is not True]
+    if not failing:
+        return (), "", ()
+    if isinstance(diagnosis, Exception):
+        rows = tuple(_why_from_check(c) for c in failing)
+        return rows, (f"The diagnosis of this run failed ({type(diagnosis).__name__}: {diagnosis}); the rows give "
+                      "the requirement, the achieved value and the shortfall only."), ()
+    by_name = {f.check: f for f in (diagnosis.findings if diagnosis is not None else ())}
+    rows, parts = [], []
+    for check in failing:
+        row = _why_from_check(check)
+        found = by_name.get(check.name)
+        parts.append(_fix_parts(found) if found is not None else ())
+        if found is not None:
+            cause = unit(found.cause)
+            if diagnosis.diverged and diagnosis.divergence and cause.strip() == diagnosis.divergence.strip():
+                cause = "The nonlinear loop diverges (see above)."
+            row = dataclasses.replace(
+                row, cause=cause, fix=unit(found.fix),
+                # the check's own numbers first (same format as the compliance table); the diagnosis' when it has none
+                achieved=row.achieved if row.achieved != "undefined" else (unit(found.achieved) or row.achieved),
+                shortfall=row.shortfall if row.shortfall_percent or row.shortfall.endswith(unit(check.unit))
+                and row.shortfall[:1].isdigit() else (unit(found.shortfall) or row.shortfall),
+                shortfall_percent=row.shortfall_percent or found.shortfall_percent)
+        rows.append(row)
+    if diagnosis is None:
+        note = ("No diagnosis was available (designkit.analysis.diagnosis is not installed): the rows give the "
+                "requirement, the achieved value and the shortfall only.")
+    elif not any(r.cause for r in rows):
+        note = "The run shows no specific cause for these shortfalls beyond the values themselves."
+    else:
+        note = ("Causes are diagnosed from this run (the simulation, the linear analysis of the design and the "
+                "checks' certificates); the fixes are computed from the same run.")
+    rows = share_causes(rows)
+    shared_rows, fixes = share_fixes(rows, parts)
+    if fixes:
+        note += " A fix that applies to several rows is given once, numbered, below the table."
+    return shared_rows, note, fixes
+
+
+REPEATED_CAUSE_MIN = 120
+"""A cause at least this long (characters) that an earlier row's cause already states in full is
+replaced by a reference to that row; a shorter one is clearer repeated."""
+
+
+def share_causes(rows: Sequence[WhyRow]) -> list[WhyRow]:
+    """Rows whose long cause is contained in an earlier row's cause say "Same cause as <row> (above)." instead."""
+    out: list[WhyRow] = []
+    for row in rows:
+        text = row.cause.strip().rstrip(".")
+        earlier = next((r for r in out if len(text) >= REPEATED_CAUSE_MIN and text in r.cause), None)
+        same = f"Same cause as {earlier.label} (above)." if earlier is not None else ""
+        out.append(dataclasses.replace(row, cause=same) if same else row)
+    return out
+
+
+def _fix_parts(finding: Any) -> tuple[str, ...]:
+    """The distinct fixes of a finding (``fixes``; its whole ``fix`` when it does not list them)."""
+    parts = tuple(getattr(finding, "fixes", ()) or ())
+    if not parts and getattr(finding, "fix", ""):
+        parts = (finding.fix,)
+    return tuple(dict.fromkeys(unit(p) for p in parts if p.strip()))
+
+
+def _refs_text(numbers: Sequence[int]) -> str:
+    """``"See fix 1 below."``, ``"See fixes 1 and 2 below."``."""
+    if len(numbers) == 1:
+        return f"See fix {numbers[0]} below."
+    return "See fixes " + ", ".join(map(str, numbers[:-1])) + f" and {numbers[-1]} below."
+
+
+def share_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]]
+                 ) -> tuple[tuple[WhyRow, ...], tuple[WhyFix, ...]]:
+    """Fixes found under several rows numbered once; those rows keep their own fixes and refer to the shared ones.
+
+    Parameters
+    ----------
+    rows : sequence of WhyRow
+        The rows, their ``fix`` the finding's whole fix.
+    parts : sequence of tuple of str
+        Each row's distinct fixes.
+
+    Returns
+    -------
+    rows, fixes : tuple of WhyRow, tuple of WhyFix
+        A row with no shared fix is returned as is.
+    """
+    count: dict[str, int] = {}
+    for row_parts in parts:
+        for part in row_parts:
+            count[part] = count.get(part, 0) + 1
+    numbers: dict[str, int] = {}
+    for row_parts in parts:
+        for part in row_parts:
+            if count[part] > 1 and part not in numbers:
+                numbers[part] = len(numbers) + 1
+    if not numbers:
+        return tuple(rows), ()
+    out = []
+    for row, row_parts in zip(rows, parts, strict=True):
+        refs = tuple(dict.fromkeys(numbers[p] for p in row_parts if p in numbers))
+        if not refs:
+            out.append(row)
+            continue
+        own = " ".join(p for p in row_parts if p not in numbers)
+        out.append(dataclasses.replace(row, fix=(own + " " if own else "") + _refs_text(refs), fix_refs=refs))
+    fixes = tuple(WhyFix(k, text, tuple(r.label for r, rp in zip(rows, parts, strict=True) if text in rp))
+                  for text, k in numbers.items())
+    return tuple(out), fixes
+
+
+def metric_rows(diagnosis: Any) -> tuple[MetricRow, ...]:
+    if diagnosis is None:
+        return ()
+    return tuple(MetricRow(m.metric, unit(m.unit), m.linear or "undefined", m.nonlinear or "undefined")
+                 for m in getattr(diagnosis, "linear_vs_nonlinear", ()))

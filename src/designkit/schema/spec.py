@@ -1,0 +1,79 @@
+"""The spec format: a plant, a controller to synthesise, requirements, a simulation scenario, numerics.
+
+Every section forbids unknown keys and is frozen; numbers must be finite.  The ``controller``
+section is the discriminated union of the registered families' spec models
+(:data:`designkit.families.FAMILIES`), so a new family needs no change here; each family also
+checks its cross-section rules (e.g. poles or requirements) and which plant kinds it accepts.
+``designkit schema`` prints the JSON Schema generated from these models.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Union
+
+from pydantic import Field, model_validator
+
+from designkit.families import FAMILIES
+from designkit.spec.controllers import PoleRequirementsController
+from designkit.spec.fields import Section, check_conjugates
+from designkit.spec.plants import DHLink, ElasticJointPlantSpec, LinkPlantSpec, PlantSpec, RobotPlantSpec, Uncertainty
+from designkit.spec.sections import (
+    AntiWindup,
+    DeadZone,
+    Noise,
+    Numerics,
+    Perturbation,
+    Quantizer,
+    QuinticTrajectory,
+    Relay,
+    Requirements,
+    Saturation,
+    Simulation,
+    SineTrajectory,
+    Trajectory,
+    TrapezoidalTrajectory,
+    ViaPointsTrajectory,
+)
+
+__all__ = [
+    "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "LinkPlantSpec", "Noise", "Numerics",
+    "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory", "Relay",
+    "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Trajectory",
+    "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "check_conjugates", "controller_models",
+]
+
+
+def controller_models() -> tuple[type, ...]:
+    """The registered families' spec models, in registry order."""
+    return tuple(f.spec for f in FAMILIES.values())
+
+
+Controller = Annotated[Union[controller_models()], Field(discriminator="kind")]  # noqa: UP007  (built at runtime)
+"""The ``controller`` section: one of the registered families' models, chosen by ``kind``."""
+
+
+class Spec(Section):
+    """A complete design spec."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", max_length=100)
+    description: str = Field(default="", max_length=10_000)
+    plant: PlantSpec
+    controller: Controller
+    requirements: Requirements | None = None
+    simulation: Simulation = Simulation()
+    numerics: Numerics = Numerics()
+
+    @model_validator(mode="after")
+    def _family_rules(self) -> Spec:
+        fam = FAMILIES[self.controller.kind]
+        if self.plant.kind not in fam.plants:
+            raise ValueError(f"controller.kind: {fam.kind} is designed for a {' or '.join(fam.plants)} plant, "
+                             f"got plant.kind {self.plant.kind!r}")
+        traj = self.simulation.trajectory
+        if traj is not None and traj.kind not in fam.references:
+            follows = ", ".join(k if k != "step" else "step (simulation.step)" for k in fam.references)
+            raise ValueError(f"simulation.trajectory.kind: the {fam.kind} controller follows {follows}, not "
+                             f"{traj.kind!r}")
+        if fam.validate is not None:
+            fam.validate(self)
+        return self

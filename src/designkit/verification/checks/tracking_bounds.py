@@ -1,0 +1,18 @@
+"""Check ``tracking_bounds``: the tracking error over the uncertainty box, by simulation at its corners and samples."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from designkit.verification.suite import CheckRule, Context
+
+
+def _run(design: Any, ctx: Context) -> tuple:
+    from designkit.verification.tracking import tracking_bounds_check
+
+    return (tracking_bounds_check(ctx.spec, design, ctx.true_plant(design), law=ctx.law),)
+
+
+RULE = CheckRule(name="tracking_bounds", order=100,
+                 applies=lambda d, c: c.uncertainty() is not None and d.reference == "trajectory", run=_run,
+                 label="Tracking error within bounds")
