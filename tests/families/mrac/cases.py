@@ -1,0 +1,38 @@
+"""The test cases the shared suites run for the mrac family, found by discovery so that adding the family edits no
+shared test: the ranged fields of its section (tests/spec/test_ranges.py), its conformance cases (tests/problems.py)
+and its example specs' exit codes (tests/test_cli.py)."""
+
+from __future__ import annotations
+
+BASE = """\
+name: ranges-mrac
+plant: {kind: link, Km: 2.0, tau: 0.5}
+controller: {kind: mrac, reference_model: {natural_frequency: 4.5, damping: 1.0}, gamma: 10000, Q: [1, 0.1],
+             nominal: {Km: 2.0, tau: 0.5}}
+simulation: {duration: 4.0, trajectory: {kind: square, amplitude: 0.5, period: 4}}
+"""
+
+RANGES = {
+    "controller.reference_model.natural_frequency": [(BASE, "controller.reference_model.natural_frequency",
+                                                      "controller.reference_model.natural_frequency")],
+    "controller.reference_model.damping": [(BASE, "controller.reference_model.damping",
+                                            "controller.reference_model.damping")],
+    "controller.nominal.Km": [(BASE, "controller.nominal.Km", "controller.nominal.Km")],
+    "controller.nominal.tau": [(BASE, "controller.nominal.tau", "controller.nominal.tau")],
+}
+"""Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
+
+CONFORMANCE = {
+    # notes §4.2, the MRAC simulator: the gradient rule recovering the reference model after Km drops 20 %
+    "link": ("{kind: mrac, poles: [-4, -5], gamma: 10000, Q: [1, 0.1]}",
+             "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+             "plant_change: {time: 8.0, values: {Km: 1.6}}}",
+             "{max_control: 50}"),  # a square wave has no settling: the adaptive checks judge the error
+}
+"""Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
+
+EXAMPLES = {
+    "mrac-link": 0,
+    "mrac-gamma-unstable": 1,  # the gradient rule diverges for this adaptation gain: the report gives the bound
+}
+"""Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
