@@ -1,0 +1,222 @@
+"""Iterative learning control on computed torque (notes section 6): the ``ilc`` family.
+
+A robot repeats one trajectory.  Each trial runs computed torque with the trial's learned acceleration
+``d_k`` (rad/s^2 per joint and instant) inside the model's inverse dynamics::
+
+    u = M^(q) (qD'' + K1 e + K2 e' + d_k) + h^(q, qd),     e = qD - q
+
+and between trials the learning module updates ``d_{k+1} = d_k + Q e_k`` (notes 6.2).  With ``M^ = M`` the error
+of each joint obeys ``e'' + K2 e' + K1 e = d - d_k`` with ``d = M^-1 f`` the input-equivalent perturbation
+(``f`` what the model misses), so ``e_k = H (d - d_k)``, ``H(s) = 1/(s^2 + K2 s + K1)``, and the update
+contracts ``d - d_k`` by ``I - Q H``.  The lifted (sampled, finite-horizon) ``H`` and its structure are in
+:mod:`~designkit.families.ilc.lifted`, the operators ``Q`` and the certificate ``||I - Q H||_2 < 1`` in
+:mod:`~designkit.families.ilc.operators`, the trial-to-trial update in :mod:`~designkit.families.ilc.learning`.
+
+When ``M^ != M`` the notes' algebra does not hold: the arm's acceleration is ``Delta (a* + d_k) + M^-1 (h^ - h
++ f)`` with ``Delta = M^-1 M^``, so the learned signal reaches the error through ``H Delta(q)`` -- coupled
+between joints by the off-diagonal entries of ``Delta`` and varying along the path -- the feedback gains become
+``Delta K1``, ``Delta K2``, and the part the model misses depends on the trial's own motion.  The certificate
+is then that of the model's error system; the ``ilc_lifted_model`` check measures, trial by trial, how much of
+the change of the error the lifted model does not explain.
+
+The feedback part is computed torque (exact linearization: the generic ``pole_placement``, ``lyapunov``,
+``error_poles`` and ``designed_loop`` checks judge it with ``d = 0``); the iteration is the learning part,
+certified by ``rho`` (``ilc_convergence``) and measured over the trials (``ilc_error_decrease``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Literal
+
+import casadi as ca
+import numpy as np
+from pydantic import Field, ValidationInfo, field_validator
+
+from designkit.families import computed_torque as ct
+from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
+from designkit.families.ilc.diagnoses import diagnose
+from designkit.families.ilc.figures import error_norm_figure, learned_figure, tracking_error_figure
+from designkit.families.ilc.learning import check_size, lifted_of, operator_of, trial_grid, update_rule
+from designkit.families.ilc.lifted import lifted_model
+from designkit.families.ilc.operators import contraction, learning_operator
+from designkit.simulation.trials import MAX_TRIALS, Learning
+from designkit.spec.fields import Finite, Section
+from designkit.spec.ranges import Ranged, RangedInt
+from designkit.synthesis.closed_loop import with_closed_loop
+from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.family import TRAJECTORY_REFERENCES, Display, Family
+from designkit.synthesis.law import Law, dynamic_law
+from designkit.synthesis.model import controller_model
+
+KIND = "ilc"
+
+
+class LearningSpec(Section):
+    """The learning operator ``Q`` of ``d_{k+1} = d_k + Q e_k``.
+
+    ``kind: adjoint`` (default): ``Q = alpha H^T``, ``alpha`` (1/s^4, 1e-12 to 1e30; left out: ``1 /
+    sigma_max(H)^2``).  ``kind: p_type``: ``d_{k+1}(t_i) = d_k(t_i) + gain e_k(t_{i+1})``, ``gain`` (1/s^2,
+    1e-12 to 1e30) required.
+    """
+
+    kind: Literal["adjoint", "p_type"] = "adjoint"
+    alpha: Ranged(1e-12, 1e30, "1/s^4", base=Finite) | None = None
+    gain: Ranged(1e-12, 1e30, "1/s^2", base=Finite) | None = Field(default=None, validate_default=True)
+
+    @field_validator("alpha")
+    @classmethod
+    def _alpha_is_adjoint(cls, v: float | None, info: ValidationInfo) -> float | None:
+        if v is not None and info.data.get("kind") == "p_type":
+            raise ValueError("belongs to the adjoint update (kind: adjoint); the p_type update takes gain")
+        return v
+
+    @field_validator("gain")
+    @classmethod
+    def _gain_is_p_type(cls, v: float | None, info: ValidationInfo) -> float | None:
+        kind = info.data.get("kind")
+        if v is not None and kind == "adjoint":
+            raise ValueError("belongs to the p_type update (kind: p_type); the adjoint update takes alpha")
+        if v is None and kind == "p_type":
+            raise ValueError("the p_type update needs a gain (1/s^2)")
+        return v
+
+
+class ILCSpec(ct.ComputedTorqueSpec):
+    """Computed torque with a learned acceleration ``d_k``, updated between trials by ``d_{k+1} = d_k + Q e_k``.
+
+    The error poles and the controller's ``model`` as for ``computed_torque``; ``trials`` (1 to 200, default
+    10); ``learning`` (:class:`LearningSpec`; default the adjoint update with ``alpha`` computed).
+    """
+
+    kind: Literal["ilc"]
+    trials: RangedInt(1, MAX_TRIALS) = 10
+    learning: LearningSpec = Field(default_factory=LearningSpec)
+
+
+def law(design: Design, anti_windup: Any = None) -> Law:
+    """``u = ID^(q, qd, qD'' + K1 e + K2 e')`` plus the trial's feedforward ``M^(q) v`` (N*m per joint)."""
+    plant = design.plant  # the controller's model
+    K1, K2 = (ca.DM(np.asarray(design.gains[k], dtype=float)) for k in ("K1", "K2"))
+    functions = plant.robot.functions
+    p = plant.model_parameters()
+
+    def call(name: str, *args: Any) -> ca.SX:
+        return functions[name](*args, ca.DM(p)) if p is not None else functions[name](*args)
+
+    def command(s: Any) -> ca.SX:
+        return call("inverse_dynamics", s.q, s.qd, s.qDdd + K1 * (s.qD - s.q) + K2 * (s.qDd - s.qd))
+
+    return dynamic_law(KIND, plant, command=command, feedforward=lambda s, v: ca.mtimes(call("mass_matrix", s.q), v),
+                       settings={"gains": design.gains.to_json()})
+
+
+def validate(spec: Any) -> None:
+    """The lifted model is the smooth, continuous, undelayed loop's: refuse what changes its structure."""
+    sim = spec.simulation
+    if sim.delay > 0:
+        raise ValueError("simulation.delay: the learning's lifted model has no delay (a delay of m steps makes the "
+                         "learned signal reach the error m steps later); leave the delay out")
+    if sim.sampling_period > 0:
+        raise ValueError("simulation.sampling_period: the learning's lifted model is the continuous loop "
+                         "integrated by the simulator; a sampled controller changes its discretization")
+    if sim.nonlinearity is not None:
+        raise ValueError("simulation.nonlinearity: the learning's certificate is for the linear error system; a "
+                         "nonlinear element at the plant input is not part of it")
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The computed-torque gains, the trial's grid and lifted model, and the learning operator and rule."""
+    ctrl = spec.controller
+    model = controller_model(plant, ctrl.model)
+    n = model.n_joints
+    pairs = ct.error_poles(spec, n)
+    K1 = tuple(float((p1 * p2).real) for p1, p2 in pairs)
+    K2 = tuple(float((-(p1 + p2)).real) for p1, p2 in pairs)
+    feedback = [Gain("K1", list(K1), "1/s^2", "position error gain (wn^2)"),
+                Gain("K2", list(K2), "1/s", "velocity error gain (2 zeta wn)")]
+    q0 = np.zeros(n)
+    if spec.simulation.initial_position is not None:
+        q0 = np.array(ct.joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
+    design = Design(kind=KIND, plant=model, gains=Gains.of(feedback), poles=tuple(p for pr in pairs for p in pr),
+                    reference="trajectory", extra={"codegen_terms": ["D_hat", "h_hat"]})
+    design = with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
+                              field="simulation.initial_position")
+    timing = trial_grid(spec, design, plant)
+    check_size(timing.n_samples, timing.dt, n, ctrl.trials)  # before any lifted quantity is computed
+    lifted = lifted_model(K1, K2, timing.dt, timing.n_samples, timing.integrator)
+    learning = ctrl.learning
+    if learning.kind == "adjoint":
+        name, unit, meaning = "alpha", "1/s^4", "learning gain of Q = alpha H^T"
+        if learning.alpha is not None:
+            value, source = float(learning.alpha), "controller.learning.alpha"
+        else:
+            value = 1.0 / max(s.estimate for s in lifted.sigma_max) ** 2
+            source = "computed: 1 / sigma_max(H)^2, which removes the largest singular direction in one trial"
+    else:
+        name, unit, meaning = "gamma", "1/s^2", "learning gain of the P-type update (one-step advance)"
+        value, source = float(learning.gain), "controller.learning.gain"
+    info = {"samples": timing.n_samples, "dt": timing.dt, "integrator": timing.integrator, "trials": ctrl.trials,
+            "learning": learning.kind, "value": value, "value_source": source}
+    notes = [f"Learning: {learning.kind.replace('_', '-')} update, {name} = {value:.6g} {unit} ({source}); "
+             f"{ctrl.trials} trials of {timing.n_samples} samples (dt = {timing.dt:g} s, {timing.integrator})."]
+    if ctrl.model is not None:
+        changed = {q.name: q.value for q in model.parameters if q.value != plant.parameter(q.name).value}
+        notes.append("The controller's model differs from the true plant ("
+                     + (", ".join(f"{k} = {v:.6g}" for k, v in changed.items()) or "same parameters")
+                     + "): the learning certificate is that of the model's error system (M^ = M); the trials run on "
+                       "the true plant and measure the difference.")
+    design = dataclasses.replace(
+        design, gains=Gains.of([*feedback, Gain(name, value, unit, meaning)]), notes=tuple(notes),
+        extra={**design.extra, "model_differs": ctrl.model is not None, "ilc": info},
+        formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
+                  "u = M̂(q) (a* + d_k) + ĥ(q, q̇)  (d_k the trial's learned acceleration)",
+                  "e_k = H (d − d_k),  H(s) = 1/(s² + K2 s + K1) per joint when M̂ = M",
+                  "d_(k+1) = d_k + Q e_k:  ‖d − d_(k+1)‖ ≤ ρ ‖d − d_k‖,  ρ = ‖I − Q H‖₂"),
+        learning=Learning(ctrl.trials, update_rule(K1, K2, info), learning_operator(learning.kind, value).describe()))
+    return dataclasses.replace(design, law=law(design))
+
+
+def _json(result: Any) -> dict[str, Any]:
+    """``rho`` (``||I - Q H||_2``, Lanczos estimate; its proved bracket and the spectral radius beside it) and
+    ``trials.error_norm``: per trial, the Euclidean norm of the sampled tracking error over every joint and
+    instant (rad)."""
+    design = result.design
+    sim = result.simulation
+    c = contraction(lifted_of(design, None if sim is None else sim.time), operator_of(design))
+    trials = result.trials
+    return {
+        "rho": c.rho,
+        "rho_bounds": [c.lower, c.upper],
+        "spectral_radius": c.spectral_radius,
+        "learning": {"kind": c.kind, "value": c.value, "unit": c.alpha_range.get("unit", ""),
+                     "range": dict(c.alpha_range)},
+        "trials": {"error_norm": [] if trials is None else [float(v) for v in trials.error_norms],
+                   "max_tracking_error": [] if trials is None else [float(v) for v in trials.max_tracking_errors]},
+    }
+
+
+FAMILY = Family(
+    kind=KIND,
+    spec=ILCSpec,
+    plants=("robot",),
+    reference="trajectory",
+    synthesize=synthesize,
+    law=law,
+    checks=("pole_placement", "lyapunov", CERTIFICATE_RULE, "error_poles", "robustness", "designed_loop",
+            TRIALS_RULE, "time_domain", "torque_limits"),
+    display=Display(
+        label="Computed torque with iterative learning",
+        law=("u = M̂(q) (q̈D + K1 (qD − q) + K2 (q̇D − q̇) + d_k) + ĥ(q, q̇)",
+             "d_(k+1) = d_k + Q e_k between trials"),
+        summary="Notes §6.2: computed torque repeats a trajectory; between trials a learned acceleration d_k is "
+                "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1.",
+    ),
+    validate=validate,
+    references=TRAJECTORY_REFERENCES,
+    figures=(error_norm_figure, tracking_error_figure, learned_figure),
+    diagnoses=(diagnose,),
+    json=_json,
+)
+
+__all__ = ["FAMILY", "ILCSpec", "law", "synthesize"]

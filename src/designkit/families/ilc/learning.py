@@ -1,0 +1,104 @@
+"""What happens between trials: the trial's grid, the bounds on the lifted size, and the update rule.
+
+The learned signal ``d_k`` is one acceleration (rad/s^2) per joint and instant; the law maps it into the
+command through the model's inertia, ``M^(q) d_k`` (``Law.feedforward``).  The update reads the trial's
+*measured* error ``e_k = qD - y_q`` (the controller's view: the true error when there is no noise) at the
+samples ``1 .. N-1`` (``e_0`` does not depend on ``d``), computes ``d_{k+1} = d_k + Q e_k`` on the samples
+``0 .. N-2``, and holds the last value over the last step, which moves no recorded sample.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from designkit.errors import SpecError
+from designkit.families.ilc.lifted import MAX_LIFTED, MAX_TRIAL_SAMPLES, LiftedModel, lifted_model
+from designkit.families.ilc.operators import Adjoint, PType, learning_operator
+
+__all__ = ["check_size", "lifted_errors", "lifted_of", "operator_of", "trial_grid", "update_rule"]
+
+
+def trial_grid(spec: Any, design: Any, plant: Any) -> Any:
+    """The time grid the simulator will use for ``design`` on the true ``plant`` (a
+    :class:`~designkit.simulation.timing.Timing`), chosen from the same rates as
+    :func:`designkit.simulation.run.build`: the requested poles, the nominal closed loop, the closed loop on the
+    true plant and the reference's rate.  Cheap: no simulation is built."""
+    import contextlib
+
+    from designkit.simulation.reference import reference_of
+    from designkit.simulation.timing import rates_of, resolve
+    from designkit.synthesis.closed_loop import linearize
+
+    ref = reference_of(spec, design)
+    sets = [design.closed_loop.poles] if design.closed_loop is not None else []
+    op = design.operating_point
+    if plant is not design.plant and op:
+        with contextlib.suppress(ValueError):
+            sets.append(linearize(plant, design.linear_law, op["r"], z0=[*op["x"], *op["xc"]])[0].poles)
+    rates = rates_of(design.poles, *sets, reference_rate=ref.rate)
+    return resolve(spec, rates, ref.horizon)
+
+
+def check_size(samples: int, dt: float, joints: int, trials: int) -> None:
+    """Refuse a lifted size ``N n`` above :data:`MAX_LIFTED` (``simulation.duration``) or ``trials N n`` above
+    :data:`MAX_TRIAL_SAMPLES` (``controller.trials``), with :class:`SpecError`."""
+    size = samples * joints
+    span = f"{(samples - 1) * dt:.6g} s at dt = {dt:.3g} s"
+    if size > MAX_LIFTED:
+        raise SpecError("simulation.duration", f"a learning trial of {span} has {samples} samples x {joints} "
+                        f"joints = {size} lifted unknowns, more than {MAX_LIFTED} (the bound of the lifted model); "
+                        "shorten simulation.duration or set a coarser simulation.dt")
+    if size * trials > MAX_TRIAL_SAMPLES:
+        raise SpecError("controller.trials", f"{trials} trials of {samples} samples x {joints} joints = "
+                        f"{size * trials} recorded samples, more than {MAX_TRIAL_SAMPLES} (every trial is kept); "
+                        f"ask for at most {MAX_TRIAL_SAMPLES // size} trials or a shorter trial")
+
+
+def _lifted(K1: tuple[float, ...], K2: tuple[float, ...], info: Any, time: np.ndarray | None) -> LiftedModel:
+    if time is None or len(time) < 2:
+        return lifted_model(K1, K2, float(info["dt"]), int(info["samples"]), str(info["integrator"]))
+    dt = float(time[1] - time[0])
+    if int(len(time)) == int(info["samples"]) and abs(dt - float(info["dt"])) <= 1e-9 * dt:
+        dt = float(info["dt"])  # the same grid: share the cached model
+    return lifted_model(K1, K2, dt, int(len(time)), str(info["integrator"]))
+
+
+def _gains(design: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    return tuple(tuple(np.atleast_1d(np.asarray(design.gains[k], dtype=float)).tolist()) for k in ("K1", "K2"))
+
+
+def lifted_of(design: Any, time: np.ndarray | None = None) -> LiftedModel:
+    """The lifted model of an ``ilc`` design, on the grid of ``time`` (a run's instants) or the design's grid."""
+    return _lifted(*_gains(design), design.extra["ilc"], time)
+
+
+def operator_of(design: Any) -> Adjoint | PType:
+    """The learning operator of an ``ilc`` design."""
+    info = design.extra["ilc"]
+    return learning_operator(str(info["learning"]), float(info["value"]))
+
+
+def lifted_errors(result: Any) -> np.ndarray:
+    """``e = qD - y_q`` of a trial at the samples ``1 .. N-1``, ``(n, L)`` (rad): what the learning sees."""
+    y = np.asarray(result.measured, dtype=float)[:, list(result.positions)]
+    return (np.asarray(result.desired, dtype=float) - y).T[:, 1:]
+
+
+def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: Any) -> Any:
+    """The :data:`~designkit.simulation.trials.LearningRule` ``(result_k, d_k) -> d_{k+1}`` of the gains and the
+    design's ``extra["ilc"]`` (grid, operator, trials)."""
+    operator = learning_operator(str(info["learning"]), float(info["value"]))
+
+    def update(result: Any, feedforward: np.ndarray) -> np.ndarray:
+        lifted = _lifted(K1, K2, info, result.time)
+        check_size(lifted.samples, lifted.dt, lifted.n, int(info["trials"]))
+        d = np.asarray(feedforward, dtype=float).T  # (n, N)
+        nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result))
+        out = np.empty_like(d)
+        out[:, :lifted.L] = nxt
+        out[:, lifted.L:] = nxt[:, -1:]
+        return out.T
+
+    return update

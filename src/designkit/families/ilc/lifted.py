@@ -1,0 +1,296 @@
+"""The lifted (finite-horizon) error system of learning on computed torque, per joint, with its structure.
+
+**The sampled error system.**  With an exact model the computed-torque law with a trial's feedforward ``v``
+(rad/s^2, entering as ``M^(q) v``) makes every joint's acceleration ``q'' = qD'' + K1 (qD - q) + K2 (qD' - qd)
++ v``: the closed loop is *affine* in ``x = (q, qd)`` per joint, whatever the arm.  The simulator holds ``v_i``
+over the step ``[t_i, t_i + dt]`` and integrates with RK4 (the reference enters at the stages, the same in every
+trial), so the difference between two trials obeys exactly the RK4 map of ``x' = A x + B v``::
+
+    A = [[0, 1], [-K1, -K2]],  B = [0, 1]^T,  hA = dt A
+    Phi   = I + hA + (hA)^2/2 + (hA)^3/6 + (hA)^4/24            (RK4's polynomial of hA)
+    Gamma = dt (I + hA/2 + (hA)^2/6 + (hA)^3/24) B              (the same with v held over the step)
+    dx_{i+1} = Phi dx_i + Gamma dv_i,   dq_i = C dx_i,  C = [1, 0]
+
+(with CVODES, the exact zero-order hold: ``expm([[A, B], [0, 0]] dt)``).  The error is sampled at the step
+starts ``t_0 .. t_{N-1}``: ``e_0`` never depends on ``v`` (the arm starts where it starts) and ``v_{N-1}`` moves no
+recorded sample, so the square lifted map is ``v_0 .. v_{N-2} -> e_1 .. e_{N-1}`` (``L = N - 1`` samples): the
+lower-triangular Toeplitz matrix of the *shifted* Markov parameters ``h_m = C Phi^m Gamma``, ``m = 0 .. L-1``.
+Its diagonal ``h_0 = C Gamma = dt^2/2 - K2 dt^3/6 + ... != 0`` (the sampled relative degree is one step), so
+``H`` is invertible, ``det H = h_0^L``.  Between trials ``e_k - e_{k+1} = H (d_{k+1} - d_k)`` per joint
+(``e = qD - q``), the notes' ``e_k = H (d - d_k)`` in lifted form.
+
+**Structure.**  ``H`` is never formed: a joint's ``L`` Markov parameters (and those of ``H^-1``, the power
+series of ``1/a``) are computed by :func:`scipy.signal.lfilter` on the second-order transfer function, products
+by FFT convolution (``H^T = J H J`` with ``J`` the reversal), ``O(L log L)`` per product, ``O(L)`` memory.
+
+**Norms.**  ``sigma_max(H)`` is estimated by Lanczos (ARPACK ``svds`` on a ``LinearOperator``), re-checked by a
+power iteration on ``H^T H``, and bracketed rigorously: below by ``||H u||`` for the computed unit vector ``u``,
+above by ``min(sum |h_m|, sup |a|)`` where ``a(w) = sum h_m e^{-imw}`` is the symbol (a finite Toeplitz matrix
+is a compression of the Laurent operator of its symbol), the supremum taken on an FFT grid of ``G`` points plus
+``(pi / G) sum m |h_m|`` (the largest change of ``a`` between grid points).  ``sigma_min(H) = 1 / ||H^-1||``
+the same way on ``H^-1`` (also lower triangular Toeplitz).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
+
+import numpy as np
+
+__all__ = ["MAX_LIFTED", "MAX_TRIAL_SAMPLES", "LiftedModel", "Norm", "discretization", "lifted_model",
+           "markov_parameters", "symbol_bound", "top_singular"]
+
+MAX_LIFTED = 50_000
+"""Most lifted unknowns ``N n`` (samples per trial times joints) a design may ask for: 25 s at 1 kHz on a
+two-link arm.  The structured operators need ``O(N n)`` memory (a dense ``nN x nN`` matrix at this size would
+need 20 GB); the bound keeps the certificate well under a second."""
+MAX_TRIAL_SAMPLES = 2_000_000
+"""Most ``trials x N x n`` over a run: every trial's record is kept (about 160 MB at this bound)."""
+GRID_FACTOR = 64
+"""The symbol is sampled on ``G >= GRID_FACTOR L`` points (a power of two, at most ``2^22``)."""
+POWER_ITERATIONS = 300
+"""Most iterations of the independent power-iteration re-check."""
+POWER_TOL = 1e-10
+"""The power iteration stops when its estimate changes by less than this, relatively, in one iteration."""
+
+
+def discretization(K1: float, K2: float, dt: float, integrator: str = "rk4") -> tuple[np.ndarray, np.ndarray]:
+    """``(Phi, Gamma)`` of one joint's error system over one step, as the simulator integrates it.
+
+    Parameters
+    ----------
+    K1, K2 : float
+        Position (1/s^2) and velocity (1/s) error gains.
+    dt : float
+        Integration step (s).
+    integrator : str
+        ``"rk4"``: RK4's polynomial of ``dt A`` with the input held; ``"cvodes"``: the exact zero-order hold.
+    """
+    A = np.array([[0.0, 1.0], [-K1, -K2]])
+    B = np.array([0.0, 1.0])
+    if integrator == "cvodes":
+        from scipy.linalg import expm
+
+        E = expm(np.block([[A, B[:, None]], [np.zeros((1, 3))]]) * dt)
+        return E[:2, :2], E[:2, 2]
+    hA = dt * A
+    I2 = np.eye(2)
+    hA2 = hA @ hA
+    hA3 = hA2 @ hA
+    return I2 + hA + hA2 / 2 + hA3 / 6 + hA3 @ hA / 24, dt * (I2 + hA / 2 + hA2 / 6 + hA3 / 24) @ B
+
+
+def _transfer(Phi: np.ndarray, Gamma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(b, a)`` of ``sum_m C Phi^m Gamma z^-m`` (C = [1, 0]) as a ratio of polynomials in ``z^-1``."""
+    b = np.array([Gamma[0], Phi[0, 1] * Gamma[1] - Phi[1, 1] * Gamma[0]])
+    a = np.array([1.0, -np.trace(Phi), np.linalg.det(Phi)])
+    return b, a
+
+
+def markov_parameters(Phi: np.ndarray, Gamma: np.ndarray, L: int, inverse: bool = False) -> np.ndarray:
+    """The first ``L`` shifted Markov parameters ``h_m = C Phi^m Gamma`` (rad per rad/s^2), or with ``inverse``
+    the first ``L`` coefficients of ``1 / a(z)`` (those of ``H^-1``)."""
+    from scipy.signal import lfilter
+
+    b, a = _transfer(Phi, Gamma)
+    impulse = np.zeros(L)
+    impulse[0] = 1.0
+    return lfilter(a, b, impulse) if inverse else lfilter(b, a, impulse)
+
+
+def _nfft(L: int) -> int:
+    return 1 << int(np.ceil(np.log2(max(2 * L, 2))))
+
+
+def symbol_bound(t: np.ndarray, const: float = 0.0, gain: float = 1.0) -> tuple[float, float]:
+    """Upper bound of ``sup_w |const - gain a(w)|``, ``a`` the symbol of the lower-triangular Toeplitz ``t``:
+    ``(bound, slack)``, the slack ``gain (pi / G) sum m |t_m|`` being what the grid may miss."""
+    L = t.size
+    G = min(1 << 22, 1 << int(np.ceil(np.log2(GRID_FACTOR * max(L, 1)))))
+    a = np.fft.fft(t, G)
+    slack = abs(gain) * np.pi / G * float(np.sum(np.arange(L) * np.abs(t)))
+    return float(np.max(np.abs(const - gain * a))) + slack, slack
+
+
+@dataclass(frozen=True)
+class Norm:
+    """The largest singular value of a structured operator: estimate, independent re-check and a rigorous bracket.
+
+    Attributes
+    ----------
+    estimate : float
+        Lanczos (ARPACK ``svds``).
+    power : float
+        Power iteration on ``A^T A`` from a fixed smooth start (independent re-check).
+    lower : float
+        ``||A u||`` for the computed unit vector ``u``: a true lower bound.
+    upper : float
+        A true upper bound (see the module docstring); ``slack`` the grid's share of it.
+    """
+
+    estimate: float
+    power: float
+    lower: float
+    upper: float
+    slack: float = 0.0
+
+    def to_dict(self) -> dict[str, float]:
+        return {"lanczos": self.estimate, "power_iteration": self.power, "lower_bound": self.lower,
+                "upper_bound": self.upper, "grid_slack": self.slack}
+
+
+def top_singular(matvec, rmatvec, L: int, upper: float, slack: float = 0.0) -> Norm:
+    """:class:`Norm` of the ``L x L`` operator given by ``matvec`` and ``rmatvec`` (``upper``: its known bound)."""
+    from scipy.sparse.linalg import LinearOperator, svds
+
+    op = LinearOperator((L, L), matvec=lambda x: matvec(np.ravel(x)), rmatvec=lambda x: rmatvec(np.ravel(x)),
+                        dtype=float)
+    v0 = np.random.default_rng(0).standard_normal(L)
+    _, s, vt = svds(op, k=1, v0=v0, tol=1e-10)
+    u = vt[0] / np.linalg.norm(vt[0])
+    lower = float(np.linalg.norm(matvec(u)))
+    x = np.ones(L) / np.sqrt(L)  # a smooth start, independent of the Lanczos run
+    value = 0.0
+    for _ in range(POWER_ITERATIONS):
+        y = rmatvec(matvec(x))
+        norm = float(np.linalg.norm(y))
+        if norm == 0.0:
+            break
+        new = np.sqrt(norm)
+        x = y / norm
+        if abs(new - value) <= POWER_TOL * new:
+            value = new
+            break
+        value = new
+    return Norm(float(s[0]), value, lower, max(upper, lower), slack)
+
+
+@dataclass(frozen=True)
+class LiftedModel:
+    """The lifted error system of every joint over one trial (module docstring).
+
+    Parameters
+    ----------
+    K1, K2 : tuple of float
+        Error gains per joint (1/s^2, 1/s).
+    dt : float
+        Integration step (s).
+    samples : int
+        Recorded instants ``N`` of a trial; the lifted size per joint is ``L = N - 1``.
+    integrator : str
+        ``"rk4"`` or ``"cvodes"`` (:func:`discretization`).
+    """
+
+    K1: tuple[float, ...]
+    K2: tuple[float, ...]
+    dt: float
+    samples: int
+    integrator: str = "rk4"
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return len(self.K1)
+
+    @property
+    def L(self) -> int:
+        """Lifted samples per joint, ``N - 1``."""
+        return self.samples - 1
+
+    @cached_property
+    def steps(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """``(Phi, Gamma)`` of every joint."""
+        return tuple(discretization(k1, k2, self.dt, self.integrator) for k1, k2 in zip(self.K1, self.K2,
+                                                                                         strict=True))
+
+    @cached_property
+    def markov(self) -> np.ndarray:
+        """Shifted Markov parameters ``(n, L)``: ``markov[j, m] = d e_{i+m+1} / d v_i`` of joint ``j`` (s^2)."""
+        return np.array([markov_parameters(P, G, self.L) for P, G in self.steps])
+
+    @cached_property
+    def inverse_markov(self) -> np.ndarray:
+        """Coefficients ``(n, L)`` of ``H^-1`` per joint (1/s^2)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.array([markov_parameters(P, G, self.L, inverse=True) for P, G in self.steps])
+
+    @cached_property
+    def _spectra(self) -> tuple[int, np.ndarray, np.ndarray]:
+        nfft = _nfft(self.L)
+        with np.errstate(over="ignore", invalid="ignore"):
+            return nfft, np.fft.rfft(self.markov, nfft, axis=1), np.fft.rfft(self.inverse_markov, nfft, axis=1)
+
+    def _convolve(self, spectrum: np.ndarray, X: np.ndarray) -> np.ndarray:
+        nfft = self._spectra[0]
+        X = np.asarray(X, dtype=float)
+        return np.fft.irfft(spectrum * np.fft.rfft(X, nfft, axis=-1), nfft, axis=-1)[..., :self.L]
+
+    def apply(self, X: np.ndarray) -> np.ndarray:
+        """``H X`` for ``X`` of shape ``(n, L)`` (rad/s^2 -> rad)."""
+        return self._convolve(self._spectra[1], X)
+
+    def apply_transpose(self, X: np.ndarray) -> np.ndarray:
+        """``H^T X`` (the adjoint: time-reversed filtering), ``X`` of shape ``(n, L)``."""
+        return self._convolve(self._spectra[1], np.asarray(X, dtype=float)[..., ::-1])[..., ::-1]
+
+    def apply_inverse(self, X: np.ndarray) -> np.ndarray:
+        """``H^-1 X``, ``X`` of shape ``(n, L)`` (rad -> rad/s^2)."""
+        return self._convolve(self._spectra[2], X)
+
+    def _joint(self, j: int, which: str):
+        """``(matvec, rmatvec)`` of joint ``j``'s ``H`` (``which="H"``) or ``H^-1``."""
+        spectrum = self._spectra[1 if which == "H" else 2][j]
+
+        def mv(x: np.ndarray) -> np.ndarray:
+            return self._convolve(spectrum, x)
+
+        return mv, (lambda x: mv(x[::-1])[::-1])
+
+    def _unique(self) -> dict[tuple[float, float], int]:
+        """One joint index per distinct pair of gains (identical joints share their norms)."""
+        out: dict[tuple[float, float], int] = {}
+        for j, key in enumerate(zip(self.K1, self.K2, strict=True)):
+            out.setdefault(key, j)
+        return out
+
+    @cached_property
+    def sigma_max(self) -> tuple[Norm, ...]:
+        """:class:`Norm` of ``H`` per joint (s^2)."""
+        found = {}
+        for key, j in self._unique().items():
+            h = self.markov[j]
+            sym, slack = symbol_bound(h)
+            l1 = float(np.sum(np.abs(h)))
+            found[key] = top_singular(*self._joint(j, "H"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
+        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+
+    @cached_property
+    def sigma_min(self) -> tuple[Norm, ...]:
+        """``sigma_min(H)`` per joint as a :class:`Norm` of ``1/||H^-1||``: ``estimate``, ``power``, and the
+        bracket ``lower`` (from the upper bound of ``||H^-1||``) and ``upper`` (from ``||H^-1 u||``)."""
+        found = {}
+        for key, j in self._unique().items():
+            c = self.inverse_markov[j]
+            if not np.all(np.isfinite(c)):
+                found[key] = Norm(0.0, 0.0, 0.0, float("inf"))
+                continue
+            sym, slack = symbol_bound(c)
+            l1 = float(np.sum(np.abs(c)))
+            inv = top_singular(*self._joint(j, "inverse"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
+            found[key] = Norm(1.0 / inv.estimate, 1.0 / inv.power, 1.0 / inv.upper, 1.0 / inv.lower,
+                              inv.slack)
+        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+
+    def zeros(self, j: int = 0) -> np.ndarray:
+        """Zeros of joint ``j``'s shifted transfer function ``z H(z)`` (0 and the sampling zero near -1)."""
+        b, _ = _transfer(*self.steps[j])
+        return np.array([0.0, -b[1] / b[0]])
+
+
+@lru_cache(maxsize=32)
+def lifted_model(K1: tuple[float, ...], K2: tuple[float, ...], dt: float, samples: int,
+                 integrator: str = "rk4") -> LiftedModel:
+    """The :class:`LiftedModel` of these gains and grid, shared by the update, the checks and the figures."""
+    return LiftedModel(tuple(float(k) for k in K1), tuple(float(k) for k in K2), float(dt), int(samples),
+                       integrator)

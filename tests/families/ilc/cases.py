@@ -1,0 +1,39 @@
+"""The test cases the shared suites run for the ilc family, found by discovery so that adding the family edits no
+shared test: the ranged fields of its section (tests/spec/test_ranges.py), its conformance cases (tests/problems.py)
+and its example specs' exit codes (tests/test_cli.py)."""
+
+from __future__ import annotations
+
+BASE = """\
+name: ranges-ilc
+plant: {kind: robot, robot: planar2r}
+controller: {kind: ilc, poles: [-20, -20], trials: 3, learning: {kind: adjoint, alpha: 1000.0}}
+simulation: {duration: 1.0, trajectory: {kind: quintic, amplitude: [0.2, -0.1], duration: 0.8}}
+"""
+P_TYPE = BASE.replace("{kind: adjoint, alpha: 1000.0}", "{kind: p_type, gain: 100.0}")
+
+RANGES = {
+    "controller.trials": [(BASE, "controller.trials", "controller.trials")],
+    "controller.learning.alpha": [(BASE, "controller.learning.alpha", "controller.learning.alpha")],
+    "controller.learning.gain": [(P_TYPE, "controller.learning.gain", "controller.learning.gain")],
+}
+"""Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
+
+CONFORMANCE = {
+    # notes §6: computed torque learning the repeatable error a 33 % light model of m2 leaves
+    "two_link": ("{kind: ilc, poles: [-20, -20], model: {parameters: {m2: 2.0}}, trials: 20}",
+                 "{duration: 2.0, trajectory: {kind: quintic, amplitude: [1.0, -0.5], duration: 1.0}}",
+                 "{tracking_error: 0.01}"),
+    "puma560": ("{kind: ilc, damping: 1.0, natural_frequency: 10, trials: 5}",
+                "{duration: 1.5, initial_position: [0, 0.785, -3.14, 0, 0.785, 0], "
+                "perturbation: {value: [2.0, 2.0, 1.0, 0, 0, 0]}, "
+                "trajectory: {kind: quintic, amplitude: 0.2, duration: 1.0}}",
+                "{tracking_error: 0.02}"),
+}
+"""Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
+
+EXAMPLES = {
+    "ilc-simnog": 0,
+    "ilc-simnog-diverging": 1,  # rho = ||I - QH|| = 1.47 > 1: the error norm grows trial after trial
+}
+"""Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
