@@ -52,3 +52,31 @@ def test_unknown_kind_is_bad_input():
     with pytest.raises(SpecError) as info:
         parse_spec("name: x\nplant: {kind: link, Km: 1, tau: 1}\ncontroller: {kind: sliding_magic}\n")
     assert info.value.path == "controller.kind"
+
+
+def test_a_familys_own_checks_figures_and_sections_reach_the_pipeline_and_the_report_through_the_registry():
+    """What a family brings from its own package is found by the shared code through FAMILIES and the check
+    registry: its rules run (check_rules), its figures and sections are laid out (the report's builders), so
+    adding such a family edits no generic module."""
+    from designkit.families import check_rules
+    from designkit.verification.suite import CheckRule, generic
+
+    for kind, fam in FAMILIES.items():
+        own = [c for c in fam.checks if isinstance(c, CheckRule)]
+        resolved = check_rules(kind)
+        assert all(rule in resolved for rule in own), kind
+        assert not any(rule.name in generic() for rule in own), kind  # its own names, not a generic one's
+    text = (SRC.parents[1] / "specs" / "sliding-mode-link.yaml").read_text()
+    loaded = parse_spec(text)
+    from designkit.pipeline import run
+    from designkit.report.figures import design_figures
+    from designkit.report.model import build_report_model
+
+    result = run(loaded)
+    fam = family(loaded.spec.controller.kind)
+    own_figures = {f.filename for f in (draw(result) for draw in fam.figures) if f is not None}
+    assert own_figures and own_figures <= {f.filename for f in design_figures(result)}
+    own_rules = [r for r in fam.checks if isinstance(r, CheckRule)]
+    assert all(any(r.owns(c.name) for c in result.checks) for r in own_rules)
+    model = build_report_model(result)
+    assert [s.anchor for s in model.sections] == [s.anchor for s in (make(result) for make in fam.sections) if s]
