@@ -260,9 +260,12 @@ class Design:
     gains : Gains
         Named gains with units.
     poles : tuple of complex
-        Closed-loop poles (1/s) the synthesis places exactly on ``closed_loop``; empty when the
-        design does not claim exact placement (e.g. a decentralized design on a coupled arm,
-        whose per-joint loops carry the placed poles).
+        Requested poles (1/s): those the synthesis places exactly on ``closed_loop`` when the design
+        has one (the ``pole_placement`` check compares them); for a design without a linear loop,
+        the poles it asks of the run (a sliding-mode law's sliding pole ``-c``), which its own checks
+        measure.  Empty when the design does not claim exact placement (e.g. a decentralized design
+        on a coupled arm, whose per-joint loops carry the placed poles).  They also set the time
+        scales of the simulation step.
     zeros : tuple of complex
         Requested zeros (1/s) of the reference-to-position transfer.
     reference : str
