@@ -345,7 +345,7 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
         "integrator_choice": integrator_source,
         "dt": dt, "dt_source": dt_source, "duration": (n_samples - 1) * dt,
         "duration_requested": requested if math.isfinite(requested) else str(requested),
-        "duration_source": duration_source, "n_steps": n_samples - 1, "fastest_rate": fast,
+        "duration_source": duration_source, "n_steps": n_samples - 1, "fastest_rate": rates.fast,
         "slowest_rate": rates.slow, "steps_per_sample": steps_per_sample, "delay_steps": delay_steps,
     }
     if integrator == "cvodes" and stiff:
