@@ -229,7 +229,7 @@ def _bad(plant: str, path: str, words: str, *, controller: str = ROBOT_CONTROLLE
     ],
 )
 def test_bad_robot_section_names_the_key_path(plant, path, words):
-    _bad(plant, path, words)
+    assert _bad(plant, path, words)
 
 
 @pytest.mark.parametrize(
@@ -242,12 +242,12 @@ def test_bad_robot_section_names_the_key_path(plant, path, words):
     ],
 )
 def test_bad_link_section_names_the_key_path(plant, path, words):
-    _bad(plant, path, words, controller=LINK_CONTROLLER)
+    assert _bad(plant, path, words, controller=LINK_CONTROLLER)
 
 
 @pytest.mark.parametrize(("name", "value"), [("m2", -4.0), ("d2", 0.0)])
 def test_override_value_the_model_refuses_names_plant_parameters(name, value):
-    _bad(f"{{kind: robot, robot: planar2r, parameters: {{{name}: {value}}}}}", f"plant.parameters.{name}",
+    assert _bad(f"{{kind: robot, robot: planar2r, parameters: {{{name}: {value}}}}}", f"plant.parameters.{name}",
          "must be")
 
 
@@ -283,4 +283,4 @@ def test_the_same_urdf_made_serial_builds(tmp_path):
 )
 def test_urdf_the_parser_refuses_is_reported_at_plant_urdf(tmp_path, content, words):
     (tmp_path / "arm.urdf").write_text(content)
-    _bad("{kind: robot, urdf: arm.urdf}", "plant.urdf", words, base_dir=tmp_path)
+    assert _bad("{kind: robot, urdf: arm.urdf}", "plant.urdf", words, base_dir=tmp_path)

@@ -28,7 +28,7 @@ def test_link_example_verifies_with_the_gains_in_the_json(capsys):
     assert data["gain_units"] == {"alpha": "N*m/rad", "beta": "N*m/rad", "M": "N*m", "c": "1/s"}
     assert data["gains"]["c"] == 5.0 and data["gains"]["M"] == pytest.approx(1.2)
     assert data["poles"] == [[-5.0, 0.0]]
-    sm = data["sliding_mode"]
+    sm = data["sliding"]
     assert sm["sliding_function"] == "s = x2 + c (x1 - xD)" and sm["sliding_pole"] == -5.0
     assert sm["measured_pole"] == pytest.approx(-5.0, rel=1e-2)
     assert 0 < sm["reaching_time"] < 1.0 and sm["chattering_amplitude"] <= sm["band_run"] <= sm["band_target"]

@@ -89,7 +89,7 @@ class ILCSpec(ct.ComputedTorqueSpec):
     10); ``learning`` (:class:`LearningSpec`; default the adjoint update with ``alpha`` computed).
     """
 
-    kind: Literal["ilc"]
+    kind: Literal[KIND]
     trials: RangedInt(1, MAX_TRIALS) = 10
     learning: LearningSpec = Field(default_factory=LearningSpec)
 
@@ -168,7 +168,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                        "the true plant and measure the difference.")
     design = dataclasses.replace(
         design, gains=Gains.of([*feedback, Gain(name, value, unit, meaning)]), notes=tuple(notes),
-        extra={**design.extra, "model_differs": ctrl.model is not None, "ilc": info},
+        extra={**design.extra, "model_differs": ctrl.model is not None, "lifted": info},
         formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
                   "u = M̂(q) (a* + d_k) + ĥ(q, q̇)  (d_k the trial's learned acceleration)",
                   "e_k = H (d − d_k),  H(s) = 1/(s² + K2 s + K1) per joint when M̂ = M",

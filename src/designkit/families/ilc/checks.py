@@ -148,7 +148,7 @@ def _words(c: Contraction) -> dict[str, str]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="ilc_convergence", order=75, applies=lambda d, c: "ilc" in d.extra, run=_certificate_checks,
+    name="ilc_convergence", order=75, applies=lambda d, c: "lifted" in d.extra, run=_certificate_checks,
     label="Learning contraction ‖I − Q H‖₂ < 1",
     labels={"ilc_spectral_radius": "Learning spectral radius < 1 (asymptotic convergence)"},
     glossary=(("ρ", "‖I − Q H‖₂: ‖d − d_k‖ and the error norm shrink at least by this factor every trial"),
@@ -280,7 +280,7 @@ def _source(design: Any) -> str:
 
 TRIALS_RULE = CheckRule(
     name="ilc_error_decrease", order=128,
-    applies=lambda d, c: "ilc" in d.extra and c.trials is not None and len(c.trials.results) >= 2,
+    applies=lambda d, c: "lifted" in d.extra and c.trials is not None and len(c.trials.results) >= 2,
     run=_trial_checks, label="Error norm falls every trial as certified",
     labels={"ilc_lifted_model": "Lifted model predicts the trial-to-trial change (μ < 1)"},
     glossary=(("e_k", "the lifted tracking error qD − q of trial k, every joint, samples 1 .. N−1"),

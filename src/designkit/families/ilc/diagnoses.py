@@ -41,7 +41,7 @@ def _fix(c: Any, lifted: Any) -> str:
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     """``(cause, fix)`` for a failed ``ilc_convergence``, ``ilc_error_decrease`` or (with trials)
     ``tracking_error`` check, else None."""
-    if check.passed is True or "ilc" not in result.design.extra:
+    if check.passed is True or "lifted" not in result.design.extra:
         return None
     c, lifted = _contraction(result)
     if check.name == "ilc_convergence":

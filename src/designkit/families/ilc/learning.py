@@ -71,12 +71,12 @@ def _gains(design: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
 def lifted_of(design: Any, time: np.ndarray | None = None) -> LiftedModel:
     """The lifted model of an ``ilc`` design, on the grid of ``time`` (a run's instants) or the design's grid."""
-    return _lifted(*_gains(design), design.extra["ilc"], time)
+    return _lifted(*_gains(design), design.extra["lifted"], time)
 
 
 def operator_of(design: Any) -> Adjoint | PType:
     """The learning operator of an ``ilc`` design."""
-    info = design.extra["ilc"]
+    info = design.extra["lifted"]
     return learning_operator(str(info["learning"]), float(info["value"]))
 
 
@@ -88,7 +88,7 @@ def lifted_errors(result: Any) -> np.ndarray:
 
 def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: Any) -> Any:
     """The :data:`~designkit.simulation.trials.LearningRule` ``(result_k, d_k) -> d_{k+1}`` of the gains and the
-    design's ``extra["ilc"]`` (grid, operator, trials)."""
+    design's ``extra["lifted"]`` (grid, operator, trials)."""
     operator = learning_operator(str(info["learning"]), float(info["value"]))
 
     def update(result: Any, feedforward: np.ndarray) -> np.ndarray:

@@ -48,6 +48,7 @@ from typing import Any, Literal
 from pydantic import Field, field_validator, model_validator
 
 from designkit.families.mrac import laws as mrac_law
+from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, gains_of
 from designkit.spec.fields import Finite, Pole, PositiveFinite, Section, check_conjugates
 from designkit.spec.ranges import Ranged, check_poles
@@ -56,7 +57,6 @@ from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.linearization import Linearization
 
-KIND = "mrac"
 GAMMA_RANGE = (1e-12, 1e12)
 Q_RANGE = 1e12
 
@@ -144,7 +144,7 @@ class MracSpec(Section):
     default the nominal design).  ``nominal``: the link the gains are realised on (default the spec's plant).
     """
 
-    kind: Literal["mrac"]
+    kind: Literal[KIND]
     poles: list[Pole] | None = Field(default=None, description="Poles (1/s) of the nominal PD loop: exactly two.")
     reference_model: ReferenceModelSpec | None = None
     gamma: Finite | list[Finite] = Field(description="Adaptation gains (> 0): one, or one per parameter a1, a2.")

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from designkit.families.mrac.boundary import GammaRun, floquet_boundary, frozen_signal_bound, gamma_boundary
+from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.runs import (
     adapted,
     assess,
@@ -50,7 +51,6 @@ from designkit.verification.suite import CheckRule, Context
 
 __all__ = ["CONVERGED_REL", "EFOLDS", "RULES", "diagnose", "fixed_comparison", "mismatch_reasons"]
 
-KIND = "mrac"
 CONVERGED_REL = 0.05
 """Converged: every adapted parameter within this fraction of its matching value."""
 EFOLDS = 3.0

@@ -44,6 +44,7 @@ from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 __all__ = ["Freezer", "MAX_STEP_FACTOR", "STATE_NAMES", "adaptive_law", "fixed_law"]
 
 KIND = "mrac"
+"""The controller kind of this family (the spec's ``controller.kind``)."""
 STATE_NAMES = (*MODEL_NAMES, *SENSITIVITY_NAMES, *PARAMETERS)
 """The adaptive law's controller states, in order."""
 MAX_STEP_FACTOR = 0.1

@@ -267,6 +267,6 @@ def section(result: Any) -> ReportSection | None:
     questions = (_why_how(result, s), _plant_question(s), _other_question(s), _module_question(result, s),
                  _boundary_question(result, s), _perturbation_question(s), _modifications_question(s))
     intro = (f"Each answer comes from re-simulating the spec's scenario with one thing changed, with adaptation and "
-             f"with the gains frozen at their initial values ({s.runs} simulations, {s.seconds:.1f} s); e = ym − x1 "
+             f"with the gains frozen at their initial values ({s.runs} simulations); e = ym − x1 "
              "is measured against the same reference model in every pair.")
     return ReportSection("lab-mrac", "Lab questions (notes, experiment 2 and the MRAC simulator)", intro, questions)

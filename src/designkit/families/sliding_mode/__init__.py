@@ -72,7 +72,13 @@ from designkit.families.sliding_mode.design_lp import design_gains
 from designkit.families.sliding_mode.diagnoses import diagnose
 from designkit.families.sliding_mode.figures import FIGURES
 from designkit.families.sliding_mode.measure import json_summary
-from designkit.families.sliding_mode.spec import SlidingModeSpec, perturbation_level, reference_amplitude, validate
+from designkit.families.sliding_mode.spec import (
+    KIND,
+    SlidingModeSpec,
+    perturbation_level,
+    reference_amplitude,
+    validate,
+)
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -81,7 +87,6 @@ from designkit.synthesis.linearization import Linearization
 
 __all__ = ["FAMILY", "KIND", "SlidingModeSpec", "law", "synthesize"]
 
-KIND = "sliding_mode"
 BAND_FRACTION = 1e-3
 """Default chattering band ``delta = BAND_FRACTION c e_max`` (rad/s): the error it leaves, ``delta/c``, is this
 fraction of the largest error jump."""

@@ -198,4 +198,4 @@ def json_summary(result: Any) -> dict[str, Any]:
             "chattering_error_band": None if run.amplitude is None else run.amplitude / info["c"],
             "total_variation_u": run.total_variation, "u_peak_to_peak_tail": run.u_ptp_tail,
         })
-    return {"sliding_mode": {k: _clean(v) for k, v in out.items()}}
+    return {"sliding": {k: _clean(v) for k, v in out.items()}}

@@ -34,6 +34,9 @@ from pydantic import Field, field_validator, model_validator
 from designkit.spec.fields import Finite, Pole, Section, fmt_pole
 from designkit.spec.ranges import Ranged, check_poles
 
+KIND = "sliding_mode"
+"""The controller kind of this family (the spec's ``controller.kind``)."""
+
 __all__ = ["SlidingModeSpec", "reference_amplitude", "perturbation_level", "validate"]
 
 
@@ -41,7 +44,7 @@ class SlidingModeSpec(Section):
     """Sliding-mode position servo ``u = -psi e - M sign(s)``, ``s = x2 + c e``, ``psi`` switching between
     ``alpha`` (``e s > 0``) and ``beta`` (module docstring for the fields)."""
 
-    kind: Literal["sliding_mode"]
+    kind: Literal[KIND]
     sliding_poles: list[Pole] = Field(
         description="The pole -c (1/s) of the motion on the sliding line s = x2 + c (x1 - xD) = 0: one real value.")
     perturbation_bound: Ranged(1e-6, 1e6, "N*m", base=Finite) | None = Field(
