@@ -1,0 +1,278 @@
+"""Adaptive computed torque (notes section 4.4, Craig's multivariable adaptive computed torque).
+
+Law (:mod:`designkit.families.adaptive_computed_torque.laws`)::
+
+    Gamma = D^(q) (qD'' + K1 e + K2 e') + h^(q, qd) = W(q, qd, qD'' + K1 e + K2 e') P^,   e = qD - q
+    P^_a' = K W_a(q, qd, qdd)' D^(q)^-1 (e + psi e')
+
+``D^`` and ``h^`` are linear in the estimated parameters through the model layer's regressor
+(:mod:`designkit.models.regressor`).  **Adapted**: the entries of the regressor's parameter vector the
+spec names in ``controller.adapt`` (``m2``, ``Izz3``, ``fv1``, ...), starting at ``controller.initial``
+(a mapping name -> value, wrong on purpose); **known**: every other entry, at the arm's true value.
+The acceleration the update needs comes from ``controller.acceleration`` (``ideal``: an ideal
+accelerometer; ``filtered``: a filtered velocity derivative of bandwidth ``controller.bandwidth``).
+
+Gains: ``poles`` (a pair per joint, or one pair for all: ``K1 = p1 p2``, ``K2 = -(p1 + p2)``) or ``K1``,
+``K2`` directly, per joint; ``psi`` (s) per joint, default ``2/K2`` (the SPR condition is ``psi K2 > 1``,
+:mod:`~designkit.families.adaptive_computed_torque.spr`).  ``gain``: the adaptation gains ``K`` (one, or
+one per adapted parameter).  ``bounds`` (name -> ``[l, h]``) with ``delta``: the notes' projection.
+
+**Contract.**  ``Linearization("frozen")``: ``freeze(values)`` is the fixed computed torque with the
+estimates held; the generic ``lyapunov`` check judges the loop frozen at the initial estimates and
+``frozen_final`` at the final ones.  The family's own checks (:mod:`.checks`): the SPR certificate,
+the tracking error converging, the Lyapunov function of the adaptive loop non-increasing along the
+run, and parameter convergence judged against the excitation indicator (:mod:`.excitation`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, field_validator, model_validator
+
+from designkit.errors import SpecError
+from designkit.families.adaptive_computed_torque import laws as act
+from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units
+from designkit.families.adaptive_computed_torque.spr import default_psi
+from designkit.spec.fields import Finite, Section, check_conjugates, parse_pole, per_joint
+from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
+from designkit.synthesis.closed_loop import with_closed_loop
+from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.family import Display, Family
+from designkit.synthesis.linearization import Linearization
+
+GAIN_RANGE = (1e-12, 1e12)
+PARAMETER_RANGE = 1e6
+
+
+class AdaptiveComputedTorqueSpec(Section):
+    """Adaptive computed torque (notes section 4.4).
+
+    ``poles``: two error poles (1/s) for every joint, or a pair per joint; or ``K1`` (1/s^2) and ``K2`` (1/s),
+    one value or one per joint, 1e-12 to 1e12.  ``psi`` (s, 1e-12 to 1e12, one or one per joint; default
+    ``2/K2``).  ``adapt``: the regressor parameters to adapt (``m1``, ``mcx2``, ``Izz3``, ``fv1``, ...);
+    ``initial``: the estimate of each at ``t = 0``; ``gain``: adaptation gains (1e-12 to 1e12, one or one per
+    adapted parameter); ``bounds``: ``[l, h]`` per adapted parameter (optional projection) with ``delta`` (its
+    hysteresis, in each parameter's unit); ``acceleration``: ``ideal`` or ``filtered`` (with ``bandwidth``,
+    rad/s, 1e-3 to 1e6).
+    """
+
+    kind: Literal[KIND]
+    poles: list[Any] | None = Field(default=None, description="Two error poles (1/s) for every joint, or a pair "
+                                    "per joint.")
+    K1: RangedPerJoint(1e-12, 1e12, "1/s^2") | None = None
+    K2: RangedPerJoint(1e-12, 1e12, "1/s") | None = None
+    psi: RangedPerJoint(1e-12, 1e12, "s") | None = None
+    adapt: list[str] = Field(min_length=1, description="Regressor parameters to adapt (m1, mcx2, Izz3, fv1, ...).")
+    initial: dict[str, Finite] = Field(description="Initial estimate of every adapted parameter.")
+    gain: Finite | list[Finite] = Field(default=1.0, description="Adaptation gains K (> 0).")
+    bounds: dict[str, list[Finite]] | None = None
+    delta: Ranged(0.0, 1e6, "", zero=True) = 0.0
+    acceleration: Literal["ideal", "filtered"] = "ideal"
+    bandwidth: Ranged(1e-3, 1e6, "rad/s") = 200.0
+
+    @field_validator("poles")
+    @classmethod
+    def _pole_pairs(cls, v: list[Any] | None) -> list[Any] | None:
+        if v is None:
+            return v
+        nested = [isinstance(p, list | tuple) for p in v]
+        if any(nested) and not all(nested):
+            raise ValueError("give two poles, or a list of two poles per joint, not a mix")
+        rows = v if all(nested) else [v]
+        pairs = []
+        for i, row in enumerate(rows):
+            where = f"[{i}]" if all(nested) else ""
+            if len(row) != 2:
+                raise ValueError(f"{where}{': ' if where else ''}must list exactly 2 poles per joint, got {len(row)}")
+            poles = []
+            for k, p in enumerate(row):
+                try:
+                    poles.append(parse_pole(p))
+                except ValueError as exc:
+                    raise ValueError(f"{where}[{k}]: {exc}") from None
+            check_poles(poles, where)
+            check_conjugates(poles)
+            pairs.append(poles)
+        return pairs if all(nested) else pairs[0]
+
+    @field_validator("adapt")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        seen = set()
+        for k, name in enumerate(v):
+            if name in seen:
+                raise ValueError(f"[{k}]: {name!r} is listed twice")
+            seen.add(name)
+        return v
+
+    @field_validator("gain")
+    @classmethod
+    def _gain(cls, v: Any) -> Any:
+        values = list(v) if isinstance(v, list | tuple) else [v]
+        for k, x in enumerate(values):
+            where = f"[{k}]: " if isinstance(v, list | tuple) else ""
+            if not x > 0:
+                raise ValueError(f"{where}must be positive (an adaptation gain), got {x:g}")
+            if not GAIN_RANGE[0] <= x <= GAIN_RANGE[1]:
+                raise ValueError(f"{where}must be between 1e-12 and 1e12, got {x:g}")
+        return v
+
+    @model_validator(mode="after")
+    def _consistent(self) -> AdaptiveComputedTorqueSpec:
+        direct = self.K1 is not None or self.K2 is not None
+        if direct == (self.poles is not None):
+            raise ValueError("give either poles, or K1 and K2")
+        if direct and (self.K1 is None or self.K2 is None):
+            raise ValueError(f"{'K2' if self.K2 is None else 'K1'}: K1 and K2 go together")
+        for k, name in enumerate(self.adapt):
+            if name not in self.initial:
+                raise ValueError(f"initial: no initial estimate of the adapted parameter {name!r}")
+        for name in self.initial:
+            if name not in self.adapt:
+                raise ValueError(f"initial.{name}: not an adapted parameter (controller.adapt lists {self.adapt})")
+            if abs(self.initial[name]) > PARAMETER_RANGE:
+                raise ValueError(f"initial.{name}: must be within 1e6 in magnitude, got {self.initial[name]:g}")
+        gains = self.gain if isinstance(self.gain, list) else [self.gain]
+        if len(gains) not in (1, len(self.adapt)):
+            raise ValueError(f"gain: must be one number or {len(self.adapt)} (one per adapted parameter), got "
+                             f"{len(gains)}")
+        for name, pair in (self.bounds or {}).items():
+            if name not in self.adapt:
+                raise ValueError(f"bounds.{name}: not an adapted parameter (controller.adapt lists {self.adapt})")
+            if len(pair) != 2:
+                raise ValueError(f"bounds.{name}: must be [l, h], got {len(pair)} numbers")
+            lo, hi = pair
+            if lo > hi:
+                raise ValueError(f"bounds.{name}: l = {lo:g} > h = {hi:g}")
+            if not lo <= self.initial[name] <= hi:
+                raise ValueError(f"initial.{name}: the initial estimate {self.initial[name]:g} is outside its bounds "
+                                 f"[{lo:g}, {hi:g}]")
+        return self
+
+
+def _joint_list(value: Any, n: int, path: str) -> tuple[float, ...]:
+    try:
+        return per_joint(value, n, path)
+    except ValueError as exc:
+        key, msg = str(exc).split(": ", 1)
+        raise SpecError(key, msg) from None
+
+
+def gains_of(spec: Any, n: int) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], str]:
+    """``(K1, K2, psi, how)`` per joint from the spec (``how`` says where ``psi`` came from)."""
+    c = spec.controller
+    if c.poles is not None:
+        pairs = c.poles if isinstance(c.poles[0], list) else [c.poles] * n
+        if len(pairs) != n:
+            raise SpecError("controller.poles", f"needs one pair of poles per joint ({n}), got {len(pairs)}")
+        K1 = tuple(float((p1 * p2).real) for p1, p2 in pairs)
+        K2 = tuple(float((-(p1 + p2)).real) for p1, p2 in pairs)
+    else:
+        K1 = _joint_list(c.K1, n, "controller.K1")
+        K2 = _joint_list(c.K2, n, "controller.K2")
+    if c.psi is not None:
+        return K1, K2, _joint_list(c.psi, n, "controller.psi"), "the spec"
+    return K1, K2, tuple(default_psi(k) for k in K2), "chosen as 2/K2 (SPR margin psi K2 - 1 = 1)"
+
+
+def adaptation(spec: Any, plant: Any) -> Adaptation:
+    """The :class:`~.laws.Adaptation` a spec asks for on ``plant`` (names checked against the robot)."""
+    c = spec.controller
+    n = plant.n_joints
+    known = list(plant.robot.parameter_names)
+    for k, name in enumerate(c.adapt):
+        if name not in known:
+            raise SpecError(f"controller.adapt[{k}]", f"the robot has no parameter {name!r}; its parameters are "
+                            f"{', '.join(known)}")
+    K1, K2, psi, _ = gains_of(spec, n)
+    gains = c.gain if isinstance(c.gain, list) else [c.gain] * len(c.adapt)
+    bounds = None
+    if c.bounds:
+        bounds = tuple(tuple(float(x) for x in c.bounds[name]) if name in c.bounds else (-np.inf, np.inf)
+                       for name in c.adapt)
+    return Adaptation(names=tuple(c.adapt), initial=tuple(float(c.initial[x]) for x in c.adapt),
+                      gain=tuple(float(g) for g in gains), K1=K1, K2=K2, psi=psi, acceleration=c.acceleration,
+                      bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta))
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
+    a = adaptation(spec, plant)
+    n = plant.n_joints
+    _, _, _, how = gains_of(spec, n)
+    units = parameter_units(a.names)
+    true = act.true_parameters(plant)
+    idx = [list(plant.robot.parameter_names).index(x) for x in a.names]
+    gains = Gains.of([
+        Gain("K1", list(a.K1), "1/s^2", "position error gain"),
+        Gain("K2", list(a.K2), "1/s", "velocity error gain"),
+        Gain("psi", list(a.psi), "s", "velocity weight of e1 = e + psi e' (SPR filter)"),
+        Gain("K", list(a.gain), "", "adaptation gains, one per adapted parameter (unit of the parameter squared "
+                                    "times s/rad^2)"),
+    ])
+    notes = [f"psi {how}.",
+             "Adapted: " + ", ".join(f"{x} (from {v:.6g} {u}; true {true[i]:.6g} {u})"
+                                     for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
+             + "; every other parameter of the regressor is known (the arm's true value).",
+             {"ideal": "Acceleration for the update: an ideal accelerometer (the arm's own acceleration at the "
+                       "command).",
+              "filtered": f"Acceleration for the update: the measured velocity differentiated through a first-order "
+                          f"filter of bandwidth {a.bandwidth:g} rad/s."}[a.acceleration]]
+    q0 = np.zeros(n)
+    if spec.simulation.initial_position is not None:
+        q0 = np.array(_joint_list(spec.simulation.initial_position, n, "simulation.initial_position"))
+    poles = tuple(p for k1, k2 in zip(a.K1, a.K2, strict=True) for p in np.roots([1.0, k2, k1]))
+    design = Design(
+        kind=KIND, plant=plant, gains=gains, poles=poles, reference="trajectory",
+        formulas=("v = q̈D + K1 e + K2 ė,  e = qD − q",
+                  "Γ = D̂(q) v + ĥ(q, q̇) = W(q, q̇, v) P̂",
+                  "P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)",
+                  "ë + K2 ė + K1 e = D̂⁻¹ W(q, q̇, q̈) (P − P̂);  H(s) = (1 + ψ s)/(s² + K2 s + K1) SPR ⇔ ψ K2 > 1"),
+        notes=tuple(notes),
+        extra={"adaptation": a.to_json(), "units": list(units), "true": [float(true[i]) for i in idx]},
+    )
+    lin = Linearization("frozen", reason="the computed torque with the estimated parameters held (no adaptation)",
+                        parameters=tuple(f"p_{x}" for x in a.names), initial=a.initial, units=units,
+                        freeze=Freezer(plant, a.names, a.K1, a.K2))
+    return with_closed_loop(design, act.adaptive_law(plant, a), np.concatenate([q0, np.zeros(2 * n)]),
+                            field="simulation.initial_position", linearization=lin)
+
+
+def law(design: Design, anti_windup: Any = None) -> Any:
+    """The adaptive law of ``design`` (its settings from ``design.extra``)."""
+    x = dict(design.extra["adaptation"])
+    bounds = x["bounds"]
+    a = Adaptation(names=tuple(x["adapt"]), initial=tuple(x["initial"]), gain=tuple(x["gain"]), K1=tuple(x["K1"]),
+                   K2=tuple(x["K2"]), psi=tuple(x["psi"]), acceleration=x["acceleration"],
+                   bandwidth=float(x["bandwidth"]), bounds=None if bounds is None else tuple(tuple(b) for b in bounds),
+                   delta=float(x["delta"]))
+    return act.adaptive_law(design.plant, a)
+
+
+def validate(spec: Any) -> None:
+    """Cross-section rules: no anti-windup (no integral), no controller-model section."""
+    if spec.simulation.anti_windup is not None:
+        raise ValueError("simulation.anti_windup: the adaptive computed torque has no integral to limit")
+
+
+def _family() -> Family:
+    from designkit.families.adaptive_computed_torque import checks, figures, report
+
+    return Family(
+        kind=KIND, spec=AdaptiveComputedTorqueSpec, plants=("robot",), reference="trajectory",
+        synthesize=synthesize, law=law,
+        checks=("lyapunov", "frozen_final", "time_domain", "torque_limits", *checks.RULES),
+        display=Display(
+            label="Adaptive computed torque (Craig)",
+            law=("Γ = D̂(q) (q̈D + K1 e + K2 ė) + ĥ(q, q̇) = W(q, q̇, q̈D + K1 e + K2 ė) P̂,  e = qD − q",
+                 "P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)  (adapted parameters; the others known)"),
+            summary="Notes §4.4 (Craig 1988): computed torque whose model parameters are estimated on line from the "
+                    "filtered tracking error e + ψ ė; the filter (1 + ψ s)/(s² + K2 s + K1) must be strictly "
+                    "positive real."),
+        validate=validate, figures=figures.FIGURES, sections=(report.section,), json=report.json,
+    )
+
+
+FAMILY = _family()

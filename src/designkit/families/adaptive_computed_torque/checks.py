@@ -1,0 +1,207 @@
+"""The adaptive computed torque's own checks.
+
+``spr_certificate`` (order 15, required): ``H_j(s) = (1 + psi_j s)/(s^2 + K2_j s + K1_j)`` strictly positive
+real for every joint, by the KYP lemma on the certificate core (per joint and for the block-diagonal
+``2n``-state system), cross-checked by a frequency sweep of ``Re H(jw)`` and the analytic condition
+``psi K2 > 1`` (:mod:`.spr`).  It reads only the gains: it is not a check of a linearization.  When the
+routes disagree the check is undecided.
+
+``tracking_convergence`` (order 126, required): the tracking error converges: the largest ``|e_j|`` over
+the last :data:`TAIL` of the run is at most :data:`TRACK_FRACTION` of the largest over the run (or below
+:data:`TRACK_FLOOR` rad).
+
+``adaptive_lyapunov`` (order 127, required): ``V = sum_j x_j' P_j x_j + (P - P^)' K^-1 (P - P^)``
+(``x_j = (e_j, e'_j)``, ``P_j`` the closed-form KYP matrix) recorded along the run never rises by more than
+the tolerance over its running minimum: :data:`V_TOL_IDEAL` x ``V(0)`` with the ideal accelerometer (the
+theorem's setting: ``V' = -sum 2 K1 e^2 + 2 (psi K2 - 1) e'^2`` exactly, so what is left is integration
+error), :data:`V_TOL_FILTERED` x ``V(0)`` with the filtered derivative (where the theorem does not hold
+exactly; the check then measures what the filter costs).
+
+``estimate_convergence`` (order 128): the final estimates against the true values (within
+:data:`CONVERGED_REL`), judged against the excitation indicator (:mod:`.excitation`): required when the
+trajectory is exciting, informational otherwise (the Lyapunov argument promises ``e -> 0`` only).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from designkit.families.adaptive_computed_torque.excitation import EFOLDS, excitation
+from designkit.families.adaptive_computed_torque.laws import KIND, estimates
+from designkit.families.adaptive_computed_torque.spr import joint_spr, stacked_realisation
+from designkit.verification.check import Check
+from designkit.verification.suite import CheckRule, Context
+
+__all__ = ["CONVERGED_REL", "RULES", "TAIL", "TRACK_FLOOR", "TRACK_FRACTION", "V_TOL_FILTERED", "V_TOL_IDEAL",
+           "lyapunov_rise", "spr_evidence"]
+
+TAIL = 0.1
+"""The tracking error's last window: this fraction of the run."""
+TRACK_FRACTION = 0.05
+"""Converging: the last window's largest error at most this fraction of the run's largest."""
+TRACK_FLOOR = 1e-6
+"""An error below this (rad) counts as converged whatever its history."""
+V_TOL_IDEAL = 1e-6
+"""Largest rise of ``V`` over its running minimum, relative to ``V(0)``, with the ideal accelerometer."""
+V_TOL_FILTERED = 1e-2
+"""The same with the filtered velocity derivative."""
+CONVERGED_REL = 0.05
+"""Converged: every estimate within this fraction of its true value."""
+
+
+def _ours(design: Any, ctx: Context) -> bool:
+    return design.kind == KIND
+
+
+def _run(design: Any, ctx: Context) -> bool:
+    return design.kind == KIND and ctx.simulation is not None
+
+
+def spr_evidence(design: Any, solver: str = "CLARABEL") -> dict[str, Any]:
+    """Per-joint :class:`~.spr.JointSpr` and the block-diagonal KYP verdict of a design's gains."""
+    from designkit.verification.kyp import positive_real
+
+    a = design.extra["adaptation"]
+    joints = [joint_spr(k1, k2, psi, solver=solver) for k1, k2, psi in zip(a["K1"], a["K2"], a["psi"], strict=True)]
+    stacked = positive_real(*stacked_realisation(a["K1"], a["K2"], a["psi"]), solver=solver)
+    return {"joints": joints, "stacked": stacked}
+
+
+def _spr(design: Any, ctx: Context) -> tuple[Check, ...]:
+    ev = spr_evidence(design, ctx.solver)
+    joints, stacked = ev["joints"], ev["stacked"]
+    cert = {"joints": [{"K1": j.K1, "K2": j.K2, "psi": j.psi, "psi_K2_minus_1": j.analytic, "kyp": j.kyp,
+                        "kyp_margin": j.kyp_margin, "sweep_min_re_H": j.sweep_min, "sweep_w_rad_s": j.sweep_w,
+                        "w2_re_H_top": j.high_frequency, "psi_min_s": j.psi_min} for j in joints],
+            "stacked_kyp": stacked.passed, "stacked_detail": stacked.detail}
+    worst = min(range(len(joints)), key=lambda k: joints[k].analytic)
+    w = joints[worst]
+    target = "ψ K2 > 1 per joint (KYP: P ≻ 0, AᵀP + PA ≺ 0, P B = Cᵀ; sweep of Re H(jω); analytic)"
+    agree = all(j.agree for j in joints) and stacked.passed == (w.analytic > 0)
+    if not agree:
+        return (Check("spr_certificate", None, target, w.analytic, w.analytic, "1",
+                      "undecided: the KYP certificate, the frequency sweep and the analytic condition disagree "
+                      f"(joint {worst + 1}: KYP {w.kyp}, sweep {'positive' if w.sweep_positive else 'not positive'}, "
+                      f"ψ K2 − 1 = {w.analytic:.4g})", cert),)
+    if w.analytic > 0:
+        detail = (f"H(s) = (1 + ψ s)/(s² + K2 s + K1) is strictly positive real for every joint: KYP certificate "
+                  f"found and re-checked per joint and for the stacked system; smallest ψ K2 − 1 = {w.analytic:.4g} "
+                  f"(joint {worst + 1}); admissible ψ per joint: "
+                  + ", ".join(f"ψ{k + 1} > {j.psi_min:.4g} s" for k, j in enumerate(joints)))
+        return (Check("spr_certificate", True, target, w.analytic, w.analytic, "1", detail, cert),)
+    bad = [k for k, j in enumerate(joints) if j.analytic <= 0]
+    detail = ("not SPR: " + "; ".join(
+        f"joint {k + 1}: ψ K2 − 1 = {joints[k].analytic:.4g} (ψ = {joints[k].psi:.4g} s, needs ψ > 1/K2 = "
+        f"{joints[k].psi_min:.4g} s, e.g. ψ = {2 * joints[k].psi_min:.4g} s), Re H(jω) reaches "
+        f"{joints[k].sweep_min:.4g} at ω = {joints[k].sweep_w:.4g} rad/s" for k in bad))
+    return (Check("spr_certificate", False, target, w.analytic, w.analytic, "1", detail, cert),)
+
+
+def _errors(sim: Any) -> np.ndarray:
+    ref = np.asarray(sim.reference, dtype=float)[:, :, 0]
+    pos = np.asarray(sim.state, dtype=float)[:, list(sim.positions)]
+    return ref - pos
+
+
+def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
+    sim = ctx.simulation
+    t = np.asarray(sim.time, dtype=float)
+    e = np.abs(_errors(sim))
+    tail = t >= t[-1] - TAIL * (t[-1] - t[0])
+    peak = np.max(e, axis=0)
+    last = np.max(e[tail], axis=0)
+    if not np.all(np.isfinite(e)):
+        return (Check("tracking_convergence", False, "finite error", None, None, "rad",
+                      "the tracking error stopped being finite", {}),)
+    ratio = last / np.where(peak > 0, peak, 1.0)
+    ok = bool(np.all((ratio <= TRACK_FRACTION) | (last <= TRACK_FLOOR)))
+    worst = int(np.argmax(ratio))
+    cert = {"peak_rad": peak.tolist(), "last_window_rad": last.tolist(), "ratio": ratio.tolist(),
+            "tail_s": float(TAIL * (t[-1] - t[0]))}
+    detail = (f"largest |e| over the last {TAIL * (t[-1] - t[0]):.3g} s against the run's largest, per joint: "
+              + ", ".join(f"{a:.3g} of {b:.3g} rad" for a, b in zip(last, peak, strict=True))
+              + f" (worst ratio {ratio[worst]:.3g}, joint {worst + 1})")
+    return (Check("tracking_convergence", ok, f"last-window |e| <= {TRACK_FRACTION:g} x peak |e| per joint",
+                  float(ratio[worst]), float(TRACK_FRACTION - ratio[worst]), "1 (ratio)", detail, cert,
+                  data={"time": t, "error": _errors(sim)}),)
+
+
+def lyapunov_rise(V: np.ndarray) -> tuple[float, int]:
+    """Largest ``V_k - min_{j <= k} V_j`` and its index (0 for a non-increasing sequence)."""
+    V = np.asarray(V, dtype=float)
+    rise = V - np.minimum.accumulate(V)
+    k = int(np.argmax(rise))
+    return float(rise[k]), k
+
+
+def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
+    sim = ctx.simulation
+    t = np.asarray(sim.time, dtype=float)
+    V = np.asarray(sim.signals["V"], dtype=float)
+    Vdot = np.asarray(sim.signals["Vdot_bound"], dtype=float)
+    filtered = design.extra["adaptation"]["acceleration"] == "filtered"
+    tol = V_TOL_FILTERED if filtered else V_TOL_IDEAL
+    if not np.all(np.isfinite(V)):
+        return (Check("adaptive_lyapunov", False, "finite V", None, None, "", "V stopped being finite", {}),)
+    rise, k = lyapunov_rise(V)
+    rel = rise / V[0] if V[0] > 0 else rise
+    predicted = float(np.sum(0.5 * (Vdot[1:] + Vdot[:-1]) * np.diff(t)))
+    cert = {"V0": float(V[0]), "V_end": float(V[-1]), "largest_rise": rise, "relative_rise": rel,
+            "at_s": float(t[k]), "tolerance": tol, "integral_of_Vdot": predicted,
+            "V_end_minus_V0": float(V[-1] - V[0]), "acceleration": design.extra["adaptation"]["acceleration"]}
+    setting = ("filtered velocity derivative: the theorem's V' = −xᵀQ1x holds only up to the filter's error"
+               if filtered else "ideal accelerometer: V' = −Σ 2K1 e² + 2(ψK2 − 1) ė² exactly")
+    detail = (f"V from {V[0]:.4g} to {V[-1]:.4g}; largest rise over its running minimum {rel:.3g} × V(0) at "
+              f"t = {t[k]:.3g} s (tolerance {tol:g} × V(0), {setting}); ∫V' dt on the error equation "
+              f"{predicted:.4g} against V(T) − V(0) = {V[-1] - V[0]:.4g}")
+    return (Check("adaptive_lyapunov", bool(rel <= tol), f"V non-increasing within {tol:g} × V(0)", rel, tol - rel,
+                  "1 (relative)", detail, cert, data={"time": t, "V": V}),)
+
+
+def run_excitation(design: Any, sim: Any) -> Any:
+    """The excitation indicators of the run's desired trajectory."""
+    a = design.extra["adaptation"]
+    return excitation(design.plant, a["adapt"], a["K1"], a["gain"], np.asarray(sim.time), np.asarray(sim.reference))
+
+
+def _estimates(design: Any, ctx: Context) -> tuple[Check, ...]:
+    sim = ctx.simulation
+    a = design.extra["adaptation"]
+    names, true = list(a["adapt"]), np.asarray(design.extra["true"], dtype=float)
+    final = estimates(sim, names)[-1]
+    rel = np.abs(final - true) / np.where(np.abs(true) > 0, np.abs(true), 1.0)
+    start = np.abs(np.asarray(a["initial"]) - true) / np.where(np.abs(true) > 0, np.abs(true), 1.0)
+    worst = int(np.argmax(rel)) if rel.size else 0
+    ex = run_excitation(design, sim)
+    ok = bool(np.all(rel <= CONVERGED_REL)) if np.all(np.isfinite(rel)) else False
+    words = ", ".join(f"{n}: {f:.4g} (true {t:.4g}, from {s * 100:.3g} % to {r * 100:.3g} % off)"
+                      for n, f, t, s, r in zip(names, final, true, start, rel, strict=True))
+    pe = (f"excitation: averaged convergence rate {ex.rate:.3g} 1/s × {ex.duration:.3g} s = {ex.efolds:.3g} e-folds; "
+          f"smallest eigenvalue of ∫Wᵀ W dt over {ex.window:.3g} s windows {ex.alpha_min:.3g}")
+    cert = {"final": final.tolist(), "true": true.tolist(), "relative_error": rel.tolist(), "rate_1_s": ex.rate,
+            "efolds": ex.efolds, "alpha_min": ex.alpha_min, "window_s": ex.window, "exciting": ex.exciting}
+    target = f"every estimate within {CONVERGED_REL * 100:g} % of the true value"
+    margin = float(CONVERGED_REL - rel[worst]) if math.isfinite(rel[worst]) else None
+    if ex.exciting:
+        return (Check("estimate_convergence", ok, target, float(rel[worst]), margin, "1 (relative)",
+                      f"{words}; {pe} (≥ {EFOLDS:g}: convergence expected)", cert,
+                      data={"excitation": ex}),)
+    return (Check("estimate_convergence", ok, target, float(rel[worst]), margin, "1 (relative)",
+                  f"{words}; {pe} (< {EFOLDS:g}: the trajectory does not excite the parameters enough to expect "
+                  f"convergence; reported, {'converged anyway' if ok else 'not converged'})", cert, required=False,
+                  data={"excitation": ex}),)
+
+
+RULES = (
+    CheckRule("spr_certificate", 15, _ours, _spr, label="Error filter strictly positive real (KYP, sweep, analytic)",
+              glossary=(("H(s)", "the map from the parameter-error torque u to e1 = e + ψ ė"),
+                        ("SPR", "strictly positive real: the condition of the update law's Lyapunov argument"))),
+    CheckRule("tracking_convergence", 126, _run, _tracking, label="Tracking error converging"),
+    CheckRule("adaptive_lyapunov", 127, _run, _lyapunov, label="Lyapunov function of the adaptive loop non-increasing"),
+    CheckRule("estimate_convergence", 128, _run, _estimates,
+              label="Parameter estimates against the true values (with the excitation indicator)"),
+)
+"""The family's own check rules."""

@@ -1,0 +1,3 @@
+"""The adaptive computed torque's figures (placeholder, filled below)."""
+
+FIGURES: tuple = ()
