@@ -52,7 +52,7 @@ from designkit.simulation.nonlinear import element_for
 from designkit.simulation.reference import Reference, reference_of
 from designkit.simulation.result import SimulationResult
 from designkit.simulation.step import layout, step_function
-from designkit.simulation.timing import grid, rates_of, resolve
+from designkit.simulation.timing import grid, rates_of, resolve, sampling_of
 from designkit.spec.fields import per_joint
 from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
@@ -334,9 +334,10 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     _check_anti_windup(sim.anti_windup, law)
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
-    held_per_step = sim.sampling_period == 0 and (sim.delay > 0 or not element.continuous or law.discontinuous)
+    sampling = sampling_of(spec, law)
+    held_per_step = sampling[0] == 0 and (sim.delay > 0 or not element.continuous or law.discontinuous)
     timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
-                     max_dt_reason=law.max_step_reason)
+                     max_dt_reason=law.max_step_reason, sampling=sampling)
 
     t = grid(timing)
     if motion is None:  # a task-space path is checked on its joint path (the family's motion)
@@ -386,7 +387,8 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         "reference": dict(ref.settings),
         "nonlinearity": element.settings,
         "delay": float(sim.delay),
-        "sampling_period": float(sim.sampling_period),
+        "sampling_period": float(sampling[0]),
+        "sampling_period_source": sampling[1] if sampling[0] > 0 else "",
         "noise": noise_settings,
         "perturbation": pert_settings,
         "plant_change": change_settings,

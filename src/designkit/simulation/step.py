@@ -7,7 +7,9 @@ Signal chain over the step ``[t_k, t_k + dt]``::
                                        controller plus the trial's feedforward v_k (F = law.feedforward,
                                        v_k itself when the law declares none); sampled or discontinuous:
                                        only at the step's start, then held
-    m <- law.update(y, xc, m, r)       the law's discrete memory, at each controller sample
+    m <- law.update(y, xc, m, r)       the law's discrete memory, at each controller sample (before the
+                                       command when the law says ``command_after_update``: measure,
+                                       update, compute; the signals are recorded on the same memory)
     v = element(u_c, e)                nonlinear element per input (saturation, dead zone, relay, quantizer)
     u_a(t) = v(t - delay)              delay line of ``delay/dt`` steps
     x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative
@@ -22,9 +24,10 @@ law's recorded signals (:attr:`designkit.synthesis.law.Law.signals`).
 
 The chain is evaluated inside the integrator (fourth-order accurate with RK4) when the controller
 is continuous and smooth, there is no delay and the element is continuous and memoryless.  A
-sampled controller (``sampling_period > 0``) computes its command and the derivative of its state at
-``t = j Ts`` and holds both; a **discontinuous** law is held the same way at every step (its sample
-is the step); a relay, quantizer or delay line is evaluated once per step and held.
+sampled controller (``sampling_period > 0``: ``simulation.sampling_period``, or the period the law
+declares, :attr:`designkit.synthesis.law.Law.sampling_period`) computes its command and the
+derivative of its state at ``t = j Ts`` and holds both; a **discontinuous** law is held the same
+way at every step (its sample is the step); a relay, quantizer or delay line is evaluated once per step and held.
 """
 
 from __future__ import annotations
@@ -124,28 +127,29 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
     x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
     r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)
     y = x + noise
-    gate = law.gate(y, xc, m, r0)
-    command = law.command(y, xc, m, r0) + _feedforward(law, y, xc, m, r0, uff)
+    m_next = ca.if_else(flag, law.update(y, xc, m, r0), m) if L.nm else m
+    m_cmd = m_next if law.command_after_update else m  # the memory the command and the signals read
+    gate = law.gate(y, xc, m_cmd, r0)
+    command = law.command(y, xc, m_cmd, r0) + _feedforward(law, y, xc, m_cmd, r0, uff)
     if held_law:
         u_hold = ca.if_else(flag, command, u_hold)
-        d_hold = ca.if_else(flag, law.derivative(y, xc, m, r0, gate), d_hold)
+        d_hold = ca.if_else(flag, law.derivative(y, xc, m_cmd, r0, gate), d_hold)
         u_cmd = u_hold
     else:
         u_cmd = command
-    m_next = ca.if_else(flag, law.update(y, xc, m, r0), m) if L.nm else m
     if per_step:
         v, e_next = element.function(u_cmd, e)
         u_app = line[L.nu * (L.delay_steps - 1):] if L.delay_steps > 0 else v
         line_next = ca.vertcat(v, line[: L.nu * (L.delay_steps - 1)]) if L.delay_steps > 0 else line
     else:
         u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
-    held = ca.vertcat(noise, dist, uff, m, e, gate, u_app, d_hold, p)
+    held = ca.vertcat(noise, dist, uff, m_cmd, e, gate, u_app, d_hold, p)
     s0 = ca.vertcat(x, xc)
     if timing.integrator == "cvodes":
         s_next = variable_step(rhs, s0, timing.dt, (r0, rm, r1), held, rtol=numerics.rtol, atol=numerics.atol)
     else:
         s_next = rk4(lambda state, ref: rhs(state, ref, held), s0, timing.dt, (r0, rm, r1))
     z_next = ca.vertcat(s_next[:L.nx], law.project(s_next[L.nx:]), m_next, e_next, u_hold, d_hold, line_next)
-    signals = law.signals(y, xc, m, r0) if law.signals is not None else ca.DM(0, 1)
+    signals = law.signals(y, xc, m_cmd, r0) if law.signals is not None else ca.DM(0, 1)
     record = ca.vertcat(x, xc, u_cmd, u_app, y, dist, signals)
     return ca.Function("sim_step", [z, w], [z_next, record], ["z", "w"], ["z_next", "record"])

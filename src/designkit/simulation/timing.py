@@ -24,11 +24,12 @@ Defaults:
   ``max(CAPPED_STEPS * dt, horizon + 10 / |Re p|med + delay)`` when that fits the budget; the
   settings then say that the run does not reach steady state.
 
-A user ``dt`` must divide the sampling period and the delay into whole numbers of steps and
-satisfy ``dt * rate <= MAX_DT_RATE``, else :class:`SpecError` on ``simulation.dt``.  Any run
-longer than :data:`MAX_STEPS` steps is refused (a resource bound) naming the field to change:
-``simulation.dt`` when the user set it, ``numerics.integrator`` when an explicit ``rk4`` meets a
-stiff loop, else ``simulation.duration``.
+The sampling period is ``simulation.sampling_period`` or the one the control law declares
+(:func:`sampling_of`, which refuses the two in conflict).  A user ``dt`` must divide the sampling
+period and the delay into whole numbers of steps and satisfy ``dt * rate <= MAX_DT_RATE``, else
+:class:`SpecError` on ``simulation.dt``.  Any run longer than :data:`MAX_STEPS` steps is refused
+(a resource bound) naming the field to change: ``simulation.dt`` when the user set it,
+``numerics.integrator`` when an explicit ``rk4`` meets a stiff loop, else ``simulation.duration``.
 """
 
 from __future__ import annotations
@@ -251,8 +252,30 @@ def _bound_error(spec: Any, duration: float, dt: float, steps: float, *, integra
                                             "simulation.dt)")
 
 
+def sampling_of(spec: Any, law: Any) -> tuple[float, str]:
+    """``(period, key)``: the controller's sampling period (s, 0: continuous) and the key path that sets it.
+
+    A law that declares the period it was designed for (:attr:`designkit.synthesis.law.Law.sampling_period`)
+    is sampled there; ``simulation.sampling_period`` may then be left out or repeat it.
+
+    Raises
+    ------
+    SpecError
+        On ``simulation.sampling_period`` when it is positive and differs from the law's period.
+    """
+    given = float(spec.simulation.sampling_period)
+    own = getattr(law, "sampling_period", None)
+    if own is None:
+        return given, "simulation.sampling_period"
+    source = getattr(law, "sampling_period_source", "") or "the control law's design"
+    if given > 0 and abs(given - own) > 1e-9 * own:
+        raise SpecError("simulation.sampling_period", f"{given:g} s conflicts with the {own:g} s the controller was "
+                        f"designed for ({source}); leave simulation.sampling_period out or set it to {own:g} s")
+    return float(own), source
+
+
 def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool = False, max_dt: float | None = None,
-            max_dt_reason: str = "") -> Timing:
+            max_dt_reason: str = "", sampling: tuple[float, str] | None = None) -> Timing:
     """Integrator, step, number of samples, sampling and delay steps for ``spec.simulation``.
 
     Parameters
@@ -270,6 +293,9 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     max_dt : float, optional
         The largest step the law can be simulated with (s; :attr:`designkit.synthesis.law.Law.max_step`), and
         ``max_dt_reason`` why: the default step is chosen at or below it, a larger ``simulation.dt`` is refused.
+    sampling : (float, str), optional
+        The controller's sampling period (s) and the key path that sets it (:func:`sampling_of`); default
+        ``simulation.sampling_period``.
 
     Raises
     ------
@@ -280,7 +306,8 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     sim = spec.simulation
     fast = rates.fast
     duration, duration_source, start = _duration(spec, rates.slow, ref_horizon)
-    periods = {"simulation.sampling_period": sim.sampling_period, "simulation.delay": sim.delay}
+    sample, sample_key = (float(sim.sampling_period), "simulation.sampling_period") if sampling is None else sampling
+    periods = {sample_key: sample, "simulation.delay": sim.delay}
     g = _rational_gcd(list(periods.values()))
     stiff = () if held_per_step else rates.stiff()
     default_dt = sim.dt is None
@@ -339,7 +366,7 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     if dt >= duration:
         raise SpecError("simulation.dt", f"{dt:g} s must be smaller than the duration {duration:g} s")
     n_samples = round(steps) + 1
-    steps_per_sample = _whole_steps(sim.sampling_period, dt) or 0
+    steps_per_sample = _whole_steps(sample, dt) or 0
     delay_steps = _whole_steps(sim.delay, dt) or 0
     settings: dict[str, Any] = {
         "integrator_choice": integrator_source,

@@ -43,8 +43,20 @@ side inside each step.  ``max_step`` (s) bounds the step the law can be simulate
 ``max_step_reason`` says why (e.g. the chattering band the hold leaves on the sliding function);
 the simulation takes the smaller of it and its own choice and reports both.
 
-:func:`dynamic_law` builds a law from CasADi expressions (its states' derivatives, the command,
-the recorded signals), so no family hand-assembles the functions.
+**Sampled laws with discrete memory.**  A law designed in discrete time (a self-tuning regulator:
+its estimates, covariance and past inputs and outputs) declares its memory entries
+(:class:`Memory` in :func:`dynamic_law`: ``memory_names``, ``initial_memory``, ``memory_units`` and
+the ``update`` function) and the period it was designed for, ``sampling_period`` (s), with
+``sampling_period_source`` naming where it comes from (a spec key path such as
+``controller.sampling_period``).  The simulation then samples the controller at that period (its
+command held between samples, ``update`` called once per sample) and refuses a conflicting
+``simulation.sampling_period``, naming both.  ``command_after_update`` (set by :func:`dynamic_law`
+when a law has memory) orders a sample as a sampled controller does: measure ``y``, update the memory
+``m <- update(y, xc, m, r)``, then compute the command (and record the signals) from the *updated*
+memory; without it the command reads the memory as it was before the sample.
+
+:func:`dynamic_law` builds a law from CasADi expressions (its states' derivatives, its memory's
+update, the command, the recorded signals), so no family hand-assembles the functions.
 
 Anti-windup of integral states (spec ``simulation.anti_windup``), per joint ``j``:
 ``threshold`` -- ``gate_j = 1`` while ``|e_j| <= value_j`` else 0; ``saturation`` -- the integral
@@ -53,6 +65,7 @@ clamped to ``|K3_j x3_j| <= value_j`` after every step.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -62,7 +75,7 @@ import numpy as np
 
 from designkit.synthesis.design import freeze
 
-__all__ = ["Law", "LawSymbols", "State", "dynamic_law", "integral_law", "law_symbols", "stateless_law"]
+__all__ = ["Law", "LawSymbols", "Memory", "State", "dynamic_law", "integral_law", "law_symbols", "stateless_law"]
 
 
 @dataclass(frozen=True)
@@ -94,6 +107,15 @@ class Law:
         ``(y, xc, m, r) -> s``, the recorded signals named by ``signal_names`` (units in ``signal_units``).
     feedforward : casadi.Function or None
         ``(y, xc, m, r, v) -> u``: how a trial's feedforward ``v`` enters the command (default: added).
+    memory_units : tuple of str
+        Units of the memory entries (empty: unitless).
+    sampling_period : float or None
+        The period (s) the law was designed for: the simulation samples it there (module docstring);
+        ``None``: a continuous law, sampled only when ``simulation.sampling_period`` says so.
+    sampling_period_source : str
+        Where ``sampling_period`` comes from (a spec key path), for messages.
+    command_after_update : bool
+        At a sample the command reads the memory updated by that sample (module docstring).
     """
 
     kind: str
@@ -115,6 +137,10 @@ class Law:
     signal_names: tuple[str, ...] = ()
     signal_units: tuple[str, ...] = ()
     feedforward: ca.Function | None = None
+    memory_units: tuple[str, ...] = ()
+    sampling_period: float | None = None
+    sampling_period_source: str = ""
+    command_after_update: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
@@ -135,6 +161,18 @@ class Law:
         if len(units) != size:
             raise ValueError(f"law {self.kind!r}: {len(units)} signal units for {size} signals")
         object.__setattr__(self, "signal_units", units)
+        nm = len(self.memory_names)
+        memory = tuple(float(v) for v in self.initial_memory) or (0.0,) * nm
+        if len(memory) != nm:
+            raise ValueError(f"law {self.kind!r}: initial_memory has {len(memory)} values for {nm} memory entries")
+        object.__setattr__(self, "initial_memory", memory)
+        munits = tuple(self.memory_units) or ("",) * nm
+        if len(munits) != nm:
+            raise ValueError(f"law {self.kind!r}: {len(munits)} memory units for {nm} memory entries")
+        object.__setattr__(self, "memory_units", munits)
+        if self.sampling_period is not None and not (math.isfinite(self.sampling_period) and self.sampling_period > 0):
+            raise ValueError(f"law {self.kind!r}: sampling_period must be positive and finite, got "
+                             f"{self.sampling_period}")
 
     @property
     def n_state(self) -> int:
@@ -173,6 +211,8 @@ class LawSymbols:
         Indices of the joint positions and velocities in ``y``.
     names : tuple of str
         Controller state names (for :meth:`state`).
+    memory_names : tuple of str
+        Memory entry names (for :meth:`memory`).
     """
 
     y: ca.SX
@@ -182,6 +222,7 @@ class LawSymbols:
     positions: tuple[int, ...]
     velocities: tuple[int, ...]
     names: tuple[str, ...] = ()
+    memory_names: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:
@@ -217,6 +258,10 @@ class LawSymbols:
         """The controller state ``name``."""
         return self.xc[self.names.index(name)]
 
+    def memory(self, name: str) -> ca.SX:
+        """The memory entry ``name`` (its value before the sample's update)."""
+        return self.m[self.memory_names.index(name)]
+
 
 @dataclass(frozen=True)
 class State:
@@ -237,12 +282,40 @@ class State:
     initial: float | None = None
 
 
+@dataclass(frozen=True)
+class Memory:
+    """One discrete memory entry of a :func:`dynamic_law`, updated once per controller sample.
+
+    Parameters
+    ----------
+    name : str
+        As in ``memory_names`` (``"theta1"``, ``"y_prev"``).
+    update : callable
+        ``LawSymbols -> SX`` scalar: the entry's value after the sample, from ``y``, ``xc``, the memory
+        before the sample ``m`` and ``r``.
+    initial : float
+        Its value before the first sample.
+    unit : str
+        Its unit (``"rad"``, ``""``).
+    """
+
+    name: str
+    update: Callable[[LawSymbols], ca.SX]
+    initial: float = 0.0
+    unit: str = ""
+
+
 def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX], states: Sequence[State] = (),
                 settings: Mapping[str, Any] | None = None, signals: Mapping[str, Callable[[LawSymbols], ca.SX]]
                 | None = None, signal_units: Sequence[str] = (), discontinuous: bool = False,
                 max_step: float | None = None, max_step_reason: str = "",
-                feedforward: Callable[[LawSymbols, ca.SX], ca.SX] | None = None) -> Law:
-    """A law from CasADi expressions: its states' derivatives, its command and its recorded signals.
+                feedforward: Callable[[LawSymbols, ca.SX], ca.SX] | None = None, memory: Sequence[Memory] = (),
+                sampling_period: float | None = None, sampling_period_source: str = "") -> Law:
+    """A law from CasADi expressions: its states' derivatives, its memory's update, its command and its signals.
+
+    With ``memory``, the command and the signals are written on the memory *after* the sample's update
+    (``command_after_update``): in them ``s.m`` / ``s.memory(name)`` are the updated entries, in each
+    :attr:`Memory.update` the entries before it.
 
     Parameters
     ----------
@@ -262,6 +335,10 @@ def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX]
         See :class:`Law`.
     feedforward : callable, optional
         ``(LawSymbols, v) -> SX``: how a trial's feedforward ``v`` (one per plant input) enters the command.
+    memory : sequence of Memory
+        The discrete memory, in order (module docstring, "Sampled laws").
+    sampling_period : float, optional
+        The period (s) the law was designed for, and ``sampling_period_source`` the spec key that sets it.
 
     Examples
     --------
@@ -273,12 +350,23 @@ def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX]
     ...                   command=lambda s: -20 * (s.q[0] - s.state("xf")) - 2 * s.qd[0])
     >>> law.state_names, law.rest_start
     (('xf',), ('xf',))
+
+    A sampled integrator of the position error, ``i(k) = i(k-1) + Ts e(k)``, ``u = -5 i``, designed for
+    ``Ts = 0.01`` s:
+
+    >>> law = dynamic_law("demo", LinkPlant(Km=2.0, tau=0.5), sampling_period=0.01,
+    ...                   memory=[Memory("i", lambda s: s.memory("i") + 0.01 * (s.q[0] - s.qD[0]), unit="rad*s")],
+    ...                   command=lambda s: -5 * s.memory("i"))
+    >>> law.memory_names, law.command_after_update, float(law.update([1, 0], [], [0.0], [0, 0, 0]))
+    (('i',), True, 0.01)
     """
     n = len(plant.positions)
     names = tuple(s.name for s in states)
-    y, xc, m, r = law_symbols(len(plant.states), len(states), 0, n)
-    sym = LawSymbols(y, xc, m, r, tuple(plant.positions), tuple(plant.velocities), names)
+    mnames = tuple(e.name for e in memory)
+    y, xc, m, r = law_symbols(len(plant.states), len(states), len(memory), n)
+    sym = LawSymbols(y, xc, m, r, tuple(plant.positions), tuple(plant.velocities), names, mnames)
     args, arg_names = [y, xc, m, r], ["y", "xc", "m", "r"]
+    m_next = ca.vertcat(*[e.update(sym) for e in memory]) if memory else m
     g = ca.SX.sym("gate", len(states))
     xc_dot = ca.vertcat(*[s.derivative(sym) for s in states]) if states else ca.SX(0, 1)
     ff_fn = None
@@ -297,8 +385,11 @@ def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX]
         gate=ca.Function(f"{kind}_gate", args, [ca.SX.ones(len(states)) if states else ca.SX(0, 1)], arg_names,
                          ["gate"]),
         project=ca.Function(f"{kind}_project", [xc], [xc], ["xc"], ["xc_projected"]),
-        update=ca.Function(f"{kind}_update", args, [m], arg_names, ["m_next"]),
+        update=ca.Function(f"{kind}_update", args, [m_next], arg_names, ["m_next"]),
         settings=settings or {},
+        memory_names=mnames, initial_memory=tuple(float(e.initial) for e in memory),
+        memory_units=tuple(e.unit for e in memory), sampling_period=sampling_period,
+        sampling_period_source=sampling_period_source, command_after_update=bool(memory),
         initial_state=tuple(0.0 if s.initial is None else float(s.initial) for s in states),
         rest_start=tuple(s.name for s in states if s.initial is None),
         discontinuous=discontinuous, max_step=max_step, max_step_reason=max_step_reason,

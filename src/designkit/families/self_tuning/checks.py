@@ -1,0 +1,3 @@
+RULES = ()
+def diagnose(result, check):
+    return None
