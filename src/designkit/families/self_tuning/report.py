@@ -6,8 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
+from designkit.families.self_tuning.laws import KIND
 from designkit.families.self_tuning.runs import samples, true_theta
 
 __all__ = ["json", "section"]
@@ -20,18 +19,19 @@ def _num(x: Any) -> float | None:
 
 def json(result: Any) -> dict[str, Any]:
     """``theta_hat`` (final estimates), ``theta_true`` (the exactly discretized true link at the end of the run,
-    same order) and ``self_tuning`` (form, parameter names and units, initial estimates, sampling period)."""
+    same order) and the family's own object under its kind (form, parameter names and units, initial estimates,
+    sampling period)."""
     d, sim = result.design, result.simulation
     x = d.extra
     info = {"form": x["form"], "parameters": list(x["parameters"]), "units": list(x["units"]),
             "initial": list(x["initial"]), "sampling_period": x["Ts"], "design": x["design"]}
     if sim is None:
-        return {"theta_hat": list(x["initial"]), "self_tuning": info}
+        return {"theta_hat": list(x["initial"]), KIND: info}
     s = samples(sim, d)
     plant = result.plant if result.plant is not None else d.plant
     true = true_theta(result.loaded.spec, plant, d, s.t[-1:])[0]
     return {"theta_hat": [_num(v) for v in s.theta[-1]], "theta_true": [float(v) for v in true],
-            "self_tuning": {**info, "samples": len(s.t), "held": int(s.held.sum()), "bounded": int(s.bounded.sum())}}
+            KIND: {**info, "samples": len(s.t), "held": int(s.held.sum()), "bounded": int(s.bounded.sum())}}
 
 
 def section(result: Any) -> Any:
@@ -40,5 +40,3 @@ def section(result: Any) -> Any:
 
     return build(result)
 
-
-_ = np
