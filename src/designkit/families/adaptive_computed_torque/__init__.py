@@ -126,7 +126,7 @@ class AdaptiveComputedTorqueSpec(Section):
             raise ValueError("give either poles, or K1 and K2")
         if direct and (self.K1 is None or self.K2 is None):
             raise ValueError(f"{'K2' if self.K2 is None else 'K1'}: K1 and K2 go together")
-        for k, name in enumerate(self.adapt):
+        for name in self.adapt:
             if name not in self.initial:
                 raise ValueError(f"initial: no initial estimate of the adapted parameter {name!r}")
         for name in self.initial:

@@ -42,7 +42,8 @@ import numpy as np
 
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
-__all__ = ["KIND", "Adaptation", "Freezer", "adaptive_law", "fixed_law", "parameter_units", "true_parameters"]
+__all__ = ["KIND", "Adaptation", "Freezer", "adaptive_law", "estimated_dynamics", "estimates", "fixed_law",
+           "parameter_units", "settings_of", "true_parameters"]
 
 KIND = "adaptive_computed_torque"
 """The controller kind of this family (the spec's ``controller.kind``)."""
@@ -126,6 +127,19 @@ def _estimate(P_true: np.ndarray, idx: Sequence[int], values: ca.SX) -> ca.SX:
     return ca.vertcat(*entries)
 
 
+def estimated_dynamics(plant: Any, names: Sequence[str], values: Any) -> ca.Function:
+    """``(q, qd, v) -> (D^, h^, W(q, qd, v) P^)`` with the adapted entries of ``P`` at ``values`` (the others true):
+    ``D^ = dW(q, 0, a)/da P^`` (kg*m^2), ``h^ = W(q, qd, 0) P^`` (N*m); the law's model, for the tests."""
+    n = plant.n_joints
+    q, qd, v, acc = (ca.SX.sym(x, n) for x in ("q", "qd", "v", "acc"))
+    P_hat = _estimate(true_parameters(plant), _indices(plant, names), ca.SX(ca.DM([float(x) for x in values])))
+    W = _regressor(plant)
+    D = ca.jacobian(W(q, ca.SX.zeros(n), acc) @ P_hat, acc)
+    h = W(q, qd, ca.SX.zeros(n)) @ P_hat
+    return ca.Function("estimated_dynamics", [q, qd, v], [D, h, W(q, qd, v) @ P_hat], ["q", "qd", "v"],
+                       ["D_hat", "h_hat", "tau"])
+
+
 def adaptive_law(plant: Any, a: Adaptation) -> Law:
     """The adaptive computed torque (module docstring) on the arm ``plant`` (whose true parameters are the known ones).
 
@@ -175,12 +189,14 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
             memo[key]["vf_dot"] = a.bandwidth * (qd - vf)
         return memo[key]
 
-    states = [State(x, (lambda k: lambda s: parts(s)["rate"][k])(k), float(a.initial[k]))
-              for k, x in enumerate(names)]
+    def pick(name: str, k: int) -> Any:
+        return lambda s: parts(s)[name][k]
+
+    states = [State(x, pick("rate", k), float(a.initial[k])) for k, x in enumerate(names)]
     if a.acceleration == "filtered":
-        states += [State(f"vf{j + 1}", (lambda j: lambda s: parts(s)["vf_dot"][j])(j), 0.0) for j in range(n)]
+        states += [State(f"vf{j + 1}", pick("vf_dot", j), 0.0) for j in range(n)]
     signals = {"V": lambda s: parts(s)["V"], "Vdot_bound": lambda s: parts(s)["Vdot"]}
-    signals.update({f"e1_{j + 1}": (lambda j: lambda s: parts(s)["e1"][j])(j) for j in range(n)})
+    signals.update({f"e1_{j + 1}": pick("e1", j) for j in range(n)})
     kw: dict[str, Any] = {}
     if a.acceleration == "filtered":
         kw = {"max_step": 0.2 / a.bandwidth,

@@ -1,0 +1,47 @@
+"""Bad adaptive computed-torque specs: exit 2, one line naming the key path, nothing written."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.cli_input import assert_bad_input
+
+HEAD = "name: bad\nplant: {kind: robot, robot: planar2r}\n"
+SINE = "simulation: {duration: 2, trajectory: {kind: sine, amplitude: [1.0, 1.2], frequency: 0.5}}\n"
+GOOD = "adapt: [m1, m2], initial: {m1: 7.0, m2: 4.5}"
+
+
+def _ctrl(body: str) -> str:
+    return "controller: {kind: adaptive_computed_torque, " + body + "}\n" + SINE
+
+
+CASES = {
+    "K1 zero": (_ctrl(f"K1: [0, 100], K2: [20, 20], {GOOD}"), "controller.K1[0]: must be positive"),
+    "K2 negative": (_ctrl(f"K1: [100, 100], K2: [20, -1], {GOOD}"), "controller.K2[1]: must be positive"),
+    "psi negative": (_ctrl(f"poles: [-10, -10], psi: [-0.1, 0.1], {GOOD}"), "controller.psi[0]: must be positive"),
+    "psi wrong length": (_ctrl(f"poles: [-10, -10], psi: [0.1, 0.1, 0.1], {GOOD}"), "controller.psi"),
+    "K1 wrong length": (_ctrl(f"K1: [100, 100, 100], K2: [20, 20], {GOOD}"), "controller.K1"),
+    "K1 without K2": (_ctrl(f"K1: [100, 100], {GOOD}"), "controller.K2: K1 and K2 go together"),
+    "poles and gains": (_ctrl(f"poles: [-10, -10], K1: [100, 100], K2: [20, 20], {GOOD}"),
+                        "controller: give either poles, or K1 and K2"),
+    "bounds reversed": (_ctrl(f"poles: [-10, -10], {GOOD}, bounds: {{m1: [10.0, 4.0]}}"),
+                        "controller.bounds.m1: l = 10 > h = 4"),
+    "initial outside bounds": (_ctrl(f"poles: [-10, -10], {GOOD}, bounds: {{m2: [1.0, 4.0]}}"),
+                               "controller.initial.m2: the initial estimate 4.5 is outside its bounds"),
+    "unknown parameter": (_ctrl("poles: [-10, -10], adapt: [m1, m7], initial: {m1: 7.0, m7: 1.0}"),
+                          "controller.adapt[1]: the robot has no parameter 'm7'"),
+    "missing initial": (_ctrl("poles: [-10, -10], adapt: [m1, m2], initial: {m1: 7.0}"),
+                        "controller.initial: no initial estimate of the adapted parameter 'm2'"),
+    "gain zero": (_ctrl(f"poles: [-10, -10], {GOOD}, gain: [1.0, 0.0]"), "controller.gain[1]: must be positive"),
+    "gain wrong length": (_ctrl(f"poles: [-10, -10], {GOOD}, gain: [1.0, 2.0, 3.0]"),
+                          "controller.gain: must be one number or 2"),
+    "K1 beyond its range": (_ctrl(f"K1: [100, 1.0e+13], K2: [20, 20], {GOOD}"), "controller.K1[1]: must be between"),
+    "adapted twice": (_ctrl("poles: [-10, -10], adapt: [m1, m1], initial: {m1: 7.0}"),
+                      "controller.adapt[1]: 'm1' is listed twice"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_bad_input(case, tmp_path, capsys):
+    text, message = CASES[case]
+    assert_bad_input(tmp_path, capsys, HEAD + text, message)
