@@ -35,7 +35,7 @@ from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
 from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units
 from designkit.families.adaptive_computed_torque.spr import default_psi
-from designkit.spec.fields import Finite, Section, check_conjugates, parse_pole, per_joint
+from designkit.spec.fields import Finite, NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
 from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
@@ -68,7 +68,7 @@ class AdaptiveComputedTorqueSpec(Section):
     initial: dict[str, Finite] = Field(description="Initial estimate of every adapted parameter.")
     gain: Finite | list[Finite] = Field(default=1.0, description="Adaptation gains K (> 0).")
     bounds: dict[str, list[Finite]] | None = None
-    delta: Ranged(0.0, 1e6, "", zero=True) = 0.0
+    delta: Ranged(1e-12, 1e6, "", zero=True, base=NonNegativeFinite) = 0.0
     acceleration: Literal["ideal", "filtered"] = "ideal"
     bandwidth: Ranged(1e-3, 1e6, "rad/s") = 200.0
 
