@@ -181,9 +181,9 @@ def design(nominal: Any, st: Settings, *, excitation_window: float = 2.0, notes:
     names, units = PARAMETER_NAMES[st.form], PARAMETER_UNITS[st.form]
     coefs = initial_controller(st)
     model = position_model(st.theta0, st.Ts, st.form)
-    gains = [Gain("Ts", st.Ts, "s", "sampling period"), Gain("lambda", st.forgetting, "", "forgetting factor"),
-             Gain("P0", st.P0, "", "initial covariance (times the identity)"),
-             Gain("max_trace", st.max_trace, "", "covariance bound (trace)" + ("" if st.safeguards else ", off"))]
+    gains = [Gain("Ts", st.Ts, "s", "sampling period"), Gain("λ", st.forgetting, "", "forgetting factor"),
+             Gain("P(0)", st.P0, "", "initial covariance (times the identity)"),
+             Gain("tr P max", st.max_trace, "", "covariance bound (trace)" + ("" if st.safeguards else ", off"))]
     if st.design == "pole_placement":
         gains += [Gain(n_, v, u, w) for n_, v, u, w in zip(
             ("R1", "S0", "S1", "T0"), coefs, ("", "N*m/rad", "N*m/rad", "N*m/rad"),

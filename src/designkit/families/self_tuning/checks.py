@@ -247,7 +247,7 @@ def _diagnose_own(result: Any, check: Any) -> tuple[str, str] | None:
     if check.name == "parameter_step":
         return ("The estimator did not follow the change of the link: " + check.detail + ".",
                 "Lower controller.forgetting below 1 (forgetting lets new data outweigh the old; with λ = 1 the "
-                "estimator's memory is the whole run).")
+                "estimator's memory is the whole run)" + _with_forgetting(result) + ".")
     if check.name == "characteristic_polynomial":
         return ("The estimated closed loop is not the requested one: " + check.detail + ".",
                 "Look at the Sylvester condition number: a near-common factor of A and B makes the design ill-posed; "
@@ -256,6 +256,29 @@ def _diagnose_own(result: Any, check: Any) -> tuple[str, str] | None:
         return ("The final controller does not place the true loop's poles: " + check.detail + ".",
                 "The estimates have not converged (see the convergence check): excite longer or forget faster.")
     return None
+
+
+SUGGESTED_FORGETTING = 0.99
+"""The forgetting factor a failed re-convergence is re-simulated with."""
+
+
+def _with_forgetting(result: Any) -> str:
+    """``": with lambda = 0.99 the estimates re-converge ... (re-simulated)"`` when the spec forgets nothing."""
+    spec = result.loaded.spec
+    if spec.controller.forgetting < 1 or result.simulation is None:
+        return ""
+    from designkit.families.self_tuning import synthesize
+    from designkit.families.self_tuning.runs import simulate
+    from designkit.verification.suite import Context
+
+    plant = result.plant if result.plant is not None else result.design.plant
+    other = spec.model_copy(update={"controller": spec.controller.model_copy(
+        update={"forgetting": SUGGESTED_FORGETTING})})
+    design = synthesize(other, plant)
+    took, _ = reconvergence_time(design, Context(other, simulate(other, design, plant), other.numerics.solver, plant))
+    if took is None:
+        return f": λ = {SUGGESTED_FORGETTING:g} was re-simulated and does not re-converge either"
+    return f": with λ = {SUGGESTED_FORGETTING:g} (re-simulated) the estimates re-converge {took:.3g} s after the change"
 
 
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:

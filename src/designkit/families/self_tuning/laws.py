@@ -75,6 +75,9 @@ class Settings:
         Requested continuous poles (1/s): two (pole placement) or three (PID).
     observer : float
         Observer pole (1/s, real, negative), pole placement only.
+    estimate : bool
+        ``False`` switches the estimator off (the controller stays designed on ``theta0``): the
+        non-adaptive comparison of the report.
     """
 
     form: str
@@ -87,6 +90,7 @@ class Settings:
     design: str
     poles: tuple[complex, ...]
     observer: float = 0.0
+    estimate: bool = True
 
     @property
     def n(self) -> int:
@@ -200,6 +204,11 @@ def _poly3(poles: Sequence[complex]) -> list[float]:
     return list(np.real(np.poly([complex(p) for p in poles])))
 
 
+def _pole_words(p: complex) -> str:
+    p = complex(p)
+    return f"{p.real:g}" if p.imag == 0 else f"{p.real:g} ± {abs(p.imag):g}j"
+
+
 def self_tuning_law(nominal: Any, st: Settings) -> Law:
     """The sampled self-tuning law (module docstring) for the link layout of ``nominal``."""
     n = st.n
@@ -226,7 +235,7 @@ def self_tuning_law(nominal: Any, st: Settings) -> Law:
             phi, out = ca.vertcat(v1, u1), v
         else:
             phi, out = ca.vertcat(y1 - y2, u1, u2), y - y1
-        est = _rls(st, theta, P, phi, out, ca.logic_not(first))
+        est = _rls(st, theta, P, phi, out, ca.logic_not(first) if st.estimate else ca.SX(0))
         old = [mem(c) for c in ctrl]
         coefs, held = _design(st, est["theta"], old)
         if st.design == "pole_placement":
@@ -265,9 +274,11 @@ def self_tuning_law(nominal: Any, st: Settings) -> Law:
     return dynamic_law(
         KIND, nominal, memory=memory, command=lambda s: s.memory("u"),
         signals={name: (lambda nm: (lambda s: s.memory(nm)))(name) for name in recorded},
-        settings={"estimator": st.form, "sampling_period": st.Ts, "forgetting": st.forgetting,
-                  "initial_covariance": st.P0, "initial_estimates": list(st.theta0), "max_trace": st.max_trace,
-                  "safeguards": st.safeguards, "design": st.design,
-                  "poles": [[complex(p).real, complex(p).imag] for p in st.poles], "observer": st.observer},
+        settings={"estimator": "speed measured" if st.form == "speed" else "position differences",
+                  "sampling_period": st.Ts, "forgetting": st.forgetting, "initial_covariance": st.P0,
+                  "initial_estimates": list(st.theta0), "max_trace": st.max_trace, "safeguards": st.safeguards,
+                  "design": "pole placement" if st.design == "pole_placement" else "PID",
+                  "requested_poles": ", ".join(_pole_words(p) for p in st.poles if complex(p).imag >= 0) + " 1/s",
+                  "observer": st.observer, "estimating": st.estimate},
         sampling_period=st.Ts, sampling_period_source="controller.sampling_period",
     )

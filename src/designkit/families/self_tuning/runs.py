@@ -163,3 +163,27 @@ def simulate(spec: Any, design: Any, plant: Any) -> Any:
     from designkit.simulation.run import build
 
     return build(spec, design, plant=plant).run()
+
+
+def designed_response(sim: Any, design: Any, spec: Any, plant: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(t, x1, ym)`` at the sample instants: the position and the response the requested loop gives on the true
+    link, ``ym = (Am(1)/B(1)) B(z)/Am(z) xD`` (pole placement: ``A R + B S = Am Ao`` cancels the observer), ``B``
+    the true sampled link's numerator at each sample; started at rest at the initial position."""
+    x = design.extra
+    s = samples(sim, design)
+    idx = np.searchsorted(np.asarray(sim.time, dtype=float), s.t)
+    x1 = np.asarray(sim.position, dtype=float)[idx]
+    r = np.asarray(sim.desired, dtype=float)[idx, 0]
+    Ts = x["Ts"]
+    am = np.real(np.poly(np.exp(np.array([complex(a, b) for a, b in x["poles"]]) * Ts)))
+    th = true_theta(spec, plant, design, s.t)
+    model = position_models(th, Ts, x["form"])
+    ym = np.empty_like(r)
+    y1 = y2 = float(x1[0])
+    r1 = r2 = float(x1[0])
+    for k in range(len(r)):
+        b0, b1 = model[k, 2], model[k, 3]
+        g = (am[0] + am[1] + am[2]) / (b0 + b1)
+        ym[k] = -am[1] * y1 - am[2] * y2 + g * (b0 * r1 + b1 * r2)
+        y1, y2, r1, r2 = ym[k], y1, r[k], r1
+    return s.t, x1, ym
