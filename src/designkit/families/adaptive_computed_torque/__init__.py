@@ -33,7 +33,7 @@ from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
-from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units
+from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units, state_name
 from designkit.families.adaptive_computed_torque.spr import default_psi
 from designkit.spec.fields import Finite, NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
 from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
@@ -173,8 +173,8 @@ def gains_of(spec: Any, n: int) -> tuple[tuple[float, ...], tuple[float, ...], t
         K1 = _joint_list(c.K1, n, "controller.K1")
         K2 = _joint_list(c.K2, n, "controller.K2")
     if c.psi is not None:
-        return K1, K2, _joint_list(c.psi, n, "controller.psi"), "the spec"
-    return K1, K2, tuple(default_psi(k) for k in K2), "chosen as 2/K2 (SPR margin psi K2 - 1 = 1)"
+        return K1, K2, _joint_list(c.psi, n, "controller.psi"), "given by the spec"
+    return K1, K2, tuple(default_psi(k) for k in K2), "chosen as 2/K2 (SPR margin ψ K2 − 1 = 1)"
 
 
 def adaptation(spec: Any, plant: Any) -> Adaptation:
@@ -197,6 +197,13 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
                       bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta))
 
 
+def _gain_unit(unit: str) -> str:
+    """The unit of an adaptation gain for a parameter in ``unit``: ``unit^2 s/rad^2`` (``P^' = K W' D^-1 e1``)."""
+    if not unit:
+        return "s/rad^2"
+    return (f"({unit})^2" if "*" in unit or "/" in unit else f"{unit}^2") + "*s/rad^2"
+
+
 def synthesize(spec: Any, plant: Any) -> Design:
     """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
     a = adaptation(spec, plant)
@@ -208,11 +215,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
     gains = Gains.of([
         Gain("K1", list(a.K1), "1/s^2", "position error gain"),
         Gain("K2", list(a.K2), "1/s", "velocity error gain"),
-        Gain("psi", list(a.psi), "s", "velocity weight of e1 = e + psi e' (SPR filter)"),
-        Gain("K", list(a.gain), "", "adaptation gains, one per adapted parameter (unit of the parameter squared "
-                                    "times s/rad^2)"),
+        Gain("psi", list(a.psi), "s", "velocity weight of e1 = e + ψ ė (the SPR filter)"),
+        *(Gain(f"K_{x}", g, _gain_unit(u), f"adaptation gain of {x}")
+          for x, g, u in zip(a.names, a.gain, units, strict=True)),
     ])
-    notes = [f"psi {how}.",
+    notes = [f"ψ {how}; SPR needs ψ > 1/K2: " + ", ".join(f"{1 / k:.4g} s" for k in a.K2) + " per joint.",
              "Adapted: " + ", ".join(f"{x} (from {v:.6g} {u}; true {true[i]:.6g} {u})"
                                      for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
              + "; every other parameter of the regressor is known (the arm's true value).",
@@ -234,7 +241,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         extra={"adaptation": a.to_json(), "units": list(units), "true": [float(true[i]) for i in idx]},
     )
     lin = Linearization("frozen", reason="the computed torque with the estimated parameters held (no adaptation)",
-                        parameters=tuple(f"p_{x}" for x in a.names), initial=a.initial, units=units,
+                        parameters=tuple(state_name(x) for x in a.names), initial=a.initial, units=units,
                         freeze=Freezer(plant, a.names, a.K1, a.K2))
     return with_closed_loop(design, act.adaptive_law(plant, a), np.concatenate([q0, np.zeros(2 * n)]),
                             field="simulation.initial_position", linearization=lin)

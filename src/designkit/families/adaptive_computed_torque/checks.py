@@ -153,7 +153,7 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
             "at_s": float(t[k]), "tolerance": tol, "integral_of_Vdot": predicted,
             "V_end_minus_V0": float(V[-1] - V[0]), "acceleration": design.extra["adaptation"]["acceleration"]}
     setting = ("filtered velocity derivative: the theorem's V' = −xᵀQ1x holds only up to the filter's error"
-               if filtered else "ideal accelerometer: V' = −Σ 2K1 e² + 2(ψK2 − 1) ė² exactly")
+               if filtered else "ideal accelerometer: V' = −Σ 2K1 e² + 2(ψK2 − 1) ė² exactly, ≤ 0 when ψK2 ≥ 1")
     detail = (f"V from {V[0]:.4g} to {V[-1]:.4g}; largest rise over its running minimum {rel:.3g} × V(0) at "
               f"t = {t[k]:.3g} s (tolerance {tol:g} × V(0), {setting}); ∫V' dt on the error equation "
               f"{predicted:.4g} against V(T) − V(0) = {V[-1] - V[0]:.4g}")

@@ -123,7 +123,7 @@ def _draw_excitation(result: Any, ex: Any) -> Any:
                                label=f"smallest eigenvalue of ∫WᵀW dt over the last {ex.window:.3g} s"))
     ax.set_yscale("log")
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("λmin (N²·m² s per unit²)", fontsize=8)
+    ax.set_ylabel("λmin ((N·m per parameter unit)²·s)", fontsize=8)
     ax.set_xlim(ex.time[0], ex.time[-1])
     ax.legend(loc="best", framealpha=0.9, fontsize=7)
     return fig, {"window": ex.window, "efolds": ex.efolds, "floor": floor}

@@ -20,7 +20,7 @@ on ``qdd`` (no algebraic loop) -- and ``acceleration: filtered`` differentiates 
 velocity through a first-order filter ``vf' = wf (qd - vf)``, ``qdd^ = wf (qd - vf)`` (``n``
 more controller states, a lag of ``1/wf``).
 
-Controller states in order: ``p_<name>`` (the adapted parameters, starting at the spec's initial
+Controller states in order: ``<name> estimate`` (the adapted parameters, starting at the spec's initial
 estimates), then ``vf<j>`` (filtered velocities, ``filtered`` only, starting at rest).  Recorded
 signals: ``V`` (the Lyapunov function of the adaptive loop, computed with the true parameters --
 a verification signal, not used by the law), ``Vdot_bound`` (its derivative on the exact error
@@ -43,7 +43,7 @@ import numpy as np
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
 __all__ = ["KIND", "Adaptation", "Freezer", "adaptive_law", "estimated_dynamics", "estimates", "fixed_law",
-           "parameter_units", "settings_of", "true_parameters"]
+           "parameter_units", "settings_of", "state_name", "true_parameters"]
 
 KIND = "adaptive_computed_torque"
 """The controller kind of this family (the spec's ``controller.kind``)."""
@@ -159,7 +159,7 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
     p = plant.model_parameters()
     fd = plant.robot.functions["forward_dynamics"]
     memo: dict[int, dict[str, ca.SX]] = {}
-    names = tuple(f"p_{x}" for x in a.names)
+    names = tuple(state_name(x) for x in a.names)
 
     def parts(s: LawSymbols) -> dict[str, ca.SX]:
         key = id(s)
@@ -249,9 +249,14 @@ class Freezer:
         return fixed_law(self.plant, self.names, values, self.K1, self.K2)
 
 
+def state_name(name: str) -> str:
+    """The controller state holding the estimate of the parameter ``name`` (``"m2 estimate"``)."""
+    return f"{name} estimate"
+
+
 def estimates(sim: Any, names: Sequence[str]) -> np.ndarray:
     """The adapted parameters along a run, ``(N, m)``."""
-    cols = [list(sim.controller_state_names).index(f"p_{x}") for x in names]
+    cols = [list(sim.controller_state_names).index(state_name(x)) for x in names]
     return np.asarray(sim.controller_state, dtype=float)[:, cols]
 
 

@@ -34,7 +34,8 @@ def _spr_rows(result: Any) -> list[dict[str, Any]]:
     from designkit.families.adaptive_computed_torque.checks import spr_evidence
 
     return [{"K1": j.K1, "K2": j.K2, "psi": j.psi, "psi_K2_minus_1": j.analytic, "kyp": j.kyp,
-             "sweep_min_re_H": j.sweep_min, "psi_min_s": j.psi_min} for j in spr_evidence(result.design)["joints"]]
+             "sweep_min_re_H": j.sweep_min, "sweep_w_rad_s": j.sweep_w, "w2_re_H_top": j.high_frequency,
+             "psi_min_s": j.psi_min} for j in spr_evidence(result.design)["joints"]]
 
 
 def json(result: Any) -> dict[str, Any]:
@@ -67,10 +68,12 @@ def _spr_question(result: Any) -> Question:
     rows = _spr_rows(result)
     table = Table("The error filter of each joint and its SPR condition ψ K2 > 1",
                   ("Joint", "K1 (1/s²)", "K2 (1/s)", "ψ (s)", "ψ K2 − 1", "SPR for ψ above (s)", "KYP certificate",
-                   "smallest Re H(jω) on the grid"),
+                   "ω² Re H(jω) at the grid's top", "most negative Re H(jω) (at ω, rad/s)"),
                   tuple((str(k + 1), _f(r["K1"]), _f(r["K2"]), _f(r["psi"]), _f(r["psi_K2_minus_1"], 3),
                          _f(r["psi_min_s"]), {True: "found, re-checked", False: "refuted",
-                                              None: "undecided"}[r["kyp"]], _f(r["sweep_min_re_H"], 3))
+                                              None: "undecided"}[r["kyp"]], _f(r["w2_re_H_top"], 3),
+                         f"{_f(r['sweep_min_re_H'], 3)} (at {_f(r['sweep_w_rad_s'], 4)})" if r["sweep_min_re_H"] < 0
+                         else "none negative")
                         for k, r in enumerate(rows)))
     bad = [k for k, r in enumerate(rows) if r["psi_K2_minus_1"] <= 0]
     if bad:
