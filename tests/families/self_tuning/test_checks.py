@@ -113,3 +113,27 @@ def test_a_step_reference_loses_excitation_and_says_so(tmp_path, capsys):
     payload = json.loads(capsys.readouterr().out)
     exc = next(c for c in payload["checks"] if c["name"] == "excitation")
     assert rc == 1 and exc["passed"] is False and "lost excitation" in exc["detail"]
+
+
+def test_pid_design_gains_are_the_one_link_pid_of_the_estimated_link(tmp_path, capsys):
+    """design: pid -- the final gains in use place the continuous PID loop of the *true* final link at the requested
+    poles (python-control), since the estimates converged."""
+    import control
+
+    from designkit.families import synthesize
+    from designkit.pipeline import plant as plant_of
+    from designkit.schema.loader import parse_spec
+    from designkit.simulation.run import build
+
+    text = (SPECS / "selftune-speed.yaml").read_text().replace("  poles: [-4, -5]", "  design: pid\n"
+                                                                 "  poles: [-4, -5, -20]")
+    loaded = parse_spec(text)
+    true = plant_of(loaded)
+    design = synthesize(loaded.spec, true)
+    res = build(loaded.spec, design, plant=true).run()
+    s = samples(res, design)
+    K1, K2, K3 = s.coefs[-1, :3]
+    Km, tau = 1.0, 0.8  # the true link after the change
+    L = control.tf([Km * K2, Km * K1, Km * K3], [tau, 1.0, 0.0, 0.0])
+    poles = np.sort(control.poles(control.feedback(L, 1)).real)
+    np.testing.assert_allclose(poles, [-20.0, -5.0, -4.0], rtol=1e-6)

@@ -85,3 +85,37 @@ def test_the_recorded_regressor_is_the_sampled_data():
     Phi, _ = _batch("position", x, u)
     phi = np.column_stack([np.asarray(res.signals[f"phi{i}"])[idx] for i in (1, 2, 3)])
     np.testing.assert_allclose(phi[1:], Phi, rtol=1e-12, atol=1e-15)
+
+
+def test_the_notes_recursion_is_the_standard_one_with_P_over_lambda():
+    """§4.3 as printed (gamma = 1/(1 + x'Px), K = gamma P x, P <- (P - K x'P)/lambda) started from P0/lambda gives
+    the estimates of designkit's law (the standard form from P0), on measurements fed to the law's update."""
+    from designkit.families.self_tuning import settings_from
+    from designkit.families.self_tuning.laws import self_tuning_law
+
+    loaded = parse_spec(SPEC.format(form="speed", lam=0.9, P0=10.0, T=2.0, change="", safe="false", bit=0.25))
+    design = synthesize(loaded.spec, plant_of(loaded))
+    st = settings_from(design)
+    law = self_tuning_law(design.plant, st)
+    names = law.memory_names
+    rng = np.random.default_rng(7)
+    m = np.asarray(law.initial_memory, dtype=float)
+    theta, P = np.asarray(st.theta0, dtype=float), np.eye(2) * st.P0 / st.forgetting
+    v_prev = u_prev = None
+    for k in range(40):
+        y = [rng.normal(), rng.normal()]
+        if u_prev is not None:  # an exciting past input in the law's memory (its own command would do too)
+            u_prev = rng.normal()
+            m[names.index("u1")] = u_prev
+        m = np.asarray(law.update(y, [], m, [0.3, 0.0, 0.0]), dtype=float).ravel()
+        if v_prev is not None:
+            x = np.array([v_prev, u_prev])
+            gamma = 1.0 / (1.0 + x @ P @ x)
+            K = gamma * P @ x
+            theta = theta + K * (y[1] - x @ theta)
+            P = (P - np.outer(K, x @ P)) / st.forgetting
+        v_prev, u_prev = y[1], 0.0
+        np.testing.assert_allclose(m[[names.index("th1"), names.index("th2")]], theta, rtol=1e-9, atol=1e-12)
+    # the law's covariance is the notes' times lambda
+    P_law = m[[names.index(n) for n in ("P11", "P12", "P21", "P22")]].reshape(2, 2)
+    np.testing.assert_allclose(P_law, st.forgetting * P, rtol=1e-9, atol=1e-12)

@@ -187,7 +187,8 @@ def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
         detail = (f"the link changes at t = {t0:g} s ({moved}); the estimates are within {CONVERGED_REL:.0%} of the "
                   f"new link's parameters {took:.4g} s later and stay there")
     return (Check("parameter_step", took is not None, f"re-converged within the {left:.4g} s left",
-                  took, left - took if took is not None else None, "s", detail,
+                  took if took is not None else "never", left - took if took is not None else None,
+                  "s" if took is not None else "", detail,
                   {"reconvergence_time": took, "change_time": t0}),)
 
 
