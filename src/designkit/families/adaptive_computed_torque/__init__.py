@@ -35,6 +35,7 @@ from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
 from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units, state_name
 from designkit.families.adaptive_computed_torque.spr import default_psi
+from designkit.families.adaptive_computed_torque.words import unit_text
 from designkit.spec.fields import Finite, NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
 from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
@@ -220,7 +221,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
           for x, g, u in zip(a.names, a.gain, units, strict=True)),
     ])
     notes = [f"ψ {how}; SPR needs ψ > 1/K2: " + ", ".join(f"{1 / k:.4g} s" for k in a.K2) + " per joint.",
-             "Adapted: " + ", ".join(f"{x} (from {v:.6g} {u}; true {true[i]:.6g} {u})"
+             "Adapted: " + ", ".join(f"{x} (from {v:.6g} {unit_text(u)}; true {true[i]:.6g} {unit_text(u)})"
                                      for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
              + "; every other parameter of the regressor is known (the arm's true value).",
              {"ideal": "Acceleration for the update: an ideal accelerometer (the arm's own acceleration at the "

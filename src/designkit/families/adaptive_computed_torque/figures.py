@@ -14,31 +14,9 @@ from designkit.display.figure import JOINT_COLORS, LIMIT_STYLE, Figure
 from designkit.display.svg import BLUE, GREEN, GREY, RED, new_figure, plot_decimated, render_tagged, tag
 from designkit.families.adaptive_computed_torque.laws import KIND, estimates
 from designkit.families.adaptive_computed_torque.spr import frequency_grid, re_h
+from designkit.families.adaptive_computed_torque.words import describe, unit_text
 
-__all__ = ["FIGURES", "describe", "excitation_figure", "error_figure", "estimates_figure", "spr_figure"]
-
-_WORDS = {"m": "mass of link {}", "mcx": "first moment x of link {}", "mcy": "first moment y of link {}",
-          "mcz": "first moment z of link {}", "fv": "viscous friction of joint {}",
-          "fc": "Coulomb friction of joint {}", "Ia": "rotor inertia of joint {}"}
-_UNIT_TEXT = {"kg": "kg", "kg*m": "kg·m", "kg*m^2": "kg·m²", "N*m*s/rad": "N·m·s/rad", "N*m": "N·m"}
-
-
-def describe(name: str) -> str:
-    """A regressor parameter in words: ``m2`` -> ``"m2, mass of link 2"``, ``fv1`` -> ``"fv1, viscous friction of
-    joint 1"``."""
-    stem = name.rstrip("0123456789")
-    index = name[len(stem):]
-    if stem in _WORDS:
-        return f"{name}, {_WORDS[stem].format(index)}"
-    if stem.startswith("I"):
-        return f"{name}, inertia {stem[1:]} of link {index} about its frame origin"
-    return name
-
-
-def unit_text(unit: str) -> str:
-    """A unit typeset (``kg*m^2`` -> ``kg·m²``)."""
-    return _UNIT_TEXT.get(unit, unit)
-
+__all__ = ["FIGURES", "excitation_figure", "error_figure", "estimates_figure", "spr_figure"]
 
 def _ours(result: Any) -> bool:
     return result.design.kind == KIND and result.simulation is not None

@@ -13,8 +13,8 @@ import numpy as np
 
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
-from designkit.families.adaptive_computed_torque.figures import describe, unit_text
 from designkit.families.adaptive_computed_torque.laws import estimates
+from designkit.families.adaptive_computed_torque.words import describe, unit_text
 
 __all__ = ["json", "section"]
 
