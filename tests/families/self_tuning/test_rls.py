@@ -102,7 +102,7 @@ def test_the_notes_recursion_is_the_standard_one_with_P_over_lambda():
     m = np.asarray(law.initial_memory, dtype=float)
     theta, P = np.asarray(st.theta0, dtype=float), np.eye(2) * st.P0 / st.forgetting
     v_prev = u_prev = None
-    for k in range(40):
+    for _ in range(40):
         y = [rng.normal(), rng.normal()]
         if u_prev is not None:  # an exciting past input in the law's memory (its own command would do too)
             u_prev = rng.normal()
