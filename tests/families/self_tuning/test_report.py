@@ -43,3 +43,20 @@ def test_figures_are_drawn(speed_result):
     assert all(f is not None and f.svg.startswith("<") for f in figs)
     assert {f.filename for f in figs} == {"fig-selftune-estimates.svg", "fig-selftune-loop.svg",
                                           "fig-selftune-conditioning.svg"}
+
+
+def test_reports_have_no_raw_python_representation(speed_result, failing_result, tmp_path, monkeypatch):
+    """The written reports (HTML and PDF) pass the shared report suite's raw-notation patterns."""
+    from designkit.report.provenance import STABLE_ENV
+    from designkit.report.writer import write_report
+    from tests.report.test_pipeline_reports import _html_text, _pdf_text, _raw
+
+    monkeypatch.setenv(STABLE_ENV, "stable")  # the command line is pytest's here: not part of what is scanned
+
+    for result in (speed_result, failing_result):
+        files = write_report(result, tmp_path)
+        html = _html_text(files.html.read_text(encoding="utf-8"))
+        assert _raw(html) == [] and "N*m" not in html
+        assert "Lab questions (notes, experiment 2: self-tuning)" in html
+        pdf = _pdf_text(files.pdf)
+        assert _raw(pdf) == [] and "N*m" not in pdf

@@ -129,10 +129,14 @@ def _excitation(design: Any, ctx: Context) -> tuple[Check, ...]:
     detail = (f"smallest eigenvalue of the windowed information matrix (last {window_s:g} s, {e['window']} samples), "
               f"normalized to a unit diagonal: {_f(v, 3)} (at least {EXCITATION_MIN:g}); unnormalized "
               f"{_f(e['final_lam'], 3)}")
+    if len(e["norm"]) < e["window"]:
+        detail = (f"the run has {len(e['norm'])} samples, fewer than the {e['window']} of the excitation window "
+                  f"({window_s:g} s): the indicator is not defined; lengthen simulation.duration or shorten "
+                  "controller.excitation_window")
     if lost.size:
         detail += (f"; below the threshold on {lost.size} of {len(e['norm'])} samples, first at "
                    f"t = {e['samples'].t[lost[0]]:.4g} s")
-    if not passed:
+    if not passed and len(e["norm"]) >= e["window"]:
         detail += ": the estimator has lost excitation, its estimates are not determined by the data"
     return (Check("excitation", passed, f"≥ {EXCITATION_MIN:g}", v if math.isfinite(v) else None,
                   v - EXCITATION_MIN if math.isfinite(v) else None, "", detail,
