@@ -117,3 +117,25 @@ def test_pid_gains_place_the_continuous_loop():
     # u = -(K1 + K2 s + K3/s) x1 + ...: loop Km (K2 s^2 + K1 s + K3) / (s^2 (tau s + 1))
     L = control.tf([Km * K2, Km * K1, Km * K3], [tau, 1.0, 0.0, 0.0])
     np.testing.assert_allclose(np.sort(control.poles(control.feedback(L, 1)).real), sorted(poles), rtol=1e-8)
+
+
+def test_designed_response_is_python_controls_forced_response(speed_result):
+    """The designed response ym = (Am(1)/B(1)) B(z)/Am(z) xD of runs.designed_response, against python-control's
+    forced response of the same discrete transfer function (B of scipy's ZOH model) before the link changes."""
+    import control
+
+    from designkit.families.self_tuning.runs import designed_response
+
+    res = speed_result
+    t, x1, ym = designed_response(res.simulation, res.design, res.loaded.spec, res.plant)
+    Ts = 0.01
+    A, B = zoh(2.0, 0.5, Ts)
+    b = [B[0], A[0, 1] * B[1] - A[1, 1] * B[0]]
+    am = np.real(np.poly(np.exp(np.array([-4.0, -5.0]) * Ts)))
+    G = control.tf(np.polymul([sum(am) / sum(b)], b), am, Ts)
+    before = t < 12.0 - 1e-9
+    r = np.asarray(res.simulation.desired)[np.searchsorted(np.asarray(res.simulation.time), t), 0]
+    out = control.forced_response(G, T=t[before], U=r[before]).outputs
+    np.testing.assert_allclose(ym[before], out, atol=1e-9)
+    # and the regulator follows it once the estimates have converged (before the change)
+    assert np.max(np.abs(x1 - ym)[(t > 8.0) & before]) < 1e-5

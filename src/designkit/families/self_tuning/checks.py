@@ -32,6 +32,7 @@ import numpy as np
 from designkit.families.self_tuning.laws import KIND
 from designkit.families.self_tuning.runs import (
     characteristic_error,
+    designed_response,
     excitation,
     position_models,
     samples,
@@ -190,6 +191,15 @@ def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
     else:
         detail = (f"the link changes at t = {t0:g} s ({moved}); the estimates are within {CONVERGED_REL:.0%} of the "
                   f"new link's parameters {took:.4g} s later and stay there")
+    if design.extra["design"] == "pole_placement":
+        ts, x1, ym = designed_response(ctx.simulation, design, ctx.spec, ctx.true_plant(design))
+        after = ts >= t0
+        tail = ts >= ts[-1] - design.extra["excitation_window"]
+        if after.any():
+            dev = np.abs(x1 - ym)
+            peak, last = _f(float(np.max(dev[after])), 3), _f(float(np.max(dev[tail])), 3)
+            detail += (f"; the loop leaves the response the requested poles give on the new link by at most {peak} "
+                       f"rad after the change and by {last} rad over the last excitation window")
     return (Check("parameter_step", took is not None, f"re-converged within the {left:.4g} s left",
                   took if took is not None else "never", left - took if took is not None else None,
                   "s" if took is not None else "", detail,
