@@ -40,6 +40,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit.models import regressor
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
 __all__ = ["KIND", "Adaptation", "Freezer", "adaptive_law", "estimated_dynamics", "estimates", "fixed_law",
@@ -113,10 +114,23 @@ def _indices(plant: Any, names: Sequence[str]) -> list[int]:
     return [all_names.index(n) for n in names]
 
 
-def _regressor(plant: Any) -> Any:
-    W = plant.robot.functions["regressor"]
-    p = plant.model_parameters()
-    return (lambda q, qd, a: W(q, qd, a, ca.DM(p))) if p is not None else (lambda q, qd, a: W(q, qd, a))
+def _torque_of_parameters(plant: Any) -> Any:
+    """``(q, qd, a, P) -> W(q, qd, a) P`` as the model layer's Newton--Euler in the parameter vector (cheaper
+    than the regressor product: the RNEA with ``P`` as data), the robot's own symbols bound to the plant's
+    values."""
+    robot = plant.robot
+    n = robot.n
+    q, qd, a = (ca.SX.sym(x, n) for x in ("q", "qd", "a"))
+    P = ca.SX.sym("P", len(robot.parameter_names))
+    tau = regressor.inverse_dynamics(robot.description, q, qd, a, ca.vertsplit(P), friction=robot.friction,
+                                     motor_inertia=robot.motor_inertia)
+    syms = [sym for _, sym in robot.description.symbols]
+    if syms:
+        F = ca.Function("torque_of_parameters", [q, qd, a, P, ca.vertcat(*syms)], [tau])
+        p = ca.DM(plant.model_parameters())
+        return lambda q_, qd_, a_, P_: F(q_, qd_, a_, P_, p)
+    F = ca.Function("torque_of_parameters", [q, qd, a, P], [tau])
+    return lambda q_, qd_, a_, P_: F(q_, qd_, a_, P_)
 
 
 def _estimate(P_true: np.ndarray, idx: Sequence[int], values: ca.SX) -> ca.SX:
@@ -133,10 +147,10 @@ def estimated_dynamics(plant: Any, names: Sequence[str], values: Any) -> ca.Func
     n = plant.n_joints
     q, qd, v, acc = (ca.SX.sym(x, n) for x in ("q", "qd", "v", "acc"))
     P_hat = _estimate(true_parameters(plant), _indices(plant, names), ca.SX(ca.DM([float(x) for x in values])))
-    W = _regressor(plant)
-    D = ca.jacobian(W(q, ca.SX.zeros(n), acc) @ P_hat, acc)
-    h = W(q, qd, ca.SX.zeros(n)) @ P_hat
-    return ca.Function("estimated_dynamics", [q, qd, v], [D, h, W(q, qd, v) @ P_hat], ["q", "qd", "v"],
+    tau_of = _torque_of_parameters(plant)
+    D = ca.jacobian(tau_of(q, ca.SX.zeros(n), acc, P_hat), acc)
+    h = tau_of(q, qd, ca.SX.zeros(n), P_hat)
+    return ca.Function("estimated_dynamics", [q, qd, v], [D, h, tau_of(q, qd, v, P_hat)], ["q", "qd", "v"],
                        ["D_hat", "h_hat", "tau"])
 
 
@@ -153,7 +167,7 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
     n = plant.n_joints
     idx = _indices(plant, a.names)
     P_true = true_parameters(plant)
-    W = _regressor(plant)
+    tau_of = _torque_of_parameters(plant)
     K1, K2, psi = (ca.DM(list(x)) for x in (a.K1, a.K2, a.psi))
     gain = np.asarray(a.gain, dtype=float)
     p = plant.model_parameters()
@@ -170,16 +184,17 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
         P_hat = _estimate(P_true, idx, est)
         e, ed = s.qD - q, s.qDd - qd
         v = s.qDdd + K1 * e + K2 * ed
-        u = W(q, qd, v) @ P_hat
+        u = tau_of(q, qd, v, P_hat)
         acc = ca.SX.sym("acc", n)
-        D_hat = ca.jacobian(W(q, ca.SX.zeros(n), acc) @ P_hat, acc)
+        D_hat = ca.jacobian(tau_of(q, ca.SX.zeros(n), acc, P_hat), acc)
         if a.acceleration == "ideal":
             qdd = fd(q, qd, u, ca.DM(p)) if p is not None else fd(q, qd, u)
         else:
             vf = ca.vertcat(*[s.state(f"vf{j + 1}") for j in range(n)])
             qdd = a.bandwidth * (qd - vf)
         e1 = e + psi * ed
-        Wa = W(q, qd, qdd)[:, idx]
+        Pa = ca.SX.sym("Pa", len(idx))
+        Wa = ca.jacobian(tau_of(q, qd, qdd, _estimate(P_true, idx, Pa)), Pa)  # affine in P: free of Pa
         rate = ca.DM(gain) * (Wa.T @ ca.solve(D_hat, e1))
         phi = ca.DM(P_true[idx]) - est
         V = ca.sum1((K2 + psi * K1) * e**2 + 2 * e * ed + psi * ed**2) + ca.sum1(phi**2 / ca.DM(gain))
@@ -224,12 +239,12 @@ def fixed_law(plant: Any, names: Sequence[str], values: Sequence[float], K1: Seq
     """The computed torque with the estimates held at ``values``: ``W(q, qd, qD'' + K1 e + K2 e') P^`` (no state)."""
     idx = _indices(plant, names)
     P_hat = _estimate(true_parameters(plant), idx, ca.DM([float(v) for v in values]))
-    W = _regressor(plant)
+    tau_of = _torque_of_parameters(plant)
     k1, k2 = ca.DM(list(K1)), ca.DM(list(K2))
 
     def command(s: LawSymbols) -> ca.SX:
         v = s.qDdd + k1 * (s.qD - s.q) + k2 * (s.qDd - s.qd)
-        return W(s.q, s.qd, v) @ P_hat
+        return tau_of(s.q, s.qd, v, P_hat)
 
     return dynamic_law(KIND, plant, command=command,
                        settings={"frozen": {x: float(v) for x, v in zip(names, values, strict=True)},
