@@ -7,7 +7,7 @@ import math
 from typing import Any
 
 from designkit.families.self_tuning.laws import KIND
-from designkit.families.self_tuning.runs import samples, true_theta
+from designkit.families.self_tuning.runs import excitation, samples, sylvester_condition, true_theta
 
 __all__ = ["json", "section"]
 
@@ -20,7 +20,8 @@ def _num(x: Any) -> float | None:
 def json(result: Any) -> dict[str, Any]:
     """``theta_hat`` (final estimates), ``theta_true`` (the exactly discretized true link at the end of the run,
     same order) and the family's own object under its kind (form, parameter names and units, initial estimates,
-    sampling period)."""
+    sampling period, design; after a run the samples taken, the samples where the controller was held and where
+    the covariance bound fired, the final excitation indicator and the final Sylvester condition number)."""
     d, sim = result.design, result.simulation
     x = d.extra
     info = {"form": x["form"], "parameters": list(x["parameters"]), "units": list(x["units"]),
@@ -30,8 +31,13 @@ def json(result: Any) -> dict[str, Any]:
     s = samples(sim, d)
     plant = result.plant if result.plant is not None else d.plant
     true = true_theta(result.loaded.spec, plant, d, s.t[-1:])[0]
+    window = max(1, int(round(x["excitation_window"] / x["Ts"])))
+    norm = excitation(s, window)[1]
+    cond = sylvester_condition(s, d)
     return {"theta_hat": [_num(v) for v in s.theta[-1]], "theta_true": [float(v) for v in true],
-            KIND: {**info, "samples": len(s.t), "held": int(s.held.sum()), "bounded": int(s.bounded.sum())}}
+            KIND: {**info, "samples": len(s.t), "held": int(s.held.sum()), "bounded": int(s.bounded.sum()),
+                   "excitation": _num(norm[-1]) if norm.size else None,
+                   "sylvester_condition": _num(cond[-1]) if cond.size else None}}
 
 
 def section(result: Any) -> Any:
