@@ -12,12 +12,22 @@ controller: {kind: adaptive_computed_torque, K1: [100, 100], K2: [20, 20], psi: 
 simulation: {duration: 2.0, trajectory: {kind: sine, amplitude: [1.0, 1.2], frequency: 0.5}}
 """
 
+SLOTINE = """\
+name: ranges-adaptive-ct-slotine-li
+plant: {kind: robot, robot: planar2r}
+controller: {kind: adaptive_computed_torque, scheme: slotine_li, Lambda: [10, 10], KD: [5, 1], adapt: [m1, m2],
+             initial: {m1: 7.0, m2: 4.5}, gain: 5.0}
+simulation: {duration: 2.0, trajectory: {kind: sine, amplitude: [1.0, 1.2], frequency: 0.5}}
+"""
+
 RANGES = {
     "controller.K1": [(BASE, "controller.K1", "controller.K1")],
     "controller.K2": [(BASE, "controller.K2", "controller.K2")],
     "controller.psi": [(BASE, "controller.psi", "controller.psi")],
     "controller.delta": [(BASE, "controller.delta", "controller.delta")],
     "controller.bandwidth": [(BASE, "controller.bandwidth", "controller.bandwidth")],
+    "controller.Lambda": [(SLOTINE, "controller.Lambda", "controller.Lambda")],
+    "controller.KD": [(SLOTINE, "controller.KD", "controller.KD")],
 }
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
@@ -40,6 +50,7 @@ EXAMPLES = {
     "adaptive-ct-simnog": 0,
     "adaptive-ct-simnog-poor": 0,  # e -> 0 is met and certified; the estimates' convergence is not promised here
     "adaptive-ct-puma560": 0,
-    "adaptive-ct-not-spr": 1,  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
+    "adaptive-ct-not-spr": 1,
+    "adaptive-ct-simnog-slotine-li": 0,  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -36,6 +36,18 @@ CASES = {
     "gain wrong length": (_ctrl(f"poles: [-10, -10], {GOOD}, gain: [1.0, 2.0, 3.0]"),
                           "controller.gain: must be one number or 2"),
     "K1 beyond its range": (_ctrl(f"K1: [100, 1.0e+13], K2: [20, 20], {GOOD}"), "controller.K1[1]: must be between"),
+    "Lambda with Craig's scheme": (_ctrl(f"poles: [-10, -10], Lambda: [10, 10], {GOOD}"),
+                                   "controller.Lambda: a gain of scheme: slotine_li only"),
+    "K1 with Slotine-Li": (_ctrl(f"scheme: slotine_li, Lambda: [10, 10], KD: [5, 1], K1: [1, 1], {GOOD}"),
+                           "controller.K1: not a gain of the Slotine-Li scheme"),
+    "Slotine-Li without KD": (_ctrl(f"scheme: slotine_li, Lambda: [10, 10], {GOOD}"),
+                              "controller.KD: required by the Slotine-Li scheme"),
+    "acceleration with Slotine-Li": (_ctrl(f"scheme: slotine_li, Lambda: [10, 10], KD: [5, 1], acceleration: ideal, "
+                                           f"{GOOD}"), "controller.acceleration: the Slotine-Li scheme needs no"),
+    "KD negative": (_ctrl(f"scheme: slotine_li, Lambda: [10, 10], KD: [5, -1], {GOOD}"),
+                    "controller.KD[1]: must be positive"),
+    "Lambda wrong length": (_ctrl(f"scheme: slotine_li, Lambda: [10, 10, 10], KD: [5, 1], {GOOD}"),
+                            "controller.Lambda"),
     "adapted twice": (_ctrl("poles: [-10, -10], adapt: [m1, m1], initial: {m1: 7.0}"),
                       "controller.adapt[1]: 'm1' is listed twice"),
 }

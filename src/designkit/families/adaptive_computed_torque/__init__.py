@@ -72,6 +72,9 @@ class AdaptiveComputedTorqueSpec(Section):
     delta: Ranged(1e-12, 1e6, "", zero=True, base=NonNegativeFinite) = 0.0
     acceleration: Literal["ideal", "filtered"] = "ideal"
     bandwidth: Ranged(1e-3, 1e6, "rad/s") = 200.0
+    scheme: Literal["craig", "slotine_li"] = "craig"
+    Lambda: RangedPerJoint(1e-12, 1e12, "1/s") | None = None
+    KD: RangedPerJoint(1e-12, 1e12, "N*m*s/rad") | None = None
 
     @field_validator("poles")
     @classmethod
@@ -123,7 +126,18 @@ class AdaptiveComputedTorqueSpec(Section):
     @model_validator(mode="after")
     def _consistent(self) -> AdaptiveComputedTorqueSpec:
         direct = self.K1 is not None or self.K2 is not None
-        if direct == (self.poles is not None):
+        if self.scheme == "slotine_li":
+            for name in ("poles", "K1", "K2", "psi"):
+                if getattr(self, name) is not None:
+                    raise ValueError(f"{name}: not a gain of the Slotine-Li scheme (it takes Lambda and KD)")
+            for name in ("Lambda", "KD"):
+                if getattr(self, name) is None:
+                    raise ValueError(f"{name}: required by the Slotine-Li scheme")
+            if "acceleration" in self.model_fields_set:
+                raise ValueError("acceleration: the Slotine-Li scheme needs no acceleration")
+        elif self.Lambda is not None or self.KD is not None:
+            raise ValueError(f"{'Lambda' if self.Lambda is not None else 'KD'}: a gain of scheme: slotine_li only")
+        if self.scheme != "slotine_li" and direct == (self.poles is not None):
             raise ValueError("give either poles, or K1 and K2")
         if direct and (self.K1 is None or self.K2 is None):
             raise ValueError(f"{'K2' if self.K2 is None else 'K1'}: K1 and K2 go together")
@@ -187,7 +201,13 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
         if name not in known:
             raise SpecError(f"controller.adapt[{k}]", f"the robot has no parameter {name!r}; its parameters are "
                             f"{', '.join(known)}")
-    K1, K2, psi, _ = gains_of(spec, n)
+    if c.scheme == "slotine_li":
+        K1 = K2 = psi = ()
+        Lambda = _joint_list(c.Lambda, n, "controller.Lambda")
+        KD = _joint_list(c.KD, n, "controller.KD")
+    else:
+        K1, K2, psi, _ = gains_of(spec, n)
+        Lambda = KD = ()
     gains = c.gain if isinstance(c.gain, list) else [c.gain] * len(c.adapt)
     bounds = None
     if c.bounds:
@@ -195,7 +215,8 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
                        for name in c.adapt)
     return Adaptation(names=tuple(c.adapt), initial=tuple(float(c.initial[x]) for x in c.adapt),
                       gain=tuple(float(g) for g in gains), K1=K1, K2=K2, psi=psi, acceleration=c.acceleration,
-                      bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta))
+                      bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta), scheme=c.scheme, Lambda=Lambda,
+                      KD=KD)
 
 
 def _gain_unit(unit: str) -> str:
@@ -205,58 +226,68 @@ def _gain_unit(unit: str) -> str:
     return (f"({unit})^2" if "*" in unit or "/" in unit else f"{unit}^2") + "*s/rad^2"
 
 
-def synthesize(spec: Any, plant: Any) -> Design:
-    """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
-    a = adaptation(spec, plant)
-    n = plant.n_joints
-    _, _, _, how = gains_of(spec, n)
-    units = parameter_units(a.names)
-    true = act.true_parameters(plant)
-    idx = [list(plant.robot.parameter_names).index(x) for x in a.names]
-    gains = Gains.of([
-        Gain("K1", list(a.K1), "1/s^2", "position error gain"),
-        Gain("K2", list(a.K2), "1/s", "velocity error gain"),
-        Gain("psi", list(a.psi), "s", "velocity weight of e1 = e + ψ ė (the SPR filter)"),
-        *(Gain(f"K_{x}", g, _gain_unit(u), f"adaptation gain of {x}")
-          for x, g, u in zip(a.names, a.gain, units, strict=True)),
-    ])
+def _scheme_parts(spec: Any, a: Adaptation) -> tuple[list[Gain], list[str], tuple[str, ...], tuple[complex, ...]]:
+    """The gains, the scheme's notes, formulas and requested poles."""
+    if a.scheme == "slotine_li":
+        gains = [Gain("Lambda", list(a.Lambda), "1/s", "s = ė + Λ e: the sliding variable's error pole"),
+                 Gain("KD", list(a.KD), "N*m*s/rad", "damping on s")]
+        notes = ["Slotine-Li scheme: no acceleration and no inverse of the estimated inertia are needed; there is no "
+                 "SPR filter to certify (the passivity of the arm takes its place)."]
+        formulas = ("q̇r = q̇D + Λ e,  q̈r = q̈D + Λ ė,  s = ė + Λ e,  e = qD − q",
+                    "Γ = Y(q, q̇, q̇r, q̈r) P̂ + KD s = D̂ q̈r + Ĉ q̇r + ĝ + F̂ + KD s",
+                    "P̂ₐ' = K Yₐᵀ s",
+                    "D ṡ + (C + KD) s = Y (P − P̂);  V = ½ sᵀ D s + ½ (P − P̂)ᵀ K⁻¹ (P − P̂),  V' = −sᵀ KD s")
+        return gains, notes, formulas, tuple(-float(x) for x in a.Lambda)
+    _, _, _, how = gains_of(spec, len(a.K1))
+    gains = [Gain("K1", list(a.K1), "1/s^2", "position error gain"),
+             Gain("K2", list(a.K2), "1/s", "velocity error gain"),
+             Gain("psi", list(a.psi), "s", "velocity weight of e1 = e + ψ ė (the SPR filter)")]
     notes = [f"ψ {how}; SPR needs ψ > 1/K2: " + ", ".join(f"{1 / k:.4g} s" for k in a.K2) + " per joint.",
-             "Adapted: " + ", ".join(f"{x} (from {v:.6g} {unit_text(u)}; true {true[i]:.6g} {unit_text(u)})"
-                                     for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
-             + "; every other parameter of the regressor is known (the arm's true value).",
              {"ideal": "Acceleration for the update: an ideal accelerometer (the arm's own acceleration at the "
                        "command).",
               "filtered": f"Acceleration for the update: the measured velocity differentiated through a first-order "
                           f"filter of bandwidth {a.bandwidth:g} rad/s."}[a.acceleration]]
+    formulas = ("v = q̈D + K1 e + K2 ė,  e = qD − q",
+                "Γ = D̂(q) v + ĥ(q, q̇) = W(q, q̇, v) P̂",
+                "P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)",
+                "ë + K2 ė + K1 e = D̂⁻¹ W(q, q̇, q̈) (P − P̂);  H(s) = (1 + ψ s)/(s² + K2 s + K1) SPR ⇔ ψ K2 > 1")
+    poles = tuple(p for k1, k2 in zip(a.K1, a.K2, strict=True) for p in np.roots([1.0, k2, k1]))
+    return gains, notes, formulas, poles
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
+    a = adaptation(spec, plant)
+    n = plant.n_joints
+    units = parameter_units(a.names)
+    true = act.true_parameters(plant)
+    idx = [list(plant.robot.parameter_names).index(x) for x in a.names]
+    scheme_gains, scheme_notes, formulas, poles = _scheme_parts(spec, a)
+    gains = Gains.of([*scheme_gains, *(Gain(f"K_{x}", g, _gain_unit(u), f"adaptation gain of {x}")
+                                       for x, g, u in zip(a.names, a.gain, units, strict=True))])
+    notes = [scheme_notes[0],
+             "Adapted: " + ", ".join(f"{x} (from {v:.6g} {unit_text(u)}; true {true[i]:.6g} {unit_text(u)})"
+                                     for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
+             + "; every other parameter of the regressor is known (the arm's true value).", *scheme_notes[1:]]
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
         q0 = np.array(_joint_list(spec.simulation.initial_position, n, "simulation.initial_position"))
-    poles = tuple(p for k1, k2 in zip(a.K1, a.K2, strict=True) for p in np.roots([1.0, k2, k1]))
     design = Design(
-        kind=KIND, plant=plant, gains=gains, poles=poles, reference="trajectory",
-        formulas=("v = q̈D + K1 e + K2 ė,  e = qD − q",
-                  "Γ = D̂(q) v + ĥ(q, q̇) = W(q, q̇, v) P̂",
-                  "P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)",
-                  "ë + K2 ė + K1 e = D̂⁻¹ W(q, q̇, q̈) (P − P̂);  H(s) = (1 + ψ s)/(s² + K2 s + K1) SPR ⇔ ψ K2 > 1"),
+        kind=KIND, plant=plant, gains=gains, poles=poles, reference="trajectory", formulas=formulas,
         notes=tuple(notes),
         extra={"adaptation": a.to_json(), "units": list(units), "true": [float(true[i]) for i in idx]},
     )
-    lin = Linearization("frozen", reason="the computed torque with the estimated parameters held (no adaptation)",
+    held = (a.Lambda, a.KD) if a.scheme == "slotine_li" else (a.K1, a.K2)
+    lin = Linearization("frozen", reason="the law with the estimated parameters held (no adaptation)",
                         parameters=tuple(state_name(x) for x in a.names), initial=a.initial, units=units,
-                        freeze=Freezer(plant, a.names, a.K1, a.K2))
+                        freeze=Freezer(plant, a.names, *held, a.scheme))
     return with_closed_loop(design, act.adaptive_law(plant, a), np.concatenate([q0, np.zeros(2 * n)]),
                             field="simulation.initial_position", linearization=lin)
 
 
 def law(design: Design, anti_windup: Any = None) -> Any:
     """The adaptive law of ``design`` (its settings from ``design.extra``)."""
-    x = dict(design.extra["adaptation"])
-    bounds = x["bounds"]
-    a = Adaptation(names=tuple(x["adapt"]), initial=tuple(x["initial"]), gain=tuple(x["gain"]), K1=tuple(x["K1"]),
-                   K2=tuple(x["K2"]), psi=tuple(x["psi"]), acceleration=x["acceleration"],
-                   bandwidth=float(x["bandwidth"]), bounds=None if bounds is None else tuple(tuple(b) for b in bounds),
-                   delta=float(x["delta"]))
-    return act.adaptive_law(design.plant, a)
+    return act.adaptive_law(design.plant, Adaptation.from_json(design.extra["adaptation"]))
 
 
 def validate(spec: Any) -> None:

@@ -76,8 +76,11 @@ class Excitation:
 
 
 def excitation(plant: Any, names: Sequence[str], K1: Sequence[float], gain: Sequence[float], time: np.ndarray,
-               reference: np.ndarray) -> Excitation:
-    """The indicators of the trajectory ``reference`` (``(N, n, 3)``: position, velocity, acceleration) at ``time``."""
+               reference: np.ndarray, scheme: str = "craig") -> Excitation:
+    """The indicators of the trajectory ``reference`` (``(N, n, 3)``: position, velocity, acceleration) at ``time``.
+
+    ``scheme="slotine_li"``: ``K1`` is then ``KD`` and the averaged update is ``phi' ~ -K Y' KD^-1 Y phi`` (for slow
+    parameter errors ``s ~ KD^-1 Y phi``; ``Y = W`` on the desired trajectory)."""
     t = np.asarray(time, dtype=float)
     ref = np.asarray(reference, dtype=float)
     step = max(1, int(np.ceil(len(t) / MAX_POINTS)))
@@ -95,10 +98,13 @@ def excitation(plant: Any, names: Sequence[str], K1: Sequence[float], gain: Sequ
     for k in range(len(t)):
         if t[k] - t[0] >= window - 1e-12:
             alpha[k] = float(np.linalg.eigvalsh(cum[k + 1] - cum[start[k]])[0])
-    Wt = np.linalg.solve(D, W)
     k1 = np.asarray(K1, dtype=float)
     late = t >= t[0] + 0.5 * (t[-1] - t[0])
-    G = np.einsum("kia,kib->ab", Wt[late] / k1[None, :, None], Wt[late]) / max(int(late.sum()), 1)
+    if scheme == "slotine_li":
+        G = np.einsum("kia,kib->ab", W[late] / k1[None, :, None], W[late]) / max(int(late.sum()), 1)
+    else:
+        Wt = np.linalg.solve(D, W)
+        G = np.einsum("kia,kib->ab", Wt[late] / k1[None, :, None], Wt[late]) / max(int(late.sum()), 1)
     g = np.sqrt(np.asarray(gain, dtype=float))
     rate = float(np.linalg.eigvalsh((g[:, None] * G * g[None, :] + (g[:, None] * G * g[None, :]).T) / 2)[0])
     return Excitation(time=t, alpha=alpha, window=window, rate=max(rate, 0.0), duration=float(t[-1] - t[0]))

@@ -147,7 +147,7 @@ def _draw_spr(result: Any) -> Any:
 
 def spr_figure(result: Any) -> Figure | None:
     """Re H(jw) per joint and w^2 Re H(jw), whose limit is the SPR margin psi K2 - 1."""
-    if result.design.kind != KIND:
+    if result.design.kind != KIND or result.design.extra["adaptation"].get("scheme", "craig") != "craig":
         return None
     svg, keys, info = render_tagged(_draw_spr, result)
     caption = ("Drawn: for each joint, Re H(jω) of H(s) = (1 + ψ s)/(s² + K2 s + K1) scaled by K1 (top; 1 at ω = 0) "

@@ -40,6 +40,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit.families.adaptive_computed_torque import slotine_li
 from designkit.models import regressor
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
@@ -100,13 +101,26 @@ class Adaptation:
     bandwidth: float = 0.0
     bounds: tuple[tuple[float, float], ...] | None = None
     delta: float = 0.0
+    scheme: str = "craig"
+    Lambda: tuple[float, ...] = ()
+    KD: tuple[float, ...] = ()
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready settings."""
         return {"adapt": list(self.names), "initial": list(self.initial), "gain": list(self.gain),
                 "K1": list(self.K1), "K2": list(self.K2), "psi": list(self.psi), "acceleration": self.acceleration,
                 "bandwidth": self.bandwidth, "bounds": None if self.bounds is None else [list(b) for b in self.bounds],
-                "delta": self.delta}
+                "delta": self.delta, "scheme": self.scheme, "Lambda": list(self.Lambda), "KD": list(self.KD)}
+
+    @classmethod
+    def from_json(cls, x: Any) -> Adaptation:
+        """The inverse of :meth:`to_json`."""
+        bounds = x["bounds"]
+        return cls(names=tuple(x["adapt"]), initial=tuple(x["initial"]), gain=tuple(x["gain"]), K1=tuple(x["K1"]),
+                   K2=tuple(x["K2"]), psi=tuple(x["psi"]), acceleration=x["acceleration"],
+                   bandwidth=float(x["bandwidth"]), bounds=None if bounds is None else tuple(tuple(b) for b in bounds),
+                   delta=float(x["delta"]), scheme=x.get("scheme", "craig"), Lambda=tuple(x.get("Lambda", ())),
+                   KD=tuple(x.get("KD", ())))
 
 
 def _indices(plant: Any, names: Sequence[str]) -> list[int]:
@@ -181,6 +195,10 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
             return memo[key]
         q, qd = s.q, s.qd
         est = ca.vertcat(*[s.state(x) for x in names])
+        if a.scheme == "slotine_li":
+            memo[key] = slotine_li.parts(s, tau_of, n, P_true, idx, est, ca.DM(list(a.Lambda)), ca.DM(list(a.KD)),
+                                         gain, _estimate)
+            return memo[key]
         P_hat = _estimate(P_true, idx, est)
         e, ed = s.qD - q, s.qDd - qd
         v = s.qDdd + K1 * e + K2 * ed
@@ -208,12 +226,14 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
         return lambda s: parts(s)[name][k]
 
     states = [State(x, pick("rate", k), float(a.initial[k])) for k, x in enumerate(names)]
-    if a.acceleration == "filtered":
+    filtered = a.acceleration == "filtered" and a.scheme == "craig"
+    if filtered:
         states += [State(f"vf{j + 1}", pick("vf_dot", j), 0.0) for j in range(n)]
     signals = {"V": lambda s: parts(s)["V"], "Vdot_bound": lambda s: parts(s)["Vdot"]}
-    signals.update({f"e1_{j + 1}": pick("e1", j) for j in range(n)})
+    filtered_name = "s" if a.scheme == "slotine_li" else "e1"
+    signals.update({f"{filtered_name}_{j + 1}": pick("e1", j) for j in range(n)})
     kw: dict[str, Any] = {}
-    if a.acceleration == "filtered":
+    if filtered:
         kw = {"max_step": 0.2 / a.bandwidth,
               "max_step_reason": f"the velocity-derivative filter's pole ({a.bandwidth:.4g} 1/s) is integrated "
                                  "with the loop"}
@@ -235,14 +255,17 @@ def _projection(law: Law, a: Adaptation) -> ca.Function:
 
 
 def fixed_law(plant: Any, names: Sequence[str], values: Sequence[float], K1: Sequence[float],
-              K2: Sequence[float]) -> Law:
-    """The computed torque with the estimates held at ``values``: ``W(q, qd, qD'' + K1 e + K2 e') P^`` (no state)."""
+              K2: Sequence[float], scheme: str = "craig") -> Law:
+    """The law with the estimates held at ``values`` (no state): ``W(q, qd, qD'' + K1 e + K2 e') P^`` (Craig), or
+    ``Y(q, qd, qr', qr'') P^ + KD s`` (``scheme="slotine_li"``, ``K1`` then ``Lambda`` and ``K2`` ``KD``)."""
     idx = _indices(plant, names)
     P_hat = _estimate(true_parameters(plant), idx, ca.DM([float(v) for v in values]))
     tau_of = _torque_of_parameters(plant)
     k1, k2 = ca.DM(list(K1)), ca.DM(list(K2))
 
     def command(s: LawSymbols) -> ca.SX:
+        if scheme == "slotine_li":
+            return slotine_li.fixed_command(s, tau_of, plant.n_joints, P_hat, k1, k2)
         v = s.qDdd + k1 * (s.qD - s.q) + k2 * (s.qDd - s.qd)
         return tau_of(s.q, s.qd, v, P_hat)
 
@@ -259,9 +282,10 @@ class Freezer:
     names: tuple[str, ...]
     K1: tuple[float, ...]
     K2: tuple[float, ...]
+    scheme: str = "craig"
 
     def __call__(self, values: Sequence[float]) -> Law:
-        return fixed_law(self.plant, self.names, values, self.K1, self.K2)
+        return fixed_law(self.plant, self.names, values, self.K1, self.K2, self.scheme)
 
 
 def state_name(name: str) -> str:

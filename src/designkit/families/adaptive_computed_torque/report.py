@@ -43,10 +43,10 @@ def json(result: Any) -> dict[str, Any]:
     ``final`` and ``excitation`` null without a run)."""
     d, sim = result.design, result.simulation
     a = d.extra["adaptation"]
-    rows = _spr_rows(result)
+    rows = [] if a.get("scheme", "craig") == "slotine_li" else _spr_rows(result)
     out: dict[str, Any] = {
         "parameters": list(a["adapt"]), "units": list(d.extra["units"]), "initial": list(a["initial"]),
-        "true": list(d.extra["true"]), "acceleration": a["acceleration"],
+        "true": list(d.extra["true"]), "acceleration": a["acceleration"], "scheme": a.get("scheme", "craig"),
         "spr": {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows], "psi_min_s": [r["psi_min_s"] for r in rows]},
         "final": None, "excitation": None,
     }
@@ -136,8 +136,12 @@ def _lyapunov_question(result: Any) -> Question:
     if check is None:
         return Question("Is the Lyapunov function of the adaptive loop non-increasing?", ("The run was not judged.",))
     c = check.certificate
-    sentences = (f"V = Σⱼ xⱼᵀPⱼxⱼ + (P − P̂)ᵀK⁻¹(P − P̂), with xⱼ = (eⱼ, ėⱼ) and the closed-form KYP matrix "
-                 f"Pⱼ = [[K2 + ψK1, 1], [1, ψ]], was computed along the run with the true parameters: from "
+    if result.design.extra["adaptation"].get("scheme", "craig") == "slotine_li":
+        what = "V = ½ sᵀD(q)s + ½ (P − P̂)ᵀK⁻¹(P − P̂), with s = ė + Λe and the true inertia D(q),"
+    else:
+        what = ("V = Σⱼ xⱼᵀPⱼxⱼ + (P − P̂)ᵀK⁻¹(P − P̂), with xⱼ = (eⱼ, ėⱼ) and the closed-form KYP matrix "
+                "Pⱼ = [[K2 + ψK1, 1], [1, ψ]],")
+    sentences = (f"{what} was computed along the run with the true parameters: from "
                  f"{_f(c['V0'])} to {_f(c['V_end'], 3)}, rising at most {_f(c['relative_rise'], 3)} × V(0) over its "
                  f"running minimum (tolerance {_f(c['tolerance'], 3)} × V(0)) — "
                  + ("non-increasing." if check.passed else "it is not a Lyapunov function of this loop."),)
@@ -146,7 +150,12 @@ def _lyapunov_question(result: Any) -> Question:
 
 def _acceleration_question(result: Any) -> Question:
     a = result.design.extra["adaptation"]
-    if a["acceleration"] == "ideal":
+    if a.get("scheme", "craig") == "slotine_li":
+        words = ("It needs none: the Slotine–Li law's regressor Y(q, q̇, q̇r, q̈r) uses the reference velocity and "
+                 "acceleration q̇r = q̇D + Λe, q̈r = q̈D + Λė, and its update K Yₐᵀ s no inverse of the estimated "
+                 "inertia. The price is the Christoffel-consistent Coriolis matrix in the regressor, a larger "
+                 "expression than the computed torque's.")
+    elif a["acceleration"] == "ideal":
         words = ("An ideal accelerometer: the update reads the arm's own acceleration, which the law can evaluate in "
                  "the simulation because the command does not depend on it (the torque uses the desired acceleration "
                  "and the error feedback only), so there is no algebraic loop. The cost is one forward-dynamics "
@@ -166,7 +175,8 @@ def section(result: Any) -> ReportSection | None:
 
     if result.design.kind != KIND:
         return None
-    questions = [_spr_question(result)]
+    slotine = result.design.extra["adaptation"].get("scheme", "craig") == "slotine_li"
+    questions = [] if slotine else [_spr_question(result)]
     if result.simulation is not None:
         questions += [_tracking_question(result), _estimates_question(result), _lyapunov_question(result)]
     questions.append(_acceleration_question(result))
