@@ -236,6 +236,8 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "controller.workspace.low": [(ROBOT_DH, "controller.workspace.low", "controller.workspace.low")],
     "controller.workspace.high": [(ROBOT_DH, "controller.workspace.high", "controller.workspace.high")],
     "controller.workspace.samples": [(ROBOT_DH, "controller.workspace.samples", "controller.workspace.samples")],
+    "controller.workspace.tolerance": [(ROBOT_DH, "controller.workspace.tolerance",
+                                        "controller.workspace.tolerance")],
     "controller.damping": [(ROBOT, "controller.damping", "controller.damping")],
     "controller.natural_frequency": [(ROBOT, "controller.natural_frequency", "controller.natural_frequency")],
     "controller.damped_least_squares.damping": [(TASK, "controller.damped_least_squares.damping",

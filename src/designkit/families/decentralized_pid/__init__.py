@@ -53,14 +53,17 @@ class Workspace(Section):
     """A box of configurations ``low <= q <= high`` (rad, or m for a prismatic joint) for the ``workspace`` check.
 
     ``low``, ``high``: one value for every joint or one per joint (each within 100); either omitted: the
-    robot's joint limits (``qlim``).  ``samples`` (2 to 101): grid points per outboard joint when the
-    range of each ``D_ii`` over the box is searched (:func:`designkit.models.link.link_range`).  Checked
-    against the robot at synthesis: one value per joint, ``low < high``, inside the joint limits.
+    robot's joint limits (``qlim``).  ``tolerance`` (1e-9 to 0.1, default 1e-3): the relative gap between
+    each proven bound of ``D_ii`` over the box and the configuration found nearest to it
+    (:func:`designkit.models.bounds.model_bound`).  ``samples`` (2 to 101): grid points per outboard joint
+    of the sampled estimate of the range shown beside it (:func:`designkit.models.link.link_range`).
+    Checked against the robot at synthesis: one value per joint, ``low < high``, inside the joint limits.
     """
 
     low: RangedPerJoint(-100, 100, "rad or m") | None = None
     high: RangedPerJoint(-100, 100, "rad or m") | None = None
     samples: RangedInt(2, 101) = 7
+    tolerance: Ranged(1e-9, 0.1, "") = 1e-3
 
 
 def _workspace_schema(schema: dict[str, Any]) -> None:
@@ -98,7 +101,7 @@ class DecentralizedPidSpec(Section):
     def _joint_limits(cls, v: Any) -> Any:
         if isinstance(v, str):
             if v.strip() != "joint_limits":
-                raise ValueError(f"must be 'joint_limits' or a mapping {{low, high, samples}}, got {v!r}")
+                raise ValueError(f"must be 'joint_limits' or a mapping {{low, high, samples, tolerance}}, got {v!r}")
             return {}
         return v
 
@@ -177,8 +180,8 @@ def workspace(spec: Any, plant: Any) -> dict[str, Any] | None:
     Returns
     -------
     dict or None
-        ``{"low": [...], "high": [...], "samples": int, "source": {"low": ..., "high": ...}}``, the
-        source of each side being ``"spec"`` or ``"joint limits"``.
+        ``{"low": [...], "high": [...], "samples": int, "tolerance": float, "source": {"low": ..., "high": ...}}``,
+        the source of each side being ``"spec"`` or ``"joint limits"``.
 
     Raises
     ------
@@ -219,7 +222,8 @@ def workspace(spec: Any, plant: Any) -> dict[str, Any] | None:
         if lim is not None and high[i] > lim[1]:
             raise SpecError(path("high", i), f"outside joint {i + 1}'s limits [{lim[0]:.6g}, {lim[1]:.6g}], "
                             f"got {high[i]:g}")
-    return {"low": list(low), "high": list(high), "samples": ws.samples, "source": source}
+    return {"low": list(low), "high": list(high), "samples": ws.samples, "tolerance": ws.tolerance,
+            "source": source}
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:

@@ -33,9 +33,17 @@ so the joint's plants ``{(Km_i, tau_i(q)) : q in box}`` lie on the segment
 values, ``g(Km, l tau_lo + (1 - l) tau_hi) = l g(Km, tau_lo) + (1 - l) g(Km, tau_hi)`` for
 ``0 <= l <= 1``, so ``g > 0`` at both ends implies ``g > 0`` on the whole segment (the same holds
 at the four corners of any box of ``(Km, tau)``: a box is the convex hull of its corners,
-:func:`box_verdict`).  Conversely both ends are attained, at the configurations ``q_at_min`` and
-``q_at_max`` where ``D_ii`` was evaluated, so a condition ``<= 0`` at an end names a configuration of
-the box where the loop is not asymptotically stable.
+:func:`box_verdict`), and on any segment containing it.
+
+The range of ``D_ii`` is **proven**: :func:`designkit.models.bounds.model_bound` encloses
+``D_ii(q)`` over the box in ball arithmetic with branch and bound (:mod:`designkit.bounds`), so
+``D_lo <= D_ii(q) <= D_hi`` holds for every configuration of the box, and gives the witness
+configurations ``q_at_min``, ``q_at_max`` where ``D_ii`` comes within ``controller.workspace.tolerance``
+(relative) of those bounds.  A PASS evaluates the conditions at the proven ends ``D_lo/f_i``,
+``D_hi/f_i`` (so it holds on a segment containing every plant of the box); a FAIL evaluates them at a
+witness (an attained configuration of the box where the loop is not asymptotically stable).  When
+the critical inertia lies between a witness and its bound, the search goes on until it is decided
+or the work limit is reached (then the joint is undecided).
 
 How each end is decided.  Each condition is evaluated in floating point with its size
 ``|c0| + |c_Km Km| + |c_tau tau|``; it holds (fails) when it is above (below) ``ROUTH_ZERO_REL``
@@ -47,14 +55,10 @@ agree, else the end is undecided.
 
 What is proven and what is not.
 
-* The verdict for the range ``[tau_lo, tau_hi]`` is exact in the sense above.
-* **The range itself is not rigorous**: it comes from :func:`designkit.models.link.link_range`,
-  ``D_ii`` on a grid of ``samples`` points per outboard joint (``D_ii`` does not depend on joints
-  ``1..i``) polished by a bounded quasi-Newton search (L-BFGS-B with the exact CasADi gradient) --
-  an inner estimate of the true range, not interval arithmetic; a narrow peak of ``D_ii`` between
-  grid points could be missed.  A FAIL never depends on this (its configuration is an evaluated
-  point); a PASS holds for the range reported, and the certificate carries ``D_crit`` so that any
-  other bound on ``max D_ii`` can be compared with it.
+* The verdict for every configuration of the box is proven in the sense above (the rounding of the
+  range is Arb's, of the conditions ``ROUTH_ZERO_REL``); the grid-and-local-search range of
+  :func:`designkit.models.link.link_range` (``samples`` points per outboard joint, polished by
+  L-BFGS-B) is reported beside it as the sampled estimate it used to be.
 * Frozen configurations: each ``q`` held fixed.  The time variation of ``tau_i`` as the arm moves,
   the intercoupling (off-diagonal inertia, Coriolis, centrifugal and uncompensated gravity
   torques, all in ``xi``) and the plant's parameter uncertainty are not covered here (the
@@ -84,179 +88,27 @@ from typing import Any
 
 import numpy as np
 
-from designkit.synthesis.design import LinearCondition
+from designkit.families.decentralized_pid.workspace_conditions import (
+    PARAMETERS,
+    ConditionValue,
+    VertexVerdict,
+    box_verdict,
+    stable_tau_interval,
+)
 from designkit.verification.certificate import to_json
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule
-from designkit.verification.tolerances import ROUTH_ZERO_REL
 
 __all__ = ["ConditionValue", "JointWorkspace", "VertexVerdict", "box_verdict", "joint_workspace",
            "stable_tau_interval", "workspace_check"]
 
-PARAMETERS = ("Km", "tau")
-"""The link parameters the joint loops' conditions may depend on."""
-
-RANGE_METHOD = ("D_ii(q) on a grid of `samples` points per outboard joint (D_ii does not depend on joints 1..i), "
-                "the best grid points polished by SciPy L-BFGS-B with the exact CasADi gradient, within the box "
-                "(designkit.models.link.link_range): a local search, an inner estimate of the range, not interval "
-                "arithmetic")
+RANGE_METHOD = ("D_ii(q) enclosed over the box in Arb ball arithmetic (python-flint) on CasADi's expression graph, "
+                "tightened by the mean-value form with the exact gradient and by branch and bound to the relative "
+                "tolerance (designkit.models.bounds.model_bound); joints 1..i held, D_ii does not depend on them")
 VERDICT_METHOD = ("Hurwitz conditions of tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3, affine in (Km, tau) for fixed "
                   "gains, evaluated at both ends of each joint's tau range (an affine function on a segment is "
                   "positive everywhere iff at both ends); each end re-judged by the eigenvalues and Routh array of "
                   "the CasADi linearization of the joint's law on its link; frozen configurations")
-
-
-# ----------------------------------------------------------------------------- the vertex argument
-
-
-@dataclass(frozen=True)
-class ConditionValue:
-    """One affine condition evaluated at one plant ``(Km, tau)``.
-
-    Parameters
-    ----------
-    label : str
-        The condition in words.
-    unit : str
-        Unit of ``value`` and ``size``.
-    value : float
-        ``g = c0 + c_Km Km + c_tau tau``.
-    size : float
-        ``|c0| + |c_Km Km| + |c_tau tau|``, the scale its rounding is judged against.
-    """
-
-    label: str
-    unit: str
-    value: float
-    size: float
-
-    @property
-    def relative(self) -> float:
-        """``value / size`` (1), in ``[-1, 1]``; 0 when every term vanishes."""
-        return self.value / self.size if self.size > 0 else 0.0
-
-    @property
-    def status(self) -> int:
-        """1 holds, -1 fails, 0 zero within rounding (``|g| <= ROUTH_ZERO_REL size``, ``size > 0``).
-
-        A condition whose terms all vanish is exactly ``0 > 0``: it fails.
-        """
-        if self.size == 0.0:
-            return -1
-        if abs(self.value) <= ROUTH_ZERO_REL * self.size:
-            return 0
-        return 1 if self.value > 0 else -1
-
-
-@dataclass(frozen=True)
-class VertexVerdict:
-    """The conditions at one corner ``(Km, tau)`` of a parameter box.
-
-    Parameters
-    ----------
-    Km : float
-        (rad/s)/(N*m) or (m/s)/N.
-    tau : float
-        s.
-    conditions : tuple of ConditionValue
-    """
-
-    Km: float
-    tau: float
-    conditions: tuple[ConditionValue, ...]
-
-    @property
-    def passed(self) -> bool | None:
-        """True every condition holds, False one fails, None one is zero within rounding."""
-        status = [c.status for c in self.conditions]
-        if any(s < 0 for s in status):
-            return False
-        return None if any(s == 0 for s in status) else True
-
-    @property
-    def margin(self) -> float:
-        """Smallest relative condition value (1)."""
-        return min(c.relative for c in self.conditions)
-
-    @property
-    def worst(self) -> ConditionValue:
-        """The condition with the smallest relative value."""
-        return min(self.conditions, key=lambda c: c.relative)
-
-
-def _evaluate(cond: LinearCondition, Km: float, tau: float) -> ConditionValue:
-    unknown = set(cond.coefficients) - set(PARAMETERS)
-    if unknown:
-        raise ValueError(f"condition {cond.label!r} depends on {sorted(unknown)}, not only on Km and tau")
-    terms = [float(cond.constant), float(cond.coefficients.get("Km", 0.0)) * Km,
-             float(cond.coefficients.get("tau", 0.0)) * tau]
-    return ConditionValue(cond.label, cond.unit, math.fsum(terms), math.fsum(abs(t) for t in terms))
-
-
-def box_verdict(conditions: Sequence[LinearCondition], Km: tuple[float, float],
-                tau: tuple[float, float]) -> tuple[VertexVerdict, ...]:
-    """The affine conditions at the corners of the box ``Km x tau`` (module docstring: the corners decide).
-
-    Parameters
-    ----------
-    conditions : sequence of LinearCondition
-        Affine in ``Km`` and ``tau`` only.
-    Km : (float, float)
-        ``(low, high)``, (rad/s)/(N*m); positive.
-    tau : (float, float)
-        ``(low, high)``, s; positive.
-
-    Returns
-    -------
-    tuple of VertexVerdict
-        One per distinct corner, ordered ``tau`` high before low and ``Km`` low before high (for
-        the servo the largest ``tau`` is the worst corner of C3).  Every condition holds on the
-        whole box iff it holds at every corner.
-
-    Raises
-    ------
-    ValueError
-        For an empty or non-positive box, or a condition on another parameter.
-
-    Examples
-    --------
-    >>> from designkit.synthesis.pid import servo_conditions
-    >>> conds = servo_conditions({"K1": 50.0, "K2": 6.75, "K3": 100.0})   # tau_crit = 0.5 (1 + 2 * 6.75) = 7.25 s
-    >>> [v.passed for v in box_verdict(conds, (2.0, 2.0), (0.5, 7.0))]
-    [True, True]
-    >>> [v.passed for v in box_verdict(conds, (2.0, 2.0), (0.5, 7.5))]
-    [False, True]
-    """
-    (k_lo, k_hi), (t_lo, t_hi) = (float(v) for v in Km), (float(v) for v in tau)
-    if not (0 < k_lo <= k_hi and 0 < t_lo <= t_hi and math.isfinite(k_hi) and math.isfinite(t_hi)):
-        raise ValueError(f"need 0 < Km_low <= Km_high and 0 < tau_low <= tau_high, got Km {Km}, tau {tau}")
-    corners = dict.fromkeys((k, t) for t in (t_hi, t_lo) for k in (k_lo, k_hi))
-    return tuple(VertexVerdict(k, t, tuple(_evaluate(c, k, t) for c in conditions)) for k, t in corners)
-
-
-def stable_tau_interval(conditions: Sequence[LinearCondition], Km: float) -> tuple[float, float]:
-    """The open interval of ``tau`` (s) where every condition holds at ``Km`` (empty: ``low >= high``).
-
-    Each condition ``c0 + c_Km Km + c_tau tau > 0`` is a half-line in ``tau``; for the servo only C3
-    depends on ``tau`` and the interval is ``(0, tau_crit)`` with ``tau_crit = K1 (1 + Km K2)/K3``.
-
-    Examples
-    --------
-    >>> from designkit.synthesis.pid import servo_conditions
-    >>> stable_tau_interval(servo_conditions({"K1": 50.0, "K2": 6.75, "K3": 100.0}), 2.0)
-    (0.0, 7.25)
-    """
-    low, high = 0.0, math.inf
-    for cond in conditions:
-        rest = float(cond.constant) + float(cond.coefficients.get("Km", 0.0)) * Km
-        slope = float(cond.coefficients.get("tau", 0.0))
-        if slope > 0:
-            low = max(low, -rest / slope)
-        elif slope < 0:
-            high = min(high, rest / -slope)
-        elif rest <= 0:
-            return (0.0, 0.0)
-    return (low, high)
 
 
 # ----------------------------------------------------------------------------- one joint over the box
@@ -279,23 +131,31 @@ class JointWorkspace:
     Km : float
         ``1/f_i``.
     inertia : (float, float)
-        Smallest and largest ``D_ii`` found over the box (kg*m^2 or kg).
+        Proven bounds of ``D_ii`` over the box (kg*m^2 or kg): every configuration lies between.
+    attained : (float, float)
+        ``D_ii`` at the witnesses ``configurations`` (within the tolerance of ``inertia``).
     tau : (float, float)
         ``inertia / f_i`` (s).
     configurations : (ndarray, ndarray)
-        Where ``D_ii`` is smallest and largest (rad or m per joint); read-only.
+        The witnesses of the smallest and largest ``D_ii`` (rad or m per joint); read-only.
     nominal_tau : float
         ``tau_i(q*)`` the gains were designed for (s).
     stable_tau : (float, float)
         Open interval of ``tau`` (s) where the loop is Hurwitz (:func:`stable_tau_interval`).
-    ends : (VertexVerdict, VertexVerdict)
-        The conditions at ``tau`` low and high.
-    abscissa : (float, float)
-        ``max Re(eig A)`` (1/s) of the linearized joint loop at ``tau`` low and high (second route).
-    eigenvalues : (ndarray, ndarray)
+    ends, attained_ends : (VertexVerdict, VertexVerdict)
+        The conditions at ``tau`` low and high: at the proven bounds, and at the witnesses.
+    abscissa, attained_abscissa : (float, float)
+        ``max Re(eig A)`` (1/s) of the linearized joint loop there (second route).
+    eigenvalues, attained_eigenvalues : (ndarray, ndarray)
         The eigenvalues there (1/s); read-only.
-    route_status : (int, int)
-        Second route's verdict at both ends: 1 stable, 0 undecided, -1 unstable.
+    route_status, attained_status : (int, int)
+        Second route's verdict there: 1 stable, 0 undecided, -1 unstable.
+    boxes : int
+        Boxes the enclosure evaluated.
+    converged : bool
+        The enclosure reached its tolerance (or decided the critical inertia) within the work limit.
+    sampled : (float, float)
+        The grid-and-local-search range of ``D_ii`` (an inner estimate, for comparison).
     """
 
     joint: int
@@ -304,17 +164,25 @@ class JointWorkspace:
     damping: float
     Km: float
     inertia: tuple[float, float]
+    attained: tuple[float, float]
     tau: tuple[float, float]
     configurations: tuple[np.ndarray, np.ndarray]
     nominal_tau: float
     stable_tau: tuple[float, float]
     ends: tuple[VertexVerdict, VertexVerdict]
+    attained_ends: tuple[VertexVerdict, VertexVerdict]
     abscissa: tuple[float, float]
+    attained_abscissa: tuple[float, float]
     eigenvalues: tuple[np.ndarray, np.ndarray]
+    attained_eigenvalues: tuple[np.ndarray, np.ndarray]
     route_status: tuple[int, int]
+    attained_status: tuple[int, int]
+    boxes: int = 0
+    converged: bool = True
+    sampled: tuple[float, float] = (math.nan, math.nan)
 
     def __post_init__(self) -> None:
-        for name, dtype in (("configurations", float), ("eigenvalues", complex)):
+        for name, dtype in (("configurations", float), ("eigenvalues", complex), ("attained_eigenvalues", complex)):
             frozen = []
             for value in getattr(self, name):
                 a = np.array(value, dtype=dtype)
@@ -323,12 +191,16 @@ class JointWorkspace:
             object.__setattr__(self, name, tuple(frozen))
 
     def end_passed(self, k: int) -> bool | None:
-        """Verdict at end ``k`` (0 low, 1 high ``tau``): both routes must agree, else None."""
-        cond, route = self.ends[k].passed, self.route_status[k]
-        if cond is True and route == 1:
-            return True
-        if cond is False and route == -1:
+        """Verdict at end ``k`` (0 low, 1 high ``tau``): both routes must agree, else None.
+
+        False when both fail at the witness; True when both hold at the proven bound and at the witness;
+        None otherwise.
+        """
+        if self.attained_ends[k].passed is False and self.attained_status[k] == -1:
             return False
+        witness_fine = self.attained_ends[k].passed is True and self.attained_status[k] == 1
+        if self.ends[k].passed is True and self.route_status[k] == 1 and witness_fine:
+            return True
         return None
 
     @property
@@ -355,12 +227,13 @@ class JointWorkspace:
 
     @property
     def margin(self) -> float:
-        """How far the range stays from the stability limits of ``tau`` (1): ``1 - tau_hi/tau_crit``.
+        """How far the proven range stays from the stability limits of ``tau`` (1): ``1 - tau_hi/tau_crit``.
 
         With the stable interval ``(tau_a, tau_b)`` of :func:`stable_tau_interval`, the smaller of
         ``1 - tau_hi/tau_b`` and ``1 - tau_a/tau_lo`` (each 1 when that side is unbounded): the share of
-        the critical ``D_ii`` still unused, positive iff the whole range is stable.  When the interval
-        is empty (a condition independent of ``tau`` fails) it is the smallest relative condition value.
+        the critical ``D_ii`` still unused, positive when the whole range is stable (computed from the
+        proven bounds, so it errs on the safe side by at most the tolerance).  When the interval is
+        empty (a condition independent of ``tau`` fails) it is the smallest relative condition value.
         """
         return min(self._end_margins())
 
@@ -383,9 +256,13 @@ class JointWorkspace:
             "Km": self.Km,
             "Km_unit": km_unit,
             "inertia_range": list(self.inertia),
+            "inertia_attained": list(self.attained),
+            "inertia_sampled": list(self.sampled),
             "inertia_unit": inertia_unit,
             "q_at_min": self.configurations[0],
             "q_at_max": self.configurations[1],
+            "boxes": self.boxes,
+            "converged": self.converged,
             "tau_range_s": list(self.tau),
             "tau_nominal_s": self.nominal_tau,
             "tau_stable_s": list(self.stable_tau),
@@ -404,6 +281,7 @@ class JointWorkspace:
                 "end": "tau min" if k == 0 else "tau max",
                 "configuration": self.configurations[k],
                 "inertia": self.inertia[k],
+                "inertia_attained": self.attained[k],
                 "tau_s": end.tau,
                 "conditions": {c.label: c.value for c in end.conditions},
                 "relative_condition": end.margin,
@@ -416,7 +294,7 @@ class JointWorkspace:
 
 
 def joint_workspace(design: Any, i: int, low: Sequence[float], high: Sequence[float], *,
-                    samples: int = 7) -> JointWorkspace:
+                    samples: int = 7, tolerance: float = 1e-3) -> JointWorkspace:
     """Joint ``i`` (0-based) of a decentralized ``design`` over the box ``low <= q <= high``.
 
     Parameters
@@ -428,40 +306,66 @@ def joint_workspace(design: Any, i: int, low: Sequence[float], high: Sequence[fl
     low, high : sequence of float
         The box (rad or m per joint).
     samples : int
-        Grid points per outboard joint for the ``D_ii`` range.
+        Grid points per outboard joint of the sampled estimate shown beside the proven range.
+    tolerance : float
+        Relative gap between each proven bound of ``D_ii`` and its witness.
 
     Returns
     -------
     JointWorkspace
     """
+    from designkit.models.bounds import model_bound
     from designkit.models.link import link_range
     from designkit.verification.robustness import Sweeper
 
     plant, loop = design.plant, design.loops[i]
     if loop.characteristic is None or loop.characteristic.linear_conditions is None:
         raise ValueError(f"{design.loop_names[i]}: its loop exposes no affine stability conditions")
-    rng = link_range(plant.robot, i, low, high, samples=samples, p=plant.model_parameters())
+    sampled = link_range(plant.robot, i, low, high, samples=samples, p=plant.model_parameters())
     conditions = loop.characteristic.linear_conditions(loop.gains)
-    Km = float(rng.Km_min)
-    ends = box_verdict(conditions, (Km, Km), (rng.tau_min, rng.tau_max))
-    ends = (ends[-1], ends[0])  # (tau low, tau high); one corner when the range is a point
-    sweep = Sweeper(loop, PARAMETERS).sweep([[Km, rng.tau_min], [Km, rng.tau_max]])
-    eig = np.linalg.eigvals(np.nan_to_num(sweep.A))
+    Km = float(sampled.Km_min)
+    f = 1.0 / Km
+    stable = stable_tau_interval(conditions, Km)
+    thresholds = (stable[0] * f if stable[0] > 0 else None, stable[1] * f if math.isfinite(stable[1]) else None)
+    p = plant.model_parameters()
+    enc = model_bound(plant.robot, "mass_matrix", (i, i), q=(np.asarray(low, float), np.asarray(high, float)),
+                      p=None if p is None or len(p) == 0 else p, rel_tol=tolerance, strict=False,
+                      thresholds=thresholds)
+    proven = (enc.lower, enc.upper)
+    attained = (enc.min_value, enc.max_value)
+    configurations = (enc.argmin["q"], enc.argmax["q"])
+
+    def judged(inertia: tuple[float, float]) -> tuple[tuple[VertexVerdict, VertexVerdict], Any, np.ndarray]:
+        taus = (inertia[0] / f, inertia[1] / f)
+        ends = box_verdict(conditions, (Km, Km), taus)
+        sweep = Sweeper(loop, PARAMETERS).sweep([[Km, taus[0]], [Km, taus[1]]])
+        return (ends[-1], ends[0]), sweep, np.linalg.eigvals(np.nan_to_num(sweep.A))
+
+    ends, sweep, eig = judged(proven)
+    a_ends, a_sweep, a_eig = judged(attained)
     return JointWorkspace(
         joint=i + 1,
         name=design.loop_names[i],
         prismatic=plant.robot.description.links[i].joint == "prismatic",
-        damping=1.0 / Km,
+        damping=f,
         Km=Km,
-        inertia=(float(rng.inertia_min), float(rng.inertia_max)),
-        tau=(float(rng.tau_min), float(rng.tau_max)),
-        configurations=(rng.q_at_min, rng.q_at_max),
+        inertia=proven,
+        attained=attained,
+        tau=(proven[0] / f, proven[1] / f),
+        configurations=configurations,
         nominal_tau=float(loop.plant.tau),
-        stable_tau=stable_tau_interval(conditions, Km),
+        stable_tau=stable,
         ends=ends,
+        attained_ends=a_ends,
         abscissa=(float(sweep.abscissa[0]), float(sweep.abscissa[1])),
+        attained_abscissa=(float(a_sweep.abscissa[0]), float(a_sweep.abscissa[1])),
         eigenvalues=(eig[0], eig[1]),
+        attained_eigenvalues=(a_eig[0], a_eig[1]),
         route_status=(int(sweep.status[0]), int(sweep.status[1])),
+        attained_status=(int(a_sweep.status[0]), int(a_sweep.status[1])),
+        boxes=enc.boxes,
+        converged=enc.converged,
+        sampled=(float(sampled.inertia_min), float(sampled.inertia_max)),
     )
 
 
@@ -476,34 +380,35 @@ def _joint_detail(j: JointWorkspace) -> str:
     inertia_unit = j.units()[0]
     k = j.worst
     where = "every configuration (D_ii constant over the box)" if j.constant else f"q = {_vector(j.configurations[k])}"
-    return (f"joint {j.joint}: tau in [{j.tau[0]:.4g}, {j.tau[1]:.4g}] s (D_{j.joint}{j.joint} in "
-            f"[{j.inertia[0]:.4g}, {j.inertia[1]:.4g}] {inertia_unit}; stable for D_{j.joint}{j.joint} < "
-            f"{j.stable_tau[1] * j.damping:.4g} {inertia_unit}), smallest margin {j.margin:.3g} at {where}")
+    return (f"joint {j.joint}: tau in [{j.tau[0]:.4g}, {j.tau[1]:.4g}] s (D_{j.joint}{j.joint} proven in "
+            f"[{j.inertia[0]:.4g}, {j.inertia[1]:.4g}] {inertia_unit}, attained up to {j.attained[1]:.4g}; stable for "
+            f"D_{j.joint}{j.joint} < {j.stable_tau[1] * j.damping:.4g} {inertia_unit}), smallest margin "
+            f"{j.margin:.3g} at {where}")
 
 
 def _failure(j: JointWorkspace) -> tuple[str, dict[str, Any]]:
     k = next(k for k in (1, 0) if j.end_passed(k) is False)
-    end, inertia_unit = j.ends[k], j.units()[0]
+    end, inertia_unit = j.attained_ends[k], j.units()[0]
     cond = next(c for c in end.conditions if c.status < 0)
     unit = f" {cond.unit}" if cond.unit else ""
     low, high = j.stable_tau
     where = (f"stable only for tau in ({low:.4g}, {high:.4g}) s" if low < high
              else "unstable for every tau: a condition independent of tau fails")
     detail = (f"joint {j.joint} unstable at q = {_vector(j.configurations[k])} (D_{j.joint}{j.joint} = "
-              f"{j.inertia[k]:.4g} {inertia_unit}, tau = {end.tau:.4g} s; {where}, designed for "
+              f"{j.attained[k]:.4g} {inertia_unit}, tau = {end.tau:.4g} s; {where}, designed for "
               f"{j.nominal_tau:.4g} s): "
               f"{cond.label.removesuffix(' > 0')} = {cond.value:.4g}{unit} <= 0, max Re(eig) = "
-              f"{j.abscissa[k]:+.4g} 1/s")
+              f"{j.attained_abscissa[k]:+.4g} 1/s")
     evidence = to_json({
         "joint": j.joint,
         "configuration": j.configurations[k],
-        "inertia": j.inertia[k],
+        "inertia": j.attained[k],
         "tau_s": end.tau,
         "Km": end.Km,
         "condition": cond.label,
         "value": cond.value,
-        "spectral_abscissa": j.abscissa[k],
-        "eigenvalues": j.eigenvalues[k],
+        "spectral_abscissa": j.attained_abscissa[k],
+        "eigenvalues": j.attained_eigenvalues[k],
     })
     return detail, evidence
 
@@ -516,7 +421,7 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
     design : Design
         A decentralized design (per-joint ``loops`` on simplified links, a robot ``plant``).
     workspace : Mapping, optional
-        ``{"low": [...], "high": [...], "samples": int}`` (rad or m per joint); default
+        ``{"low": [...], "high": [...], "samples": int, "tolerance": float}`` (rad or m per joint); default
         ``design.extra["workspace"]`` (set by the family from ``controller.workspace``).
 
     Returns
@@ -530,13 +435,17 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
     ws = dict(design.extra["workspace"] if workspace is None else workspace)
     low, high = (np.asarray(ws[k], dtype=float) for k in ("low", "high"))
     samples = int(ws.get("samples", 7))
-    joints = [joint_workspace(design, i, low, high, samples=samples) for i in range(len(design.loops))]
+    tolerance = float(ws.get("tolerance", 1e-3))
+    joints = [joint_workspace(design, i, low, high, samples=samples, tolerance=tolerance)
+              for i in range(len(design.loops))]
     worst = min(joints, key=lambda j: j.margin)
     cert: dict[str, Any] = {
         "method": VERDICT_METHOD,
         "range_method": RANGE_METHOD,
-        "rigorous_range": False,
-        "workspace": to_json({**ws, "low": low, "high": high, "samples": samples}),
+        "rigorous_range": True,
+        "tolerance": tolerance,
+        "boxes": sum(j.boxes for j in joints),
+        "workspace": to_json({**ws, "low": low, "high": high, "samples": samples, "tolerance": tolerance}),
         "nominal_configuration": to_json(design.extra.get("configuration")),
         "joints": [j.to_dict() for j in joints],
         "ends": [row for j in joints for row in j.end_rows()],
@@ -556,11 +465,13 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
     undecided = [j for j in joints if j.passed is None]
     if undecided:
         j = undecided[0]
-        detail = (f"undecided: joint {j.joint}: a stability condition is zero within rounding at an end of its range, "
-                  f"or the conditions and the linearization disagree ({_joint_detail(j)})")
+        why = ("the enclosure of D_ii did not decide the critical inertia within its work limit"
+               if not j.converged else "a stability condition is zero within rounding at an end of its range, or the "
+               "conditions and the linearization disagree")
+        detail = f"undecided: joint {j.joint}: {why} ({_joint_detail(j)})"
         return Check("workspace", None, target, worst.margin, worst.margin, unit, detail, cert, data=data)
-    detail = (f"{len(joints)} joint loops Hurwitz for every configuration of the box (frozen q; D_ii range by grid + "
-              f"local search, not interval arithmetic); worst {_joint_detail(worst)}")
+    detail = (f"{len(joints)} joint loops proven Hurwitz for every configuration of the box (frozen q; each D_ii "
+              f"enclosed in ball arithmetic to {tolerance:.3g} relative); worst {_joint_detail(worst)}")
     return Check("workspace", True, target, worst.margin, worst.margin, unit, detail, cert, data=data)
 
 

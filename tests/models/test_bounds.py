@@ -1,0 +1,89 @@
+"""Proven bounds of model functions (designkit.models.bounds): the joints an entry cannot depend on, closed forms.
+
+Independent routes: the model's own numeric functions at random configurations (for the independence the
+module relies on), the two-link arm's Coriolis and gravity torques in textbook closed form (Spong, Hutchinson &
+Vidyasagar, *Robot Modeling and Control*, sec. 7.4) maximised analytically over the box, and random samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import designkit as dk
+from designkit.errors import ModelError
+from designkit.models.bounds import model_bound
+from designkit.models.robot_plant import zoo_plant
+
+H = 3.0 * 0.5 * 0.2  # m2 l1 lc2 of the zoo's planar2r (its description)
+
+
+@pytest.mark.parametrize("name", ["planar2r", "puma560", "scara"])
+def test_inertia_entries_do_not_depend_on_the_joints_before_them(name):
+    """D_ij is unchanged when joints 1..min(i, j) move (what model_bound holds fixed), and the Coriolis torque
+    when joint 1 moves."""
+    plant = zoo_plant(name)
+    arm, p = plant.robot, plant.model_parameters()
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-2, 2, size=(20, arm.n))
+    qd = rng.uniform(-2, 2, size=(20, arm.n))
+    D = arm.mass_matrix(q, p=p)
+    C = np.einsum("kij,kj->ki", arm.coriolis_matrix(q, qd, p=p), qd)
+    for m in range(arm.n):
+        moved = q.copy()
+        moved[:, :m + 1] = rng.uniform(-3, 3, size=(20, m + 1))
+        D2 = arm.mass_matrix(moved, p=p)
+        block = np.s_[:, m:, m:]  # entries with min(i, j) >= m
+        assert np.allclose(D2[block], D[block], rtol=1e-12, atol=1e-12 * np.abs(D).max())
+    moved = q.copy()
+    moved[:, 0] = rng.uniform(-3, 3, size=20)
+    C2 = np.einsum("kij,kj->ki", arm.coriolis_matrix(moved, qd, p=p), qd)
+    assert np.allclose(C2, C, rtol=1e-11, atol=1e-11 * np.abs(C).max())
+
+
+def test_two_link_coriolis_torque_against_its_closed_form_maximum():
+    """tau_c1 = -h sin q2 (2 q1' q2' + q2'^2): over q2 in [0.2, 1.2] and |q'| <= 2 the quadratic form takes
+    [-4, 12] (at the box's corners), so the range is h [-12 sin 1.2, 4 sin 1.2]."""
+    arm = dk.robot("planar2r")
+    e = model_bound(arm, "coriolis_torque", 0, q=([0.0, 0.2], [0.0, 1.2]), qd=(-2.0, 2.0), rel_tol=1e-6)
+    lo, hi = -12 * H * math.sin(1.2), 4 * H * math.sin(1.2)
+    assert e.lower <= lo and e.upper >= hi
+    assert e.lower == pytest.approx(lo, rel=2e-6) and e.upper == pytest.approx(hi, rel=2e-6)
+    q, qd = e.argmin["q"], e.argmin["qd"]
+    assert -H * math.sin(q[1]) * (2 * qd[0] * qd[1] + qd[1] ** 2) == pytest.approx(e.min_value, rel=1e-12)
+
+
+def test_two_link_gravity_torque_bounded_over_a_box():
+    """g_2 = m2 lc2 g0 cos(q1 + q2) (the zoo arm's gravity is -9.81 along y): over q1 + q2 in [0.3, 0.9] it is
+    largest at 0.3 and smallest at 0.9."""
+    arm = dk.robot("planar2r")
+    e = model_bound(arm, "gravity_torque", 1, q=([0.1, 0.2], [0.4, 0.5]), rel_tol=1e-8)
+    g2 = lambda s: 3.0 * 0.2 * 9.81 * math.cos(s)  # noqa: E731
+    assert arm.gravity_torque([0.1, 0.2])[1] == pytest.approx(g2(0.3), rel=1e-12)  # the closed form is the model's
+    assert e.lower <= g2(0.9) and e.upper >= g2(0.3)
+    assert e.lower == pytest.approx(g2(0.9), rel=2e-8) and e.upper == pytest.approx(g2(0.3), rel=2e-8)
+
+
+def test_puma_inertia_bound_contains_samples_and_its_witness_is_in_the_box():
+    arm = dk.robot("puma560")
+    low, high = np.full(6, -0.4), np.full(6, 0.4)
+    e = model_bound(arm, "mass_matrix", (1, 1), q=(low, high), rel_tol=1e-4)
+    Q = np.random.default_rng(2).uniform(low, high, size=(20_000, 6))
+    d = arm.mass_matrix(Q)[:, 1, 1]
+    assert e.lower <= d.min() + 1e-13 and e.upper >= d.max() - 1e-13
+    assert np.all(e.argmax["q"] >= low) and np.all(e.argmax["q"] <= high)
+    assert arm.mass_matrix(e.argmax["q"])[1, 1] == pytest.approx(e.max_value, rel=1e-12)
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    ({"quantity": "nope", "index": 0, "q": (0, 1)}, "quantity"),
+    ({"quantity": "coriolis_torque", "index": 0, "q": (0, 1)}, "qd"),
+    ({"quantity": "mass_matrix", "index": (0, 0), "q": (0, 1), "qd": (0, 1)}, "qd"),
+    ({"quantity": "mass_matrix", "index": (0, 0), "q": ([0, 1, 2], [1, 2, 3])}, "q"),
+])
+def test_bad_arguments_name_the_field(kwargs, field):
+    with pytest.raises(ModelError) as err:
+        model_bound(dk.robot("planar2r"), **kwargs)
+    assert err.value.path == field
