@@ -213,8 +213,9 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
     if c.bounds:
         bounds = tuple(tuple(float(x) for x in c.bounds[name]) if name in c.bounds else (-np.inf, np.inf)
                        for name in c.adapt)
+    acceleration = "none" if c.scheme == "slotine_li" else c.acceleration
     return Adaptation(names=tuple(c.adapt), initial=tuple(float(c.initial[x]) for x in c.adapt),
-                      gain=tuple(float(g) for g in gains), K1=K1, K2=K2, psi=psi, acceleration=c.acceleration,
+                      gain=tuple(float(g) for g in gains), K1=K1, K2=K2, psi=psi, acceleration=acceleration,
                       bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta), scheme=c.scheme, Lambda=Lambda,
                       KD=KD)
 

@@ -82,13 +82,16 @@ class Adaptation:
     K1, K2, psi : tuple of float
         Error gains (1/s^2, 1/s) and the filter's ``psi`` (s), per joint.
     acceleration : str
-        ``"ideal"`` or ``"filtered"``.
+        ``"ideal"`` or ``"filtered"`` (``"none"`` for the Slotine--Li scheme).
     bandwidth : float
         ``wf`` of the velocity-derivative filter (rad/s; ``filtered`` only).
     bounds : tuple of (float, float) or None
         ``(l_i, h_i)`` per adapted parameter, or None (no projection).
     delta : float
         The projection's hysteresis (unit of each parameter).
+    scheme : str
+        ``"craig"`` (the notes' law) or ``"slotine_li"`` (:mod:`.slotine_li`; then ``K1, K2, psi`` are empty and
+        ``Lambda`` (1/s) and ``KD`` (N*m*s/rad) per joint are its gains).
     """
 
     names: tuple[str, ...]

@@ -47,7 +47,8 @@ def json(result: Any) -> dict[str, Any]:
     out: dict[str, Any] = {
         "parameters": list(a["adapt"]), "units": list(d.extra["units"]), "initial": list(a["initial"]),
         "true": list(d.extra["true"]), "acceleration": a["acceleration"], "scheme": a.get("scheme", "craig"),
-        "spr": {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows], "psi_min_s": [r["psi_min_s"] for r in rows]},
+        "spr": None if not rows else {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows],
+                                      "psi_min_s": [r["psi_min_s"] for r in rows]},
         "final": None, "excitation": None,
     }
     if sim is not None:
