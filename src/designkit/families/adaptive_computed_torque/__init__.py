@@ -305,12 +305,15 @@ def _family() -> Family:
         synthesize=synthesize, law=law,
         checks=("lyapunov", "frozen_final", "time_domain", "torque_limits", *checks.RULES),
         display=Display(
-            label="Adaptive computed torque (Craig)",
-            law=("Γ = D̂(q) (q̈D + K1 e + K2 ė) + ĥ(q, q̇) = W(q, q̇, q̈D + K1 e + K2 ė) P̂,  e = qD − q",
-                 "P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)  (adapted parameters; the others known)"),
+            label="Adaptive computed torque",
+            law=("Craig (the default scheme): Γ = D̂(q) (q̈D + K1 e + K2 ė) + ĥ(q, q̇) = W(q, q̇, q̈D + K1 e + K2 ė) P̂,  "
+                 "e = qD − q;  P̂ₐ' = K Wₐ(q, q̇, q̈)ᵀ D̂(q)⁻¹ (e + ψ ė)",
+                 "Slotine–Li (scheme slotine_li): Γ = Y(q, q̇, q̇r, q̈r) P̂ + KD s,  q̇r = q̇D + Λ e,  s = ė + Λ e;  "
+                 "P̂ₐ' = K Yₐᵀ s",
+                 "P̂ₐ: the adapted parameters; every other parameter of the arm is known"),
             summary="Notes §4.4 (Craig 1988): computed torque whose model parameters are estimated on line from the "
-                    "filtered tracking error e + ψ ė; the filter (1 + ψ s)/(s² + K2 s + K1) must be strictly "
-                    "positive real."),
+                    "filtered tracking error e + ψ ė, the filter (1 + ψ s)/(s² + K2 s + K1) strictly positive "
+                    "real; or the Slotine–Li passivity-based law, which needs neither the acceleration nor D̂⁻¹."),
         validate=validate, figures=figures.FIGURES, sections=(report.section,), json=report.json,
     )
 
