@@ -7,7 +7,8 @@ per outboard joint polished by L-BFGS-B: the inner estimate the workspace check 
 
 Scaling, in the same run: the work (boxes) and the time against the tolerance (``D_11`` of the PUMA at 1e-2,
 1e-3, 1e-4) and against the number of joints (``D_11`` of planar chains of 2 to 5 revolute links, every joint in
-[-1, 1] rad, 1e-3, at most 40,000 boxes per end).  Timed with ``time.perf_counter`` (median of ``REPEAT`` rounds for the main comparison).
+[-1, 1] rad, 1e-3, at most 40,000 boxes per end).  Timed with ``time.perf_counter`` (median of ``REPEAT``
+rounds for the main comparison).
 
 Goal: all six proven ranges in at most 10 s on this 2-core machine.
 
@@ -104,8 +105,9 @@ def main() -> None:
     for row in tolerance:
         print(f"  D_11 at rel_tol {row['rel_tol']:g}: {row['boxes']} boxes, {row['seconds']:.2f} s")
     for row in joints:
-        print(f"  planar {row['joints']}R D_11 ({row['free']} free joints): {row['boxes']} boxes, {row['seconds']:.2f} s"
-              + ("" if row["converged"] else " (work limit reached before the tolerance)"))
+        note = "" if row["converged"] else " (work limit reached before the tolerance)"
+        print(f"  planar {row['joints']}R D_11 ({row['free']} free joints): {row['boxes']} boxes, "
+              f"{row['seconds']:.2f} s{note}")
 
 
 if __name__ == "__main__":

@@ -58,6 +58,8 @@ _EXPORTS: dict[str, str] = {
     "LinkDescription": "designkit.models.description",
     "Robot": "designkit.models.robot",
     "robot_from_dh": "designkit.models.robot",
+    "enclose": "designkit.bounds",
+    "model_bound": "designkit.models.bounds",
     "robot": "designkit.models.robots",
     "robot_from_urdf": "designkit.models.urdf",
     # errors

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import designkit as dk
 from designkit.errors import ModelError
@@ -87,3 +89,24 @@ def test_bad_arguments_name_the_field(kwargs, field):
     with pytest.raises(ModelError) as err:
         model_bound(dk.robot("planar2r"), **kwargs)
     assert err.value.path == field
+
+
+@settings(max_examples=12, deadline=None)
+@given(name=st.sampled_from(["planar2r", "puma560", "scara"]), data=st.data())
+def test_inertia_enclosures_of_zoo_robots_contain_random_samples(name, data):
+    plant = zoo_plant(name)
+    arm, p = plant.robot, plant.model_parameters()
+    i = data.draw(st.integers(0, arm.n - 1), label="joint")
+    centre = np.array(data.draw(st.lists(st.floats(-2, 2), min_size=arm.n, max_size=arm.n), label="centre"))
+    width = data.draw(st.floats(0.0, 1.0), label="width")
+    low, high = centre - width / 2, centre + width / 2
+    e = model_bound(arm, "mass_matrix", (i, i), q=(low, high), p=p if p is not None and len(p) else None,
+                    rel_tol=1e-2)
+    Q = np.random.default_rng(i).uniform(low, high, size=(2000, arm.n))
+    d = arm.mass_matrix(Q, p=p)[:, i, i]
+    rounding = 1e-13 * (1 + np.abs(d).max())  # the samples' own floating-point rounding
+    assert e.lower <= d.min() + rounding and e.upper >= d.max() - rounding
+    # the witnesses are configurations of the box with the values reported
+    for arg, value in ((e.argmin["q"], e.min_value), (e.argmax["q"], e.max_value)):
+        assert np.all(arg >= low - 1e-15) and np.all(arg <= high + 1e-15)
+        assert arm.mass_matrix(arg, p=p)[i, i] == pytest.approx(value, rel=1e-12)

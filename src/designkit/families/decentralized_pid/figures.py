@@ -44,8 +44,11 @@ def workspace_figure(result: Any, check: Any) -> Figure | None:
         return None
     worst = check.certificate["smallest_margin"]
     at = ", ".join(f"{v:.3g}" for v in worst["configuration"])
-    caption = ("Each joint's time constant τ_i = D_ii(q)/f_i over the workspace box (bar, from the smallest to the "
-               "largest D_ii found; green when stable throughout, red when not) and at the design configuration "
+    tol = check.certificate.get("tolerance")
+    proven = (f"from the proven lower to the proven upper bound of D_ii over the box, each within {tol:.3g} "
+              "(relative) of a configuration where it is attained" if tol else "from the smallest to the largest D_ii")
+    caption = ("Each joint's time constant τ_i = D_ii(q)/f_i over the workspace box (bar, " + proven + "; green "
+               "when stable throughout, red when not) and at the design configuration "
                "(dot), divided by the largest τ_i its PID loop tolerates, τ_crit,i = K1 (1 + Km K2)/K3: the loop is "
                f"stable left of the dashed line. Smallest margin 1 − τ/τ_crit = {worst['margin']:.3g} on joint "
                f"{worst['joint']} at q = [{at}].")
