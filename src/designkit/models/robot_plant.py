@@ -202,8 +202,26 @@ def _parameter(name: str, value: float, unit: str, meaning: str) -> Parameter:
     return Parameter(name, float(value), unit, meaning, positive=unit not in _NON_NEGATIVE_UNITS)
 
 
+def _consistent(robot: Robot, numeric: ChainDescription, method: str | None) -> Robot:
+    """``robot`` with the inertias :func:`~designkit.models.physical.nearest_consistent` changes on ``numeric``."""
+    if method is None:
+        return robot
+    from designkit.models.physical import nearest_consistent
+
+    fixed, changes = nearest_consistent(numeric, method)
+    links = list(robot.description.links)
+    for change in changes:
+        k = change.link - 1
+        if any(numeric_value(v) is None for v in links[k].inertia):
+            raise ModelError("consistent_inertia", f"link {change.link}'s inertia is a named parameter: override it "
+                             "with a consistent value instead")
+        links[k] = dataclasses.replace(links[k], inertia=fixed.links[k].inertia)
+    description = dataclasses.replace(robot.description, links=tuple(links), source=fixed.source)
+    return Robot(description, friction=robot.friction, motor_inertia=robot.motor_inertia)
+
+
 def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, friction: bool = True,
-              motor_inertia: bool = False) -> RobotPlant:
+              motor_inertia: bool = False, consistent_inertia: str | None = None) -> RobotPlant:
     """A built-in robot (``planar2r``, ``scara``, ``puma560``, ``onelink``) as a plant.
 
     Parameters
@@ -216,6 +234,9 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
         Joint friction (viscous and Coulomb, from the robot data) in the dynamics.
     motor_inertia : bool
         Reflected rotor inertia on the diagonal of ``M``.
+    consistent_inertia : {"raise", "nearest"}, optional
+        Replace the inertias that are not physically consistent as published
+        (:func:`designkit.models.physical.nearest_consistent`); default: as published.
 
     Raises
     ------
@@ -233,6 +254,8 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
             raise ModelError(f"parameters.{key}",
                              f"{name} has no parameter {key!r}; choose from {sorted(module.DEFAULTS)}")
     robot = ROBOTS[name](symbolic=True, friction=friction, motor_inertia=motor_inertia)
+    if consistent_inertia is not None:
+        robot = _consistent(robot, module.description(**overrides), consistent_inertia)
     params = tuple(_parameter(k, overrides.get(k, v), *module.UNITS[k]) for k, v in module.DEFAULTS.items())
     plant = RobotPlant(robot=robot, parameters=params, source=f"zoo robot {name}", link_masses=module.LINK_MASSES)
     try:  # validate the values through the same rule as with_params
@@ -242,7 +265,7 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
 
 
 def chain_plant(description: ChainDescription, *, friction: bool = True, motor_inertia: bool = False,
-                source: str = "") -> RobotPlant:
+                source: str = "", consistent_inertia: str | None = None) -> RobotPlant:
     """A DH or URDF chain as a plant whose link masses ``m<i>`` and viscous frictions ``f<i>`` are parameters.
 
     Parameters
@@ -253,7 +276,13 @@ def chain_plant(description: ChainDescription, *, friction: bool = True, motor_i
         As in :func:`zoo_plant`.
     source : str
         Where the description comes from, for reports.
+    consistent_inertia : {"raise", "nearest"}, optional
+        As in :func:`zoo_plant`.
     """
+    if consistent_inertia is not None:
+        from designkit.models.physical import nearest_consistent
+
+        description, _ = nearest_consistent(description, consistent_inertia)
     links, params = [], []
     for i, link in enumerate(description.links, start=1):
         mass, viscous = numeric_value(link.mass), numeric_value(link.viscous)

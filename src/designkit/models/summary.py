@@ -217,6 +217,10 @@ def model_summary(robot: object, *, timing: bool = True, compiled: bool = True, 
 
         bp = base_parameters(robot)
         lines.append(f"base parameters: {bp.count} of {len(names)} (identifiable combinations)")
+    if values is not None:
+        from designkit.models.physical import check_inertia
+
+        lines += ["", "Physical consistency of the inertial parameters", *check_inertia(d).sentences()]
 
     lines += ["", "Operation counts (CasADi SX)"]
     rows = []

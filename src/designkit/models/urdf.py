@@ -342,7 +342,9 @@ def description_to_urdf(description: ChainDescription) -> str:
     Standard DH: URDF link ``i`` is DH frame ``i-1`` turned by the joint
     (``Rz(theta_i) Tz(d_i)``), and the DH frame ``i`` is ``Tx(a_i) Rx(alpha_i)`` further;
     modified DH: URDF link ``i`` is DH frame ``i``.  Inertial data are written in
-    DH-frame axes.  Rotor inertia and gear ratios have no URDF element and are dropped.
+    DH-frame axes.  Rotor inertia and gear ratios have no URDF element and are dropped.  A header comment
+    states the physical consistency of the inertial parameters (:func:`designkit.models.physical.check_inertia`):
+    an inconsistent link, which condition and by how much.
 
     Raises
     ------
@@ -351,9 +353,13 @@ def description_to_urdf(description: ChainDescription) -> str:
     """
     if description.symbols:
         raise ModelError("description_to_urdf needs a numeric description (this one has symbols)")
+    from designkit.models.physical import check_inertia
+
     modified = description.convention == "modified"
+    consistency = " ".join(check_inertia(description).sentences()).replace("--", "- -")
     lines = ['<?xml version="1.0"?>', f'<robot name="{description.name}">',
              f"  <!-- written by designkit.models.urdf.description_to_urdf; source: {description.source} -->",
+             f"  <!-- {consistency} -->",
              '  <link name="base_link"/>']
     before = np.array(description.base, dtype=float)  # transform from the previous URDF link to the next joint
     for i, link in enumerate(description.links, start=1):

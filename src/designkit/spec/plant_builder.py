@@ -47,7 +47,8 @@ def _robot(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
 def _robot_model(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
     from designkit.models.robot_plant import chain_plant, zoo_plant
 
-    options = {"friction": section.friction, "motor_inertia": section.motor_inertia}
+    options = {"friction": section.friction, "motor_inertia": section.motor_inertia,
+               "consistent_inertia": section.consistent_inertia}
     if section.robot is not None:
         return zoo_plant(section.robot, overrides=section.parameters, **options)
     if section.dh is not None:

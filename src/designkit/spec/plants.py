@@ -177,7 +177,9 @@ class RobotPlantSpec(Section):
     ``tip_link`` select the chain of a URDF (``gravity`` also applies).  ``friction`` includes the
     joints' viscous and Coulomb friction in the dynamics; ``motor_inertia`` the reflected rotor
     inertia; ``payload`` a mass carried by a link (part of the true plant); ``limits`` the joints'
-    velocity, acceleration and torque limits.
+    velocity, acceleration and torque limits.  ``consistent_inertia`` (``raise`` or ``nearest``)
+    replaces the link inertias that are not physically consistent as published (their principal
+    moments break a triangle inequality; :mod:`designkit.models.physical`); default: as published.
     """
 
     kind: Literal["robot"]
@@ -193,6 +195,7 @@ class RobotPlantSpec(Section):
     tip_link: str | None = None
     friction: bool = True
     motor_inertia: bool = False
+    consistent_inertia: Literal["raise", "nearest"] | None = None
     payload: Payload | None = None
     limits: Limits | None = None
     uncertainty: Uncertainty | None = None

@@ -54,7 +54,9 @@ def robot(name: str, **overrides: Any) -> Robot:
     **overrides
         Named physical parameters of that robot (see its module's ``DEFAULTS``),
         given as numbers or scalar ``casadi.SX`` symbols, plus the options
-        ``friction``, ``motor_inertia`` and ``symbolic`` (``True`` or a tuple of names).
+        ``friction``, ``motor_inertia`` and ``symbolic`` (``True`` or a tuple of names), and
+        ``consistent_inertia``: ``"raise"`` or ``"nearest"`` to replace inertias that are not physically
+        consistent as published (:func:`designkit.models.physical.nearest_consistent`), default off.
 
     Raises
     ------
@@ -71,4 +73,13 @@ def robot(name: str, **overrides: Any) -> Robot:
         builder = ROBOTS[name]
     except KeyError:
         raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
-    return builder(**overrides)
+    method = overrides.pop("consistent_inertia", None)
+    arm = builder(**overrides)
+    if method in (None, False):
+        return arm
+    if arm.description.symbols:
+        raise ModelError("consistent_inertia", "needs a numeric robot (this one has symbols)")
+    from designkit.models.physical import nearest_consistent
+
+    fixed, _ = nearest_consistent(arm.description, method)
+    return Robot(fixed, friction=arm.friction, motor_inertia=arm.motor_inertia)
