@@ -78,6 +78,36 @@ def _summary(result) -> str:
     ])
 
 
+def _comparison_summary(result) -> str:
+    """The text summary of a comparison: the table (one column per controller), who wins, each verdict."""
+    table = result.table
+    header = ("metric", *result.labels)
+    rows = [header]
+    for m in table.metrics:
+        rows.append((f"{m.label} ({table.unit_of(m)})",
+                     *(table.cell(m, r.values.get(m.key)).removesuffix(" " + table.unit_of(m)) for r in table.rows)))
+    rows.append(("checks passed", *(f"{sum(s == 'PASS' for *_, s in r.checks)} of {len(r.checks)}"
+                                    for r in table.rows)))
+    widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
+    lines = [f"{result.loaded.spec.name}: comparison of " + ", ".join(
+        f"{label} ({r.design.kind})" for label, r in zip(result.labels, result.results, strict=True))]
+    lines += ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+    lines += [w.sentence for w in table.winners()]
+    for label, r in zip(result.labels, result.results, strict=True):
+        lines.append(f"{label}: " + ("VERIFIED" if r.verified else
+                                     "NOT VERIFIED: " + ", ".join(c.name for c in r.failed)))
+        for c in r.failed:
+            if c.detail:
+                lines.append(f"  {c.status} {c.name}: {c.detail}")
+    lines.append("VERIFIED (every controller)" if result.verified else
+                 "NOT VERIFIED: " + ", ".join(dict.fromkeys(label for label, _ in result.failed)))
+    return "\n".join(lines)
+
+
+def _is_comparison(result) -> bool:
+    return hasattr(result, "table") and hasattr(result, "results")
+
+
 def _exit_for(result) -> int:
     return EXIT_OK if result.verified else EXIT_CHECK_FAILED
 
@@ -108,14 +138,17 @@ def cmd_synth(args: argparse.Namespace) -> int:
         _start_solver_process(report=not args.no_report)
     from designkit.pipeline import run
     from designkit.report import write_report
+    from designkit.report.comparison_writer import write_comparison_report
     from designkit.schema.loader import load_spec
 
     loaded = load_spec(args.spec)
     result = run(loaded)
+    comparison = _is_comparison(result)
     files = None
     if not args.no_report:
+        write = write_comparison_report if comparison else write_report
         try:
-            files = write_report(result, Path(args.out), processes=args.jobs)
+            files = write(result, Path(args.out), processes=args.jobs)
         except OutputError as exc:
             raise OutputError("--out", f"cannot write the report: {exc.message}") from None
         except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
@@ -126,7 +159,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
             payload["report"] = {"html": str(files.html), "pdf": str(files.pdf)}
         print(json.dumps(payload, indent=2))
     else:
-        print(_summary(result))
+        print(_comparison_summary(result) if comparison else _summary(result))
         if files is not None:
             print(f"report: {files.html}\nreport: {files.pdf}")
     return _exit_for(result)
@@ -140,7 +173,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from designkit.schema.loader import load_spec
 
     result = run(load_spec(args.spec))
-    print(json.dumps(result.to_json(), indent=2) if args.json else _summary(result))
+    summary = _comparison_summary if _is_comparison(result) else _summary
+    print(json.dumps(result.to_json(), indent=2) if args.json else summary(result))
     return _exit_for(result)
 
 
@@ -148,11 +182,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     """Synthesise and simulate; print a summary or write the trajectories as CSV."""
     import numpy as np
 
-    from designkit.pipeline import design
+    from designkit.pipeline import design, single
     from designkit.schema.loader import load_spec
     from designkit.simulation.run import simulate
 
     loaded = load_spec(args.spec)
+    single(loaded, "designkit simulate")
     dsn = design(loaded)
     sim = simulate(loaded.spec, dsn)
     columns = np.column_stack([
@@ -181,10 +216,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
-    """Print the JSON Schema of the spec format."""
-    from designkit.schema.spec import Spec
+    """Print the JSON Schema of the spec format (``--form``: one controller, a comparison, or either)."""
+    from designkit.schema.comparison import json_schema
 
-    print(json.dumps(Spec.model_json_schema(), indent=2))
+    print(json.dumps(json_schema(args.form), indent=2))
     return EXIT_OK
 
 
@@ -245,7 +280,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("spec", help="path of the YAML spec")
     p.add_argument("--out", default="reports", help="report directory (default: reports/); the report "
                    "goes to OUT/<spec name>/report.html and report.pdf")
-    p.add_argument("--json", action="store_true", help="print one JSON object (gains, verified, checks)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (gains, verified, checks; for a "
+                   "comparison spec: a comparison list, one object per controller, and passed)")
     p.add_argument("--no-report", action="store_true", help="do not write the report")
     _jobs_option(p)
     p.set_defaults(func=cmd_synth)
@@ -262,6 +298,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("schema", help="print the JSON Schema of the spec format")
+    p.add_argument("--form", choices=("single", "comparison", "any"), default="single",
+                   help="single: a spec with one controller (default); comparison: a spec comparing several "
+                   "(controllers:); any: either form (oneOf)")
     p.set_defaults(func=cmd_schema)
 
     p = sub.add_parser("codegen", help="write the designed control law (and its model terms) as C code")

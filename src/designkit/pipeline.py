@@ -1,7 +1,8 @@
 """spec -> plant -> design -> simulation -> checks: the pipeline behind ``designkit synth``.
 
 Each step is a pure function of the previous steps' frozen values; the report is written
-from the :class:`PipelineResult` alone.
+from the :class:`PipelineResult` alone.  A comparison spec (``controllers:``) runs each controller as
+its own single-controller spec through the same path and returns a :class:`ComparisonResult`.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from designkit.errors import SpecError
+from designkit.schema.comparison import ComparisonSpec
 from designkit.schema.loader import LoadedSpec
 from designkit.schema.spec import Spec
 from designkit.synthesis.design import Design
@@ -124,6 +126,82 @@ class PipelineResult:
         }
 
 
+@dataclass(frozen=True, eq=False)
+class ComparisonResult:
+    """The runs of a comparison spec: each controller run alone on the shared task, and their table.
+
+    Parameters
+    ----------
+    loaded : LoadedSpec
+        The comparison spec (``controllers:``) with its source text and hash.
+    labels : tuple of str
+        The controllers' labels, in spec order.
+    results : tuple of PipelineResult
+        Each controller's run of its single-controller spec (:meth:`LoadedSpec.members`), exactly what
+        :func:`run` returns for that spec alone.
+    table : ComparisonTable
+        The same metrics for every controller (:func:`designkit.comparison.table.comparison_table`).
+    versions : Mapping
+        designkit and dependency versions.
+    """
+
+    loaded: LoadedSpec
+    labels: tuple[str, ...]
+    results: tuple[PipelineResult, ...]
+    table: Any
+    versions: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def verified(self) -> bool:
+        """True when every controller is verified (every check of every run passed)."""
+        return all(r.verified for r in self.results)
+
+    @property
+    def failed(self) -> tuple[tuple[str, Check], ...]:
+        """``(label, check)`` of every required check that failed or is undecided, controller by controller."""
+        return tuple((label, c) for label, r in zip(self.labels, self.results, strict=True) for c in r.failed)
+
+    def __getitem__(self, label: str) -> PipelineResult:
+        """The run of controller ``label``."""
+        try:
+            return self.results[self.labels.index(label)]
+        except ValueError:
+            raise KeyError(label) from None
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON object printed by ``designkit synth --json`` for a comparison.
+
+        ``comparison`` has one object per controller (label, kind, verified, metrics, checks, and its own
+        run's JSON under ``result``); ``passed`` and ``verified`` say whether every controller is verified;
+        ``checks`` lists every check of every controller, each with its ``controller`` label.
+        """
+        rows = self.table.to_json()
+        for row, r in zip(rows, self.results, strict=True):
+            row["result"] = r.to_json()
+        return {
+            "name": self.loaded.spec.name,
+            "spec_sha256": self.loaded.sha256,
+            "kind": "comparison",
+            "controllers": list(self.labels),
+            "comparison": rows,
+            "metric_units": {m.key: self.table.unit_of(m) for m in self.table.metrics},
+            "winners": [{"metric": w.metric.key, "label": w.label, "value": w.value, "runner_up": w.runner_up,
+                         "runner_up_value": w.second} for w in self.table.winners()
+                        if all(map(_finite, (w.value, w.second)))],
+            "passed": self.verified,
+            "verified": self.verified,
+            "checks": [{**c.to_dict(), "controller": label}
+                       for label, r in zip(self.labels, self.results, strict=True) for c in r.checks],
+            "versions": dict(self.versions),
+        }
+
+
+def _finite(x: float) -> bool:
+    import math
+
+    return math.isfinite(x)
+
+
 def base_dir(loaded: LoadedSpec) -> Path | None:
     """Folder of the spec file (relative model paths are resolved against it), or None for text."""
     return None if loaded.path.startswith("<") else Path(loaded.path).resolve().parent
@@ -136,11 +214,19 @@ def plant(loaded: LoadedSpec) -> Any:
     return plant_from_spec(loaded.spec.plant, base_dir(loaded))
 
 
+def single(loaded: LoadedSpec, what: str) -> None:
+    """Refuse a comparison spec where one controller is needed (:class:`SpecError` at ``controllers``)."""
+    if isinstance(loaded.spec, ComparisonSpec):
+        raise SpecError("controllers", f"{what} needs a spec with one controller (controller:); this one compares "
+                        f"{len(loaded.spec.controllers)} ({', '.join(loaded.spec.labels)}): give each its own spec")
+
+
 def design(loaded: LoadedSpec, true_plant: Any = None) -> Design:
     """Synthesise the controller of a spec (for its true plant, built from the spec when not given), with its law
     carrying the spec's anti-windup (:func:`designkit.families.synthesize`)."""
     from designkit.families import synthesize
 
+    single(loaded, "a design")
     true_plant = plant(loaded) if true_plant is None else true_plant
     return synthesize(loaded.spec, true_plant)
 
@@ -153,18 +239,24 @@ def _check_per_input(spec: Spec, true_plant: Any) -> None:
                         f"needs one value per input ({true_plant.n_inputs}), got {len(limit)}")
 
 
-def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
+def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) -> PipelineResult | ComparisonResult:
     """Synthesise, simulate and verify a spec.
 
     Parameters
     ----------
-    loaded : LoadedSpec or Spec
+    loaded : LoadedSpec, Spec or ComparisonSpec
         A validated spec (see :func:`designkit.spec.load_spec`), or a :class:`Spec` built in
         Python, which is wrapped with :meth:`LoadedSpec.from_spec`: its text (and the report's
         spec hash) is then the SHA-256 of its canonical JSON (``model_dump(mode="json")``, keys
         sorted), and model files such as a URDF are resolved against the working directory.
     simulate : bool
         Run the closed-loop simulation and the time-domain checks that need it.
+
+    Returns
+    -------
+    PipelineResult or ComparisonResult
+        The run of a one-controller spec; for a comparison spec (``controllers:``), every controller run
+        alone as its single-controller spec (:meth:`LoadedSpec.members`) and their table.
 
     Raises
     ------
@@ -177,11 +269,13 @@ def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
     from designkit.simulation.trials import run_trials
     from designkit.verification.suite import run_checks
 
-    if isinstance(loaded, Spec):
+    if isinstance(loaded, Spec | ComparisonSpec):
         loaded = LoadedSpec.from_spec(loaded)
     elif not isinstance(loaded, LoadedSpec):
         hint = "; read a file with load_spec or YAML text with parse_spec" if isinstance(loaded, str | Path) else ""
         raise SpecError("loaded", f"expected a LoadedSpec or a Spec, got {type(loaded).__name__}{hint}")
+    if isinstance(loaded.spec, ComparisonSpec):
+        return run_comparison(loaded, simulate=simulate)
     spec = loaded.spec
     true_plant = plant(loaded)
     _check_per_input(spec, true_plant)
@@ -198,6 +292,32 @@ def run(loaded: LoadedSpec | Spec, *, simulate: bool = True) -> PipelineResult:
     checks = run_checks(spec, dsn, sim, plant=true_plant, rules=check_rules(dsn.kind), trials=trials)
     return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions(),
                           plant=true_plant, trials=trials)
+
+
+def run_comparison(loaded: LoadedSpec, *, simulate: bool = True) -> ComparisonResult:
+    """Run every controller of a comparison spec as its own single-controller spec (:func:`run`) and tabulate.
+
+    Raises
+    ------
+    SpecError
+        ``loaded`` names one controller; or a controller cannot be designed as given (the key path is
+        rewritten from ``controller`` to ``controllers[<i>]``).
+    """
+    from designkit.comparison.table import comparison_table
+
+    members = loaded.members()
+    results = []
+    for k, (_, member) in enumerate(members):
+        try:
+            results.append(run(member, simulate=simulate))
+        except SpecError as exc:
+            path = exc.path
+            if path == "controller" or path.startswith(("controller.", "controller[")):
+                raise SpecError(f"controllers[{k}]{path[len('controller'):]}", exc.message) from None
+            raise
+    labels = tuple(label for label, _ in members)
+    return ComparisonResult(loaded=loaded, labels=labels, results=tuple(results),
+                            table=comparison_table(labels, results), versions=versions())
 
 
 def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str | None = None) -> Any:
@@ -229,6 +349,7 @@ def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str |
     if name is not None:
         check_name(name)
     loaded = loaded if isinstance(loaded, LoadedSpec) else load_spec(loaded)
+    single(loaded, "codegen")
     dsn = design(loaded)
     return generate_law_code(dsn, dsn.law, out_dir, name=name, spec_name=loaded.spec.name, spec_sha256=loaded.sha256,
                              law_lines=family(dsn.kind).display.law)

@@ -37,6 +37,7 @@ from yaml.events import AliasEvent, MappingStartEvent, SequenceStartEvent
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from designkit.errors import PATH_LIMIT, QUOTE_LIMIT, SpecError, short_repr, shorten
+from designkit.schema.comparison import ComparisonSpec
 from designkit.schema.spec import Spec
 
 MAX_SPEC_BYTES = 1 << 20
@@ -76,8 +77,9 @@ class LoadedSpec:
 
     Parameters
     ----------
-    spec : Spec
-        The validated spec.
+    spec : Spec or ComparisonSpec
+        The validated spec: one ``controller``, or a comparison of several (``controllers``,
+        :class:`~designkit.schema.comparison.ComparisonSpec`).
     text : str
         The YAML source.
     sha256 : str
@@ -86,14 +88,37 @@ class LoadedSpec:
         Where it was read from (``"<string>"`` for text, ``"<Spec>"`` for a :class:`Spec` object).
     """
 
-    spec: Spec
+    spec: Spec | ComparisonSpec
     text: str
     sha256: str
     path: str
 
+    @property
+    def is_comparison(self) -> bool:
+        """True for a spec naming several controllers (``controllers:``)."""
+        return isinstance(self.spec, ComparisonSpec)
+
+    def members(self) -> tuple[tuple[str, LoadedSpec], ...]:
+        """``(label, LoadedSpec)`` of each controller of a comparison, each the single-controller spec it
+        stands for (:meth:`ComparisonSpec.member`): its text is the member's canonical JSON
+        (:meth:`from_spec`), its path the comparison's (model files resolve as they do for the comparison).
+
+        Raises
+        ------
+        SpecError
+            The spec names one controller (``controller:``), not several.
+        """
+        if not isinstance(self.spec, ComparisonSpec):
+            raise SpecError("controllers", "this spec names one controller (controller:), not a comparison")
+        out = []
+        for label, member in self.spec.members():
+            canonical = LoadedSpec.from_spec(member)
+            out.append((label, LoadedSpec(spec=member, text=canonical.text, sha256=canonical.sha256, path=self.path)))
+        return tuple(out)
+
     @classmethod
-    def from_spec(cls, spec: Spec) -> LoadedSpec:
-        """Wrap a :class:`Spec` built in Python; its text is its canonical JSON.
+    def from_spec(cls, spec: Spec | ComparisonSpec) -> LoadedSpec:
+        """Wrap a :class:`Spec` (or :class:`ComparisonSpec`) built in Python; its text is its canonical JSON.
 
         The canonical JSON is ``spec.model_dump(mode="json")`` with sorted keys and no spaces
         (valid YAML, and a spec that validates to an equal :class:`Spec`); ``sha256`` is the
@@ -104,7 +129,7 @@ class LoadedSpec:
         SpecError
             ``spec`` is not a :class:`Spec`.
         """
-        if not isinstance(spec, Spec):
+        if not isinstance(spec, Spec | ComparisonSpec):
             raise SpecError("spec", f"expected a designkit Spec, got {type(spec).__name__}")
         text = json.dumps(spec.model_dump(mode="json"), sort_keys=True, separators=(",", ":"), allow_nan=False)
         return cls(spec=spec, text=text, sha256=hashlib.sha256(text.encode()).hexdigest(), path="<Spec>")
@@ -372,9 +397,11 @@ _UNION_KEYS = frozenset({"plant", "controller", "nonlinearity", "trajectory"})
 def _key_path(loc: tuple[int | str, ...]) -> str:
     parts: list[str] = []
     previous: int | str | None = None
+    before: int | str | None = None
     for item in loc:
-        tag = previous in _UNION_KEYS and item in _UNION_TAGS
-        previous = item
+        in_entry = before == "controllers" and isinstance(previous, int)  # controllers[i].<tag>
+        tag = item in _UNION_TAGS and (previous in _UNION_KEYS or in_entry)
+        before, previous = previous, item
         if isinstance(item, int):
             parts.append(f"[{item}]")
         elif tag or "[" in str(item) or str(item).startswith("function-"):
@@ -442,8 +469,12 @@ def parse_spec(text: str | bytes, *, path: str = "<string>") -> LoadedSpec:
     data = _load_yaml(text)
     if not isinstance(data, dict):
         raise SpecError("", f"a spec must be a YAML mapping, got {type(data).__name__}")
+    if "controllers" in data and "controller" in data:
+        raise SpecError("controllers", "give either controller (one controller) or controllers (a comparison of "
+                        "several), not both")
+    model = ComparisonSpec if "controllers" in data else Spec
     try:
-        spec = Spec.model_validate(data)
+        spec = model.model_validate(data)
     except ValidationError as exc:
         err = exc.errors(include_url=False, include_context=True)[0]
         key = _key_path(tuple(err.get("loc", ())))

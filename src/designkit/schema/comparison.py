@@ -1,0 +1,145 @@
+"""The comparison spec: several controllers on one task (one plant, simulation, requirements and numerics).
+
+A spec gives either ``controller:`` (one controller, :class:`~designkit.schema.spec.Spec`) or
+``controllers:`` (a list of 2 to :data:`MAX_CONTROLLERS` controller sections, :class:`ComparisonSpec`).  Each
+entry is exactly what ``controller:`` accepts plus an optional ``label`` (default: its ``kind``; the labels
+must differ).  Every entry is checked as the single-controller spec it stands for
+(:meth:`ComparisonSpec.members`), so the families' cross-section rules (plant kinds, references, poles,
+requirements) apply to it unchanged and their errors name ``controllers[<i>]`` instead of ``controller``.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any, Union
+
+from pydantic import Field, ValidationError, create_model, model_validator
+
+from designkit.families import FAMILIES
+from designkit.schema.spec import Spec
+from designkit.spec.fields import Section
+from designkit.spec.plants import PlantSpec
+from designkit.spec.sections import Numerics, Requirements, Simulation
+
+__all__ = ["MAX_CONTROLLERS", "ComparisonSpec", "ControllerEntry", "entry_models", "member_name"]
+
+MAX_CONTROLLERS = 6
+"""Most controllers a comparison spec names (at least 2)."""
+
+LABEL_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
+"""A label is also a folder name (the controller's own report): letters, digits, ``_ . -``."""
+
+
+def entry_models() -> tuple[type, ...]:
+    """One model per registered family: its spec model plus an optional ``label`` (registry order)."""
+    out = []
+    for fam in FAMILIES.values():
+        base = fam.spec
+        model = create_model(
+            f"{base.__name__}Entry", __base__=base, __module__=__name__,
+            label=(str | None, Field(default=None, pattern=LABEL_PATTERN, max_length=40,
+                                     description="How the comparison names this controller (default: its kind).")),
+        )
+        model.__doc__ = f"A ``controllers`` entry of kind {fam.kind!r}: its ``controller`` section plus a label."
+        out.append(model)
+    return tuple(out)
+
+
+ControllerEntry = Annotated[Union[entry_models()], Field(discriminator="kind")]  # noqa: UP007  (built at runtime)
+"""One entry of ``controllers``: a family's ``controller`` section with an optional ``label``."""
+
+
+def member_name(label: str) -> str:
+    """The spec name of a comparison's member (its label; also the folder of its own report)."""
+    return label
+
+
+_PATH = re.compile(r"^(\[[\w.\[\]]*|[A-Za-z_][\w.\[\]]*): (.*)$")
+
+
+def _member_error(index: int, exc: ValidationError) -> str:
+    """The first error of a member's validation as ``<key path>: <message>``, ``controller`` -> ``controllers[i]``."""
+    err = exc.errors(include_url=False)[0]
+    msg = re.sub(r"^(Value error|Assertion failed), ", "", str(err.get("msg", "invalid value")))
+    m = _PATH.match(msg)
+    path, text = (m.group(1), m.group(2)) if m else ("", msg)
+    if path == "controller" or path.startswith(("controller.", "controller[")):
+        return f"controllers[{index}]{path[len('controller'):]}: {text}"
+    return f"{path or f'controllers[{index}]'}: (controllers[{index}]) {text}"
+
+
+class ComparisonSpec(Section):
+    """A spec comparing several controllers on one task.
+
+    Parameters
+    ----------
+    name, description : str
+        As in :class:`~designkit.schema.spec.Spec` (the name is the report folder).
+    plant : PlantSpec
+        The plant every controller is designed for and simulated on.
+    controllers : list of ControllerEntry
+        2 to :data:`MAX_CONTROLLERS` controller sections, each with an optional ``label``.
+    requirements, simulation, numerics
+        Shared by every controller (the ``plant_change``, trajectory, perturbation and duration too).
+    """
+
+    name: str = Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$", max_length=100)
+    description: str = Field(default="", max_length=10_000)
+    plant: PlantSpec
+    controllers: list[ControllerEntry] = Field(min_length=2, max_length=MAX_CONTROLLERS)
+    requirements: Requirements | None = None
+    simulation: Simulation = Simulation()
+    numerics: Numerics = Numerics()
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """Each controller's label (its ``label``, else its ``kind``), in spec order."""
+        return tuple(c.label or c.kind for c in self.controllers)
+
+    def member(self, index: int) -> Spec:
+        """The single-controller :class:`Spec` of entry ``index``: the shared sections and that controller.
+
+        Its name is the entry's label (:func:`member_name`); its ``controller`` is the entry without the label,
+        validated by the family's own model, so it equals the section a one-controller spec would give.
+        """
+        entry = self.controllers[index]
+        fam = FAMILIES[entry.kind]
+        controller = fam.spec.model_validate(entry.model_dump(exclude={"label"}))
+        return Spec.model_validate({
+            "name": member_name(self.labels[index]), "description": self.description, "plant": self.plant,
+            "controller": controller, "requirements": self.requirements, "simulation": self.simulation,
+            "numerics": self.numerics,
+        })
+
+    def members(self) -> tuple[tuple[str, Spec], ...]:
+        """``(label, Spec)`` of every controller, in spec order."""
+        return tuple((label, self.member(k)) for k, label in enumerate(self.labels))
+
+    @model_validator(mode="after")
+    def _members_valid(self) -> ComparisonSpec:
+        seen: dict[str, int] = {}
+        for k, label in enumerate(self.labels):
+            if label in seen:
+                raise ValueError(f"controllers[{k}].label: {label!r} already names controllers[{seen[label]}]; "
+                                 "give each controller a distinct label")
+            seen[label] = k
+        for k in range(len(self.controllers)):
+            try:
+                self.member(k)
+            except ValidationError as exc:
+                raise ValueError(_member_error(k, exc)) from None
+        return self
+
+
+def json_schema(form: str = "single") -> dict[str, Any]:
+    """The JSON Schema of a spec: ``"single"`` (``controller:``), ``"comparison"`` (``controllers:``) or
+    ``"any"`` (exactly one of the two forms, ``oneOf``)."""
+    if form == "single":
+        return Spec.model_json_schema()
+    if form == "comparison":
+        return ComparisonSpec.model_json_schema()
+    from pydantic import TypeAdapter
+
+    schema = TypeAdapter(Union[Spec, ComparisonSpec]).json_schema()  # noqa: UP007
+    schema["title"] = "designkit spec (one controller, or a comparison of several)"
+    return schema

@@ -1,0 +1,127 @@
+"""A comparison runs each controller as its own spec: the same results as alone, metrics checked with NumPy."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from designkit.cli import main
+from designkit.pipeline import ComparisonResult, run
+from designkit.schema.loader import load_spec, parse_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE = ROOT / "specs" / "mrac-vs-selftune.yaml"
+MRAC_ALONE = ROOT / "specs" / "mrac-link.yaml"
+
+
+@pytest.fixture(scope="module")
+def comparison() -> ComparisonResult:
+    return run(load_spec(EXAMPLE))
+
+
+def _alone(label: str, block: str) -> str:
+    """The example's shared sections with one controller, written by hand (not derived from the loader)."""
+    return (f"name: {label}\nplant: {{kind: link, Km: 2.0, tau: 0.5}}\ncontroller:\n{block}"
+            "simulation:\n  duration: 40\n  trajectory: {kind: square, amplitude: 0.5, period: 4}\n"
+            "  plant_change: {time: 20, values: {Km: 1.0}}\n")
+
+
+MRAC_BLOCK = "  kind: mrac\n  poles: [-4, -5]\n  gamma: 10000\n  Q: [1, 0.1]\n"
+STR_BLOCK = ("  kind: self_tuning\n  sampling_period: 0.01\n  estimator: speed\n  forgetting: 0.99\n"
+             "  initial_covariance: 100\n  poles: [-4, -5]\n  nominal: {Km: 1.0, tau: 1.0}\n")
+
+
+@pytest.mark.parametrize(("label", "block"), [("mrac", MRAC_BLOCK), ("selftune", STR_BLOCK)])
+def test_each_controller_is_the_run_of_its_own_spec(comparison, label, block):
+    alone = run(parse_spec(_alone(label, block)))
+    inside = comparison[label]
+    assert [(c.name, c.status) for c in inside.checks] == [(c.name, c.status) for c in alone.checks]
+    for a, b in zip(inside.checks, alone.checks, strict=True):
+        if isinstance(a.achieved, float):
+            assert a.achieved == pytest.approx(b.achieved, rel=1e-9, abs=1e-12), a.name
+    np.testing.assert_allclose(inside.simulation.state, alone.simulation.state, rtol=1e-12, atol=1e-12)
+    assert inside.verified == alone.verified
+    assert dict(inside.design.gains.items()).keys() == dict(alone.design.gains.items()).keys()
+
+
+def test_metrics_against_numpy(comparison):
+    tc = 20.0
+    for label, res in zip(comparison.labels, comparison.results, strict=True):
+        sim = res.simulation
+        t = np.asarray(sim.time)
+        e = np.abs(np.asarray(sim.desired).ravel() - np.asarray(sim.state)[:, 0])
+        u = np.abs(np.asarray(sim.u_command).ravel())
+        before, after = t < tc, t >= tc
+        row = comparison.table.row(label).values
+        assert row["rms_error_before"] == pytest.approx(math.sqrt(np.mean(e[before] ** 2)), rel=1e-12)
+        assert row["rms_error_after"] == pytest.approx(math.sqrt(np.mean(e[after] ** 2)), rel=1e-12)
+        assert row["max_error_after"] == pytest.approx(e[after].max(), rel=1e-12)
+        assert row["peak_command"] == pytest.approx(u.max(), rel=1e-12)
+        assert row["rms_command"] == pytest.approx(math.sqrt(np.mean(u ** 2)), rel=1e-12)
+        assert row["rms_error_final"] == pytest.approx(math.sqrt(np.mean(e[t >= t[-1] - 4.0] ** 2)), rel=1e-12)
+        assert row["overshoot"] is None  # a square wave is not a step
+        # the unchanged-link run, simulated independently from a spec without the plant change
+        text = EXAMPLE.read_text().replace("  plant_change: {time: 20, values: {Km: 1.0}}\n", "")
+        base = run(parse_spec(text))[label].simulation
+        d = np.abs(np.asarray(sim.state)[:, 0] - np.asarray(base.state)[:, 0])
+        assert np.all(d[before] < 1e-9)  # the same run until the change
+        assert row["rms_deviation"] == pytest.approx(math.sqrt(np.mean(d[after] ** 2)), rel=1e-9)
+        band = 0.01 * 1.0  # 1 % of the square wave's range, 1 rad
+        above = np.flatnonzero(after & (d > band))
+        assert row["reconvergence"] == pytest.approx(t[above[-1] + 1] - tc, abs=1e-9)
+
+
+def test_winners_say_who_wins_and_by_how_much(comparison):
+    table = comparison.table
+    sentences = {w.metric.key: w for w in table.winners()}
+    rec = sentences["reconvergence"]
+    values = {label: table.value(label, "reconvergence") for label in comparison.labels}
+    assert rec.label == min(values, key=values.get)
+    assert rec.value == min(values.values()) and rec.second == max(values.values())
+    assert "times lower" in rec.sentence or "% lower" in rec.sentence
+
+
+def test_verdict_is_every_controllers(comparison):
+    assert comparison.verified is all(r.verified for r in comparison.results)
+    assert comparison.failed == ()
+
+
+FAILING = """\
+name: cmp-failing
+plant: {kind: link, Km: 2.0, tau: 0.5}
+controllers:
+  - {kind: mrac, poles: [-4, -5], gamma: 10000, Q: [1, 0.1], label: fine}
+  - {kind: mrac, poles: [-4, -5], gamma: 10000000, Q: [1, 0.1], label: too-fast}
+simulation:
+  duration: 24
+  trajectory: {kind: square, amplitude: 0.5, period: 4}
+  plant_change: {time: 8, values: {Km: 1.0}}
+"""
+
+
+def test_exit_codes_and_json(tmp_path, capsys):
+    code = main(["synth", str(EXAMPLE), "--no-report", "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 0 and payload["passed"] is True
+    assert [c["label"] for c in payload["comparison"]] == ["mrac", "selftune"]
+    assert [c["kind"] for c in payload["comparison"]] == ["mrac", "self_tuning"]
+    assert all(c["verified"] is True and "rms_error_after" in c["metrics"] for c in payload["comparison"])
+
+    spec = tmp_path / "failing.yaml"
+    spec.write_text(FAILING)
+    code = main(["verify", str(spec), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1 and payload["passed"] is False
+    verdicts = {c["label"]: c["verified"] for c in payload["comparison"]}
+    assert verdicts == {"fine": True, "too-fast": False}
+
+    spec.write_text(FAILING.replace("gamma: 10000000", "gamma: -5"))
+    assert main(["synth", str(spec), "--no-report"]) == 2
+    err = capsys.readouterr().err
+    assert "controllers[1].gamma" in err
+    assert main(["codegen", str(EXAMPLE), "--out", str(tmp_path)]) == 2
+    assert "controllers" in capsys.readouterr().err
