@@ -1,0 +1,248 @@
+"""Variable structure control by theorem 3 of the notes (section 5.2; ROBEL's figure 5.3): the ``vsc`` family.
+
+Plant ``x' = A(p) x + B(p) u + D(p) d`` (the link, or the elastic joint in ``[theta_m, theta_m', theta_l,
+theta_l']`` spring-side coordinates), regulated about the rest state at the reference ``x*(xD)``; with the error
+state ``x~ = x - x*(xD)``::
+
+    sigma = c x~,     u = sum_i psi_i x~_i - delta sign(sigma),     psi_i = alpha_i if x~_i sigma > 0, else beta_i
+
+**Sign convention** (figure 5.3's, used throughout): ``alpha_i`` where ``x~_i sigma > 0``, ``beta_i`` where
+``x~_i sigma < 0``; with ``cB > 0`` the reaching condition is ``alpha_i < l_i < beta_i``
+(:mod:`~designkit.families.vsc.gains`).  Theorem 3 as printed puts ``alpha_i`` on ``x_i sigma < 0``; with that
+labelling the same derivation gives ``alpha_i > l_i > beta_i`` (docs/notes-errata.md).
+
+**c** from the ``n - 1`` sliding poles by the Ackermann formula of :mod:`~designkit.families.vsc.surface`,
+normalised so that the coefficient of the driven state (``x2``) is 1.  On the elastic joint (``mgl = 0``,
+``k2 = KR R2^2/J2``) this is figure 5.3's closed form ``c1 = -(p1 + p2 + p3) - 1/tau2``, ``c2 = 1``,
+``c3 = -p1 p2 p3/k2 - c1``, ``c4 = (p1 p2 + p1 p3 + p2 p3)/k2 - 1 - c1/(tau2 k2)`` (the notes print ``c2``
+for ``tau2`` in the last term).
+
+**Gains** ``l_i = -(cA)_i/(cB)``: figure 5.3's ``l1 = (tau1/Km)(KR R1^2/J1 - c4 KR R2^2/J2)``,
+``l2 = (tau1/Km)(1/tau1 - c1)``, ``l3 = (tau1/Km)(c4 KR R2^2/J2 - KR R1^2/J1)``, ``l4 = (tau1/Km)(c4/tau2 - c3)``
+(correct as printed, with ``E`` read as ``B``).  On the link (``c = [c1, 1]``): ``l1 = 0``,
+``l2 = (1 - c1 tau)/Km``.
+
+**Integration step.**  The law is discontinuous: the simulator holds its command over each step ``h``, which
+moves ``sigma`` by at most ``h S(x~)`` (:mod:`~designkit.families.vsc.measure`).  ``h`` is chosen so that the
+first held step at the initial error moves ``sigma`` by at most the band (``chattering_band``, default
+``BAND_FRACTION |sigma(0)|``); with a boundary layer, a tenth of it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from designkit.errors import SpecError
+from designkit.families.vsc.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.vsc.figures import FIGURES
+from designkit.families.vsc.gains import bound_ranges, design_gains, rational_forms
+from designkit.families.vsc.report import json_summary, section
+from designkit.families.vsc.spec import KIND, VscSpec, perturbation_level, validate
+from designkit.families.vsc.surface import (
+    CONTROLLABILITY_TOL,
+    controllability_ratio,
+    drive_index,
+    linear_model,
+    sliding_surface,
+)
+from designkit.synthesis.closed_loop import with_law
+from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.family import Display, Family
+from designkit.synthesis.law import Law, dynamic_law
+from designkit.synthesis.linearization import Linearization
+
+__all__ = ["FAMILY", "KIND", "VscSpec", "law", "synthesize"]
+
+BAND_FRACTION = 0.05
+"""Default band: the first held step at the initial error moves ``sigma`` by at most this fraction of
+``|sigma(0)|``."""
+LAYER_STEPS = 10.0
+MAX_STEP = 1e-3
+"""Largest step (s) whatever the band: the sliding poles' and the plant's time scales are integrated."""
+REASON = ("the law switches on sigma = 0 (the relay) and on every x_i sigma = 0 (psi_i between alpha_i and beta_i), "
+          "where it spends its life: it has no derivative there, so no linearization describes the loop; theorem 3's "
+          "conditions are certified on the parameter box instead")
+COUPLING = ("KR", "J2", "R2")
+"""Elastic-joint parameters of the coupling ``k2 = KR R2^2/J2`` through which the motor reaches the link."""
+
+
+def design_box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
+    """``plant.uncertainty`` widened to hold the nominal plant; ``{"Km": (nominal, nominal)}`` without one."""
+    unc = spec.plant.uncertainty
+    intervals = dict(unc.intervals) if unc is not None else {}
+    box = {}
+    for name in model.names:
+        if name in intervals:
+            nominal = float(model.nominal[model.names.index(name)])
+            lo, hi = intervals[name]
+            box[name] = (min(lo, nominal), max(hi, nominal))
+    if not box:
+        box["Km"] = (float(model.nominal[model.names.index("Km")]),) * 2
+    if box.get("mgl", (0.0, 0.0))[1] > 0:
+        raise SpecError("plant.uncertainty.mgl", "the regulator is designed for mgl = 0 (no gravity)")
+    if box.get("tau2", (1.0, 1.0))[1] == float("inf"):
+        raise SpecError("plant.uncertainty.tau2", "must be finite")
+    return box
+
+
+def _surface(spec: Any, model: Any, box: dict) -> np.ndarray:
+    A, B, _ = model.at()
+    poles = [complex(p) for p in spec.controller.sliding_poles]
+    ratio = controllability_ratio(A, B)
+    if ratio < CONTROLLABILITY_TOL:
+        given = [k for k in COUPLING if getattr(spec.plant, k, None) is not None] or ["KR"]
+        raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "
+                        f"through the coupling k2 = KR R2^2/J2 = {-A[3, 2]:.3g} 1/s^2, and the controllability "
+                        f"matrix [B, AB, A^2 B, A^3 B] is singular to {ratio:.3g} (Hadamard ratio, below "
+                        f"{CONTROLLABILITY_TOL:g}): no sliding surface places the poles")
+    for name, (lo, hi) in box.items():  # every plant of the box must be controllable too
+        for v in (lo, hi):
+            Ab, Bb, _ = model.at({name: v})
+            if controllability_ratio(Ab, Bb) < CONTROLLABILITY_TOL:
+                raise SpecError(f"plant.uncertainty.{name}", f"{name} = {v:g} makes the plant uncontrollable")
+    return sliding_surface(A, B, poles)
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The regulator a spec asks for (package docstring): ``c``, the box's ``l_i`` ranges, the gains, the law."""
+    ctl, sim = spec.controller, spec.simulation
+    model = linear_model(plant)
+    box = design_box(spec, model)
+    c = _surface(spec, model, box)
+    A, B, D = model.at()
+    n = len(c)
+    forms = rational_forms(plant.kind, c)
+    bounds = bound_ranges(forms, model, box)
+    rho = max(abs(complex(p)) for p in ctl.sliding_poles)
+    cB_nom = float(c @ B.ravel())
+    m = float(ctl.margin)
+    al, be, S = design_gains(bounds, c, rho, cB_nom, m, ctl.alpha, ctl.beta)
+    level = perturbation_level(sim)
+    d_bar = float(ctl.perturbation_bound if ctl.perturbation_bound is not None else (level or 0.0))
+    ratio = bounds["cD/cB"]
+    r_max = max(abs(ratio.lower), abs(ratio.upper))
+    delta = float(ctl.delta) if ctl.delta is not None else (1.0 + m) * d_bar * r_max
+    notes = []
+    if ctl.delta is None:
+        src = "controller.perturbation_bound" if ctl.perturbation_bound is not None else "simulation.perturbation"
+        notes.append(f"delta = (1 + {m:g}) x {d_bar:g} x sup|cD/cB| = {delta:.4g} (perturbation bound from {src}).")
+    given = [k for k in ("alpha", "beta", "delta") if getattr(ctl, k) is not None]
+    if given:
+        notes.append(f"Given by the spec (not designed): {', '.join(given)}.")
+    rest = np.asarray(plant.rest_state(1.0), float) - np.asarray(plant.rest_state(0.0), float)
+    step = sim.step if not isinstance(sim.step, list | tuple) else sim.step[0]
+    amp = float(step) if sim.trajectory is None else 2.0 * float(np.max(np.abs(sim.trajectory.amplitude)))
+    x0 = -abs(amp) * rest
+    G = np.array([max(bounds[f"l_{i + 1}"].upper - al[i], be[i] - bounds[f"l_{i + 1}"].lower) for i in range(n)])
+    cB_max = bounds["cB"].upper
+    cD_max = r_max * cB_max
+    S0 = cB_max * (np.abs(x0) @ G + delta) + cD_max * d_bar
+    sigma0 = abs(float(c @ x0))
+    eps = ctl.boundary_layer
+    if eps is not None:
+        band, h = float(eps), float(eps) / (LAYER_STEPS * S0)
+    else:
+        band = float(ctl.chattering_band) if ctl.chattering_band is not None else BAND_FRACTION * sigma0
+        h = band / S0
+    h = min(h, MAX_STEP)
+    k = drive_index(B)
+    cA = c @ A
+    state_units = [s.unit for s in plant.states]
+    u_unit = plant.inputs[0].unit
+    gains = [Gain(f"c{i + 1}", float(c[i]), f"({state_units[k] if k is not None else ''})/({state_units[i]})",
+                  "sliding surface coefficient") for i in range(n)]
+    gains += [Gain(f"alpha{i + 1}", al[i], f"{u_unit}/({state_units[i]})", f"switching gain where x{i + 1} sigma > 0")
+              for i in range(n)]
+    gains += [Gain(f"beta{i + 1}", be[i], f"{u_unit}/({state_units[i]})", f"switching gain where x{i + 1} sigma < 0")
+              for i in range(n)]
+    gains.append(Gain("delta", delta, u_unit, "relay amplitude"))
+    position = int(plant.positions[0])
+    extra = {KIND: {
+        "c": c.tolist(), "alpha": list(al), "beta": list(be), "delta": delta, "margin": m, "S": list(S),
+        "box": {kk: list(v) for kk, v in box.items()}, "d_bar": d_bar, "bounds": {
+            kk: {"lower": b.lower, "upper": b.upper, "argmin": b.argmin, "argmax": b.argmax, "method": b.method,
+                 "form": b.form} for kk, b in bounds.items()},
+        "G": G.tolist(), "cB_max": cB_max, "cD_max": cD_max, "cB_nominal": cB_nom, "cA_nominal": cA.tolist(),
+        "rest_direction": rest.tolist(), "position_index": position, "band": band, "max_step": h,
+        "sigma0": sigma0, "S0": float(S0), "boundary_layer": eps, "plant_kind": plant.kind,
+        "nominal_model": [A.tolist(), B.tolist(), D.tolist()], "run_model": [A.tolist(), B.tolist(), D.tolist()],
+        "sliding_poles": [[complex(p).real, complex(p).imag] for p in ctl.sliding_poles],
+        "drive_index": k,
+    }}
+    formulas = (
+        "σ = c x̃ with c from the sliding poles (Ackermann: c = e P(A), e = last row of [B AB … A^(n−1)B]^−1), "
+        "normalised c_drive = 1",
+        "l_i = −(cA)_i/(cB); reaching: α_i < l_i < β_i on the whole box and δ > sup|cD/cB| d̄",
+        f"α_i = min l_i − {m:g} S_i, β_i = max l_i + {m:g} S_i; δ = (1 + {m:g}) d̄ sup|cD/cB| unless given",
+        f"h = {'ε/(10 S0)' if eps is not None else 'band/S0'} = {h:.4g} s (S0 = {S0:.4g}: the largest |σ'| at the "
+        "initial error over the box)",
+    )
+    d = Design(kind=KIND, plant=plant, gains=Gains.of(gains),
+               poles=tuple(complex(p) for p in ctl.sliding_poles), reference="step", formulas=formulas,
+               notes=tuple(notes), extra=extra)
+    return with_law(d, law(d), Linearization("none", reason=REASON))
+
+
+def law(design: Design, anti_windup: Any = None) -> Law:
+    """``u = sum_i psi_i x~_i - delta sign(sigma)`` (or ``delta sat(sigma/epsilon)``), held over each step of at
+    most ``max_step``; records ``sigma`` and ``u_eq = -(cB)^-1 c A x~`` (nominal model, no perturbation)."""
+    info = design.extra[KIND]
+    c, al, be = (np.asarray(info[k], float) for k in ("c", "alpha", "beta"))
+    delta, eps = float(info["delta"]), info["boundary_layer"]
+    rest = np.asarray(info["rest_direction"], float)
+    cA, cB = np.asarray(info["cA_nominal"], float), float(info["cB_nominal"])
+
+    def error(s: Any) -> Any:
+        return s.y - ca.DM(rest) * s.qD[0]
+
+    def sigma(s: Any) -> Any:
+        return ca.dot(ca.DM(c), error(s))
+
+    def command(s: Any) -> Any:
+        x, sg = error(s), sigma(s)
+        u = 0
+        for i in range(len(c)):
+            u = u + ca.if_else(x[i] * sg > 0, al[i], be[i]) * x[i]
+        relay = ca.sign(sg) if eps is None else ca.fmin(ca.fmax(sg / eps, -1.0), 1.0)
+        return u - delta * relay
+
+    def u_eq(s: Any) -> Any:
+        return -ca.dot(ca.DM(cA), error(s)) / cB
+
+    reason = (f"the command is held over each step; h = {info['max_step']:.4g} s moves sigma by at most "
+              f"{'a tenth of the boundary layer' if eps is not None else 'the band'} ({info['band']:.4g}) at the "
+              f"initial error (largest |sigma'| there over the box {info['S0']:.4g})")
+    unit = design.plant.states[info["drive_index"]].unit if info["drive_index"] is not None else ""
+    return dynamic_law(
+        KIND, design.plant, command=command,
+        settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": info["band"]},
+        signals={"sigma": sigma, "u_eq": u_eq}, signal_units=(unit, design.plant.inputs[0].unit),
+        discontinuous=True, max_step=float(info["max_step"]), max_step_reason=reason,
+    )
+
+
+FAMILY = Family(
+    kind=KIND,
+    spec=VscSpec,
+    plants=("link", "elastic_joint"),
+    reference="step",
+    references=("step", "square", "prbs"),
+    synthesize=synthesize,
+    law=law,
+    checks=(CERTIFICATE_RULE, RUN_RULE, "time_domain"),
+    display=Display(
+        label="Variable structure state regulator (theorem 3)",
+        law=("σ = c (x − x*(xD)), c from the sliding poles", "u = Σ ψ_i x̃_i − δ sign(σ)",
+             "ψ_i = α_i where x̃_i σ > 0 and β_i where x̃_i σ < 0; sat(σ/ε) replaces sign(σ) with a boundary layer"),
+        summary="Notes §5.2, theorem 3 (ROBEL, figure 5.3): a switching state feedback drives the state onto the "
+                "surface σ = c x̃ = 0, whose sliding motion has the requested poles; the gains bracket the "
+                "equivalent-control gains l_i on the whole parameter box, certified there.",
+    ),
+    validate=validate,
+    figures=FIGURES,
+    sections=(section,),
+    json=json_summary,
+)
