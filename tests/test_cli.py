@@ -34,6 +34,7 @@ EXPECTED_EXIT = {
     "scara-decentralized-pid": 1,  # simulated from the designed equilibrium: joint 2 overshoots 40 % (15 % asked)
     "puma560-resolved-acceleration": 1,  # the path passes near the wrist singularity with the exact inverse
     "puma560-resolved-acceleration-dls": 0,
+    "mrac-vs-selftune": 0,  # a comparison spec (controllers:): both controllers verified (docs/comparison.md)
 }
 for _examples in discovered("EXAMPLES").values():  # the families' own examples (tests/families/<kind>/cases.py)
     EXPECTED_EXIT.update(_examples)

@@ -143,6 +143,9 @@ class ComparisonResult:
         The same metrics for every controller (:func:`designkit.comparison.table.comparison_table`).
     versions : Mapping
         designkit and dependency versions.
+    unchanged : tuple of SimulationResult or None
+        Each controller's run on the unchanged plant (the spec without ``plant_change``; None without one), the
+        reference of the departure metrics and figure.
     """
 
     loaded: LoadedSpec
@@ -150,6 +153,7 @@ class ComparisonResult:
     results: tuple[PipelineResult, ...]
     table: Any
     versions: Mapping[str, str] = field(default_factory=dict)
+    unchanged: tuple[Any, ...] = ()
 
     @property
     def verified(self) -> bool:
@@ -303,7 +307,7 @@ def run_comparison(loaded: LoadedSpec, *, simulate: bool = True) -> ComparisonRe
         ``loaded`` names one controller; or a controller cannot be designed as given (the key path is
         rewritten from ``controller`` to ``controllers[<i>]``).
     """
-    from designkit.comparison.table import comparison_table
+    from designkit.comparison.table import baselines, comparison_table
 
     members = loaded.members()
     results = []
@@ -316,8 +320,10 @@ def run_comparison(loaded: LoadedSpec, *, simulate: bool = True) -> ComparisonRe
                 raise SpecError(f"controllers[{k}]{path[len('controller'):]}", exc.message) from None
             raise
     labels = tuple(label for label, _ in members)
+    unchanged = baselines(results)
     return ComparisonResult(loaded=loaded, labels=labels, results=tuple(results),
-                            table=comparison_table(labels, results), versions=versions())
+                            table=comparison_table(labels, results, unchanged), versions=versions(),
+                            unchanged=unchanged)
 
 
 def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str | None = None) -> Any:

@@ -62,9 +62,6 @@ def generic_section(result: Any) -> ReportSection:
         else:
             failed = "; ".join(f"{label} ({status.lower()})" for _, label, status in r.failed)
             verdicts.append(f"{r.label} ({r.controller}) is not verified: {failed}.")
-    rows = tuple((m.label, table.unit_of(m), *(table.cell(m, r.values.get(m.key)).removesuffix(
-        " " + table.unit_of(m)) for r in table.rows)) for m in table.metrics)
-    definitions = Table("What each metric is", ("metric", "unit", *result.labels), rows)
     meaning = Table("How each metric was computed", ("metric", "computed as"),
                     tuple((m.label, m.meaning) for m in table.metrics))
     return ReportSection(
@@ -73,7 +70,7 @@ def generic_section(result: Any) -> ReportSection:
               "is better for each metric.",
         questions=(
             Question("Who wins on each metric?", (f"Metrics won: {tally}.", *(w.sentence for w in winners)),
-                     (definitions, meaning)),
+                     (meaning,)),
             Question("Is each controller verified?", tuple(verdicts)),
         ),
     )

@@ -15,7 +15,7 @@ from typing import Any
 from designkit.comparison.metrics import baseline_simulation, compute_metrics
 from designkit.display.numbers import fmt_number, unit
 
-__all__ = ["METRICS", "ComparisonTable", "ControllerRow", "Metric", "Winner", "comparison_table"]
+__all__ = ["METRICS", "ComparisonTable", "ControllerRow", "Metric", "Winner", "baselines", "comparison_table"]
 
 
 @dataclass(frozen=True)
@@ -203,7 +203,19 @@ def _units(results: Sequence[Any]) -> tuple[str, str]:
     return one(errors, "rad"), one(commands, "")
 
 
-def comparison_table(labels: Sequence[str], results: Sequence[Any]) -> ComparisonTable:
+def baselines(results: Sequence[Any]) -> tuple[Any, ...]:
+    """Each run's re-run on the unchanged plant (:func:`~designkit.comparison.metrics.baseline_simulation`; None
+    without a plant change, without a simulation, or for a design run in trials)."""
+    out = []
+    for res in results:
+        plant = res.plant if res.plant is not None else res.design.plant
+        ran_once = res.simulation is not None and res.trials is None
+        out.append(baseline_simulation(res.loaded.spec, plant) if ran_once else None)
+    return tuple(out)
+
+
+def comparison_table(labels: Sequence[str], results: Sequence[Any],
+                     unchanged: Sequence[Any] | None = None) -> ComparisonTable:
     """The table of a comparison's runs (pure: reads the runs, returns a new value).
 
     Parameters
@@ -212,14 +224,14 @@ def comparison_table(labels: Sequence[str], results: Sequence[Any]) -> Compariso
         The controllers' labels, in spec order.
     results : sequence of PipelineResult
         Their runs, each of its single-controller spec.
+    unchanged : sequence of SimulationResult or None, optional
+        Their runs on the unchanged plant (default: :func:`baselines`).
     """
     from designkit.families import family
 
+    unchanged = baselines(results) if unchanged is None else tuple(unchanged)
     rows = []
-    for label, res in zip(labels, results, strict=True):
-        plant = res.plant if res.plant is not None else res.design.plant
-        ran_once = res.simulation is not None and res.trials is None
-        base = baseline_simulation(res.loaded.spec, plant) if ran_once else None
+    for label, res, base in zip(labels, results, unchanged, strict=True):
         values = compute_metrics(res.loaded.spec, res.simulation, base)
         checks = tuple((c.name, getattr(c, "label", "") or c.name.replace("_", " ").capitalize(), c.status)
                        for c in res.checks)

@@ -23,15 +23,22 @@ def _change_time(result: Any) -> float | None:
 
 
 def _draw(result: Any, what: str) -> tuple[Any, dict[str, Any]] | None:
-    runs = [(label, r.simulation) for label, r in zip(result.labels, result.results, strict=True)
-            if r.simulation is not None]
+    unchanged = result.unchanged or (None,) * len(result.results)
+    runs = [(label, r.simulation, base) for label, r, base in zip(result.labels, result.results, unchanged,
+                                                                   strict=True)
+            if r.simulation is not None and (what != "departure" or base is not None)]
     if not runs:
         return None
     fig, (ax,) = new_figure(7.2, 3.0)
     table = result.table
-    for k, (label, sim) in enumerate(runs):
+    for k, (label, sim, base) in enumerate(runs):
         t = np.asarray(sim.time, dtype=float)
-        if what == "output":
+        if what == "departure":
+            x = np.asarray(sim.tracked_positions, dtype=float).reshape(len(t), -1)[:, 0]
+            x0 = np.asarray(base.tracked_positions, dtype=float).reshape(len(base.time), -1)[:, 0]
+            n = min(len(x), len(x0))
+            t, y = t[:n], x[:n] - x0[:n]
+        elif what == "output":
             y = np.asarray(sim.tracked_positions, dtype=float).reshape(len(t), -1)[:, 0]
         elif what == "error":
             y = np.asarray(sim.tracking_errors, dtype=float).reshape(len(t), -1)[:, 0]
@@ -49,7 +56,8 @@ def _draw(result: Any, what: str) -> tuple[Any, dict[str, Any]] | None:
     if tc is not None:
         tag(fig, "plant-change", ax.axvline(tc, color=GREY, label="plant change", **EVENT_STYLE))
     unit = table.command_unit if what == "command" else table.error_unit
-    names = {"output": "output x", "error": "tracking error xD − x", "command": "command u"}
+    names = {"output": "output x", "error": "tracking error xD − x", "command": "command u",
+             "departure": "departure x − x0"}
     ax.set_ylabel(f"{names[what]} ({unit})")
     ax.set_xlabel("time (s)")
     ax.legend(loc="upper right", fontsize=7, ncols=min(4, len(runs) + 2))
@@ -59,7 +67,9 @@ def _draw(result: Any, what: str) -> tuple[Any, dict[str, Any]] | None:
 
 def _caption(what: str, keys: Sequence[str], info: dict[str, Any], labels: Sequence[str]) -> str:
     names = {"output": "The output x of each controller's run", "error": "The tracking error xD − x of each run",
-             "command": "The command u each controller computed"}
+             "command": "The command u each controller computed",
+             "departure": "What the plant change does to each controller: x − x0, x0 being its output in a run on "
+                          "the unchanged plant"}
     parts = [f"{names[what]} ({', '.join(labels)}), one colour per controller, on the same axes"]
     if "reference" in keys:
         parts.append("the reference xD dash-dotted")
@@ -69,11 +79,12 @@ def _caption(what: str, keys: Sequence[str], info: dict[str, Any], labels: Seque
 
 
 def comparison_figures(result: Any) -> tuple[Figure, ...]:
-    """The overlay figures of a :class:`~designkit.pipeline.ComparisonResult` (output, error, command)."""
+    """The overlay figures of a :class:`~designkit.pipeline.ComparisonResult`: output, departure from the run on
+    the unchanged plant (when there is a plant change), tracking error, command."""
     out = []
     titles = {"output": "Outputs of every controller", "error": "Tracking errors of every controller",
-              "command": "Commands of every controller"}
-    for what in ("output", "error", "command"):
+              "command": "Commands of every controller", "departure": "Departure caused by the plant change"}
+    for what in ("output", "departure", "error", "command"):
         svg, keys, info = render_tagged(_draw, result, what)
         if svg is None:
             continue

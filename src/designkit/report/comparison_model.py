@@ -28,7 +28,7 @@ class MemberRow:
     Parameters
     ----------
     label, controller : str
-        Its label and its family in words (with the kind).
+        Its label and its family in words.
     verdict, verdict_kind : str
         Its own report's verdict and ``verified`` / ``failed`` / ``undecided``.
     summary : str
@@ -117,7 +117,7 @@ def _member(label: str, result: Any) -> MemberRow:
     verdict, kind = verdict_of(tuple(result.checks))
     why = tuple(f"{getattr(c, 'label', '') or c.name}: {c.status}" + (f" — {c.detail}" if c.detail else "")
                 for c in result.failed)
-    return MemberRow(label, f"{family(result.design.kind).display.label} ({result.design.kind})",
+    return MemberRow(label, family(result.design.kind).display.label,
                      verdict, kind, verdict_summary(tuple(result.checks)), why,
                      f"{label}/report.html", f"{label}/report.pdf")
 
