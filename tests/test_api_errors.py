@@ -8,6 +8,7 @@ import json
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import designkit as dk
@@ -220,3 +221,84 @@ def test_a_per_input_requirement_of_the_wrong_length_names_its_key(tmp_path, cap
             "controller: {kind: pid_servo, poles: [-4, -5, -20], zero: -3}\n"
             "requirements: {max_control: [1, 2, 3]}\n")
     assert_bad_input(tmp_path, capsys, text, "requirements.max_control: needs one value per input (1), got 3")
+
+
+# ----------------------------------------------------------------------------- API misuse found by the issue-14 corpus
+
+
+LINK_SPEC = "name: a\nplant: {kind: link, Km: 2.0, tau: 0.5}\ncontroller: {kind: pid_servo, poles: [-4, -5, -20]}\n"
+
+
+@pytest.mark.parametrize("call, path", [
+    (lambda spec, design: dk.synthesize(None), "spec"),
+    (lambda spec, design: dk.synthesize("specs/posspeed-link.yaml"), "spec"),
+    (lambda spec, design: dk.simulate(None, design), "spec"),
+    (lambda spec, design: dk.simulate(spec, None), "design"),
+    (lambda spec, design: dk.build(1, 2), "spec"),
+    (lambda spec, design: dk.build(spec, "design"), "design"),
+])
+def test_the_wrong_object_is_named(call, path):
+    loaded = dk.parse_spec(LINK_SPEC)
+    with pytest.raises(dk.SpecError) as err:
+        call(loaded.spec, dk.synthesize(loaded.spec))
+    assert err.value.path == path and "\n" not in str(err.value)
+
+
+def test_a_loaded_spec_is_taken_for_its_spec():
+    loaded = dk.parse_spec(LINK_SPEC)
+    assert dk.synthesize(loaded).gains["K1"] == dk.synthesize(loaded.spec).gains["K1"]
+
+
+def test_unknown_names_are_designkit_errors_and_key_errors():
+    design = dk.synthesize(dk.parse_spec(LINK_SPEC).spec)
+    arm = dk.robot("planar2r")
+    for lookup, path in ((lambda: design.gains["K9"], "gains['K9']"), (lambda: arm.functions["nope"],
+                                                                        "functions['nope']")):
+        with pytest.raises(dk.NameNotFoundError) as err:
+            lookup()
+        assert isinstance(err.value, KeyError) and isinstance(err.value, dk.DesignkitError)
+        assert err.value.path == path and str(err.value).startswith(path)
+    assert dict(design.gains).keys() == {"K1", "K2", "K3", "K4"}  # the mapping protocol still works
+
+
+@pytest.mark.parametrize("q, words", [
+    (["a", "b"], "got text"),
+    (np.array([None, 1.0], dtype=object), "other objects"),
+    (np.array([1j, 0.0]), "complex"),
+    ([True, False], "booleans"),
+])
+def test_model_calls_refuse_what_is_not_real_numbers(q, words):
+    with pytest.raises(dk.ModelError) as err:
+        dk.robot("planar2r").inverse_dynamics(q, [0.0, 0.0], [0.0, 0.0])
+    assert err.value.path == "q" and words in err.value.message
+
+
+def test_model_calls_take_numbers_in_any_container():
+    arm = dk.robot("planar2r")
+    ref = arm.inverse_dynamics([0.1, 0.2], [0.0, 0.0], [0.0, 0.0])
+    assert np.array_equal(arm.inverse_dynamics(np.array([0.1, 0.2], dtype=object), [0, 0], (0, 0)), ref)
+
+
+@pytest.mark.parametrize("overrides, path", [({"m2": float("nan")}, "m2"), ({"d1": -1.0}, "d1"),
+                                             ({"m1": -0.5}, "m1"), ({"g": float("inf")}, "g")])
+def test_zoo_overrides_follow_the_plant_rule(overrides, path):
+    with pytest.raises(dk.ModelError) as err:
+        dk.robot("planar2r", **overrides)
+    assert err.value.path == path
+    with pytest.raises(dk.ModelError):  # the same values the plant's with_params refuses
+        dk.zoo_plant("planar2r").with_params(**overrides)
+
+
+def test_urdf_paths_and_numbers_off_the_chain(tmp_path):
+    with pytest.raises(dk.ModelError) as err:
+        dk.robot_from_urdf(None)
+    assert err.value.path == "path"
+    from importlib.resources import files
+
+    text = (files("designkit.models.robots") / "planar2r.urdf").read_text().replace(
+        '<link name="base_link"/>', '<link name="base_link"><inertial><mass value="nan"/><inertia ixx="0" ixy="0" '
+        'ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>')
+    bad = tmp_path / "nan-base.urdf"
+    bad.write_text(text)
+    with pytest.raises(dk.ModelError, match="base_link"):
+        dk.robot_from_urdf(bad)

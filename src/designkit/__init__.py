@@ -67,6 +67,7 @@ _EXPORTS: dict[str, str] = {
     "SpecError": "designkit.errors",
     "ModelError": "designkit.errors",
     "OutputError": "designkit.errors",
+    "NameNotFoundError": "designkit.errors",
 }
 
 __all__ = ["__version__", *_EXPORTS]

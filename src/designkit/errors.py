@@ -11,6 +11,9 @@ and one line ``designkit: error: <key path>: <message>``); anything else that es
   re-raises it as a :class:`SpecError` with the full key path, e.g. ``plant.dh[1].mass``).
 * :class:`OutputError`: an output location that cannot be written (``write_report`` to an
   existing file, an unwritable folder); nothing is overwritten.
+* :class:`NameNotFoundError`: a lookup by a name that does not exist (``gains["K9"]``,
+  ``arm.functions["nope"]``); a :class:`SpecError` that is also a :class:`KeyError`, so code written
+  for a mapping keeps working.
 
 Every class has ``path`` (where, possibly empty) and ``message`` (what, one line) attributes.
 Messages that quote a user value quote at most :data:`QUOTE_LIMIT` characters of it
@@ -136,3 +139,18 @@ class OutputError(DesignkitError, OSError):
         self.path = path
         self.message = message
         super().__init__(f"{path}: {message}" if path else message)
+
+
+class NameNotFoundError(SpecError, KeyError):
+    """A name looked up that does not exist; also a :class:`KeyError`.
+
+    Parameters
+    ----------
+    path : str
+        What was looked up (``"gains['K9']"``).
+    message : str
+        What exists instead, in one line.
+    """
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return f"{self.path}: {self.message}" if self.path else self.message

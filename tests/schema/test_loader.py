@@ -29,7 +29,7 @@ def test_posspeed_spec_as_written_in_the_issue():
         ("Km: 2.0", "Km: 0", "plant.Km", "greater than 0"),
         ("tau: 0.5", "tau: 0", "plant.tau", "greater than 0"),
         ("tau: 0.5", "tau: .nan", "plant.tau", "finite"),
-        ("Km: 2.0", "Km: two", "plant.Km", "valid number"),
+        ("Km: 2.0", "Km: two", "plant.Km", "must be a number, got the string 'two'"),
         ("zero: -3", "zero: 3", "controller.zero", "negative"),
         ("zero: -3", "zero: -5", "controller.zero", "differ from every pole"),
         ("zero: -3", "zero: -3, gain: 1", "controller.gain", "unknown key"),

@@ -56,6 +56,9 @@ def synthesize(spec, plant=None, *, base_dir=None):
     """
     import dataclasses
 
+    from designkit.spec.fields import spec_argument
+
+    spec = spec_argument(spec)
     if plant is None:
         from designkit.spec.plant_builder import plant_from_spec
 

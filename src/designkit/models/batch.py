@@ -281,6 +281,30 @@ def evaluator_for(function: ca.Function, evaluators: dict[str, Evaluator], share
     return evaluator
 
 
+def _real_array(value: Any, label: str) -> np.ndarray:
+    """``value`` as a float array; booleans, complex numbers, text and other objects are refused by name."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError):
+        raise ModelError(label, "must be real numbers (a number, a list or an array)") from None
+    kind = raw.dtype.kind
+    if kind == "b":
+        raise ModelError(label, "must be real numbers, got booleans")
+    if kind == "c":
+        raise ModelError(label, "must be real numbers, got complex numbers (the imaginary part would be lost)")
+    if kind in "USa":
+        raise ModelError(label, "must be real numbers, got text")
+    if kind == "O":
+        import numbers
+
+        if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in raw.reshape(-1)):
+            raise ModelError(label, "must be real numbers, got other objects (None, text, booleans or nested lists)")
+        return raw.astype(float)
+    if kind not in "iuf":
+        raise ModelError(label, f"must be real numbers, got {raw.dtype} entries")
+    return raw.astype(float, copy=False)
+
+
 def evaluate(
     function: ca.Function,
     args: Sequence[tuple[str, Any]],
@@ -318,7 +342,7 @@ def evaluate(
     arrays: list[np.ndarray] = []
     batch: int | None = None
     for (label, value), size in zip(args, evaluator.sizes, strict=True):
-        array = np.asarray(value, dtype=float)
+        array = _real_array(value, label)
         if array.ndim == 1 and array.shape[0] == size:
             arrays.append(array)
         elif array.ndim == 2 and array.shape[1] == size:
@@ -332,7 +356,7 @@ def evaluate(
     if symbol_names:
         if p is None:
             raise ModelError("p", f"symbolic robot: give values for {symbol_names}")
-        p_array = np.ascontiguousarray(np.asarray(p, dtype=float).reshape(-1))
+        p_array = np.ascontiguousarray(_real_array(p, "p").reshape(-1))
         if p_array.shape[0] != len(symbol_names):
             raise ModelError("p", f"expected {len(symbol_names)} values, got {p_array.shape[0]}")
         shared.append(p_array)

@@ -182,8 +182,11 @@ class FunctionTable(Mapping[str, ca.Function]):
         if name not in self._cache:
             try:
                 in_names, out_names, _, build = FUNCTION_SPECS[name]
-            except KeyError:
-                raise KeyError(f"no function {name!r}; available: {sorted(FUNCTION_SPECS)}") from None
+            except (KeyError, TypeError):
+                from designkit.errors import NameNotFoundError
+
+                raise NameNotFoundError(f"functions[{name!r}]", f"no such function; available: "
+                                        f"{sorted(FUNCTION_SPECS)}") from None
             e = self._expressions
             inputs = [getattr(e, arg) for arg in in_names]
             names = list(in_names)

@@ -151,6 +151,8 @@ def _path(joints: dict[str, _Joint], base: str, tip: str) -> list[_Joint]:
 
 
 def _read(path: str | os.PathLike[str]) -> ET.Element:
+    if not isinstance(path, str | os.PathLike):
+        raise ModelError("path", f"must be a file path (str or os.PathLike), got {type(path).__name__}")
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as exc:
@@ -164,6 +166,8 @@ def _read(path: str | os.PathLike[str]) -> ET.Element:
 
 def _serial_chain(root: ET.Element, base_link: str | None, tip_link: str | None) -> SerialChain:
     links = {el.get("name"): el for el in root.findall("link")}
+    for element in links.values():  # every link's numbers are checked, those of links off the chain too
+        _inertial(element)
     by_child: dict[str, _Joint] = {}
     children: dict[str, list[_Joint]] = {name: [] for name in links}
     for element in root.findall("joint"):

@@ -324,6 +324,11 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     ValueError
         ``design`` has no law and none is given.
     """
+    from designkit.spec.fields import spec_argument
+
+    spec = spec_argument(spec)
+    if not isinstance(design, Design):
+        raise SpecError("design", f"must be a Design (dk.synthesize(spec)), got {type(design).__name__}")
     true_plant = design.plant if plant is None else plant
     sim, kind = spec.simulation, design.reference
     motion = design.motion

@@ -274,6 +274,10 @@ def sampling_of(spec: Any, law: Any) -> tuple[float, str]:
     return float(own), source
 
 
+MAX_DELAY_STEPS = 10_000
+"""Longest delay line, in integration steps (its values are part of the simulated state)."""
+
+
 def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool = False, max_dt: float | None = None,
             max_dt_reason: str = "", sampling: tuple[float, str] | None = None) -> Timing:
     """Integrator, step, number of samples, sampling and delay steps for ``spec.simulation``.
@@ -368,6 +372,10 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     n_samples = round(steps) + 1
     steps_per_sample = _whole_steps(sample, dt) or 0
     delay_steps = _whole_steps(sim.delay, dt) or 0
+    if delay_steps > MAX_DELAY_STEPS:
+        raise SpecError("simulation.delay", f"{sim.delay:g} s is {delay_steps} steps of dt = {dt:g} s, more than the "
+                        f"{MAX_DELAY_STEPS} a delay line may hold (resource bound: the line is part of the simulated "
+                        "state); shorten simulation.delay or set a coarser simulation.dt")
     settings: dict[str, Any] = {
         "integrator_choice": integrator_source,
         "dt": dt, "dt_source": dt_source, "duration": (n_samples - 1) * dt,

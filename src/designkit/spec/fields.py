@@ -4,9 +4,11 @@ Every section forbids unknown keys and is frozen; numbers must be finite.  Secti
 spec (plant kinds, simulation, requirements, numerics) and every controller family's model are
 built from these, so that one rule (and one error message) holds everywhere.
 
-Booleans are not numbers: wherever a field (or an item of a list or mapping field) holds an
-``int`` or a ``float``, ``true`` / ``yes`` is refused (pydantic's lax mode would read it as 1),
-and an integer beyond the floating-point range is refused where a ``float`` is meant.  The rule
+Booleans are not numbers and text is not a number: wherever a field (or an item of a list or
+mapping field) holds an ``int`` or a ``float``, ``true`` / ``yes`` is refused (pydantic's lax mode
+would read it as 1), so is a quoted value (``'2.0'``, which lax mode would parse), and an integer
+beyond the floating-point range is refused where a ``float`` is meant; where a field holds only a
+boolean, a number (``friction: 1``) is refused.  Only JSON's types are read.  The rule
 is read from each field's annotation by :class:`Section`, so it holds for every section without
 restating it per field.
 """
@@ -27,7 +29,7 @@ from designkit.errors import short_repr
 
 __all__ = [
     "Finite", "NonNegativeFinite", "PerJoint", "Pole", "PositiveFinite", "Section", "check_conjugates", "fmt_pole",
-    "parse_pole", "per_joint",
+    "parse_pole", "per_joint", "spec_argument",
 ]
 
 
@@ -49,9 +51,13 @@ class _NumberRule:
     bool_ok: bool = False
     items: _NumberRule | None = None
     values: _NumberRule | None = None
+    str_ok: bool = False
+    bool_only: bool = False
 
 
-_ANYTHING = _NumberRule(bool_ok=True)
+_ANYTHING = _NumberRule(bool_ok=True, str_ok=True)
+_STRING = _NumberRule(str_ok=True)
+_BOOLEAN = _NumberRule(bool_ok=True, bool_only=True)
 
 
 def _merge(rules: list[_NumberRule | None]) -> _NumberRule | None:
@@ -64,6 +70,8 @@ def _merge(rules: list[_NumberRule | None]) -> _NumberRule | None:
         bool_ok=any(r.bool_ok for r in rules_),
         items=_merge([r.items for r in rules_]),
         values=_merge([r.values for r in rules_]),
+        str_ok=any(r.str_ok for r in rules_),
+        bool_only=all(r.bool_only for r in rules_),
     )
 
 
@@ -73,7 +81,9 @@ def _rule(tp: Any) -> _NumberRule | None:
     if origin is Annotated:
         return _rule(get_args(tp)[0])
     if tp is bool:
-        return _ANYTHING
+        return _BOOLEAN
+    if tp is str:
+        return _STRING
     if tp is float or tp is int:
         return _NumberRule(scalar=tp.__name__)
     if tp is Any or tp is object:
@@ -81,7 +91,7 @@ def _rule(tp: Any) -> _NumberRule | None:
     if origin in (Union, types.UnionType):
         return _merge([_rule(m) for m in get_args(tp) if m is not type(None)])
     if origin is Literal:
-        return _ANYTHING if any(isinstance(a, bool) for a in get_args(tp)) else None
+        return _ANYTHING if any(isinstance(a, bool) for a in get_args(tp)) else _STRING
     if origin in (list, tuple, set, frozenset, abc.Sequence):
         items = _merge([_rule(a) for a in get_args(tp) if a is not Ellipsis])
         return None if items is None else _NumberRule(items=items)
@@ -89,7 +99,7 @@ def _rule(tp: Any) -> _NumberRule | None:
         args = get_args(tp)
         values = _rule(args[1]) if len(args) == 2 else None
         return None if values is None else _NumberRule(values=values)
-    return None  # nested sections validate themselves; str, complex (poles) and others need nothing here
+    return None  # nested sections validate themselves; complex (poles) and others need nothing here
 
 
 def _number_problem(rule: _NumberRule, value: object, where: str = "") -> tuple[str, str] | None:
@@ -97,6 +107,11 @@ def _number_problem(rule: _NumberRule, value: object, where: str = "") -> tuple[
     if isinstance(value, bool):
         if rule.scalar is not None and not rule.bool_ok:
             return where, f"must be a number, {_NOT_BOOLEAN}"
+    elif isinstance(value, int | float) and rule.bool_only:
+        return where, f"must be true or false, got {short_repr(value)} (numbers are not read as booleans)"
+    elif isinstance(value, str) and rule.scalar is not None and not rule.str_ok:
+        return where, (f"must be a number, got the string {short_repr(value)} (a quoted value is text: write the "
+                       "number without quotes)")
     elif isinstance(value, int):
         if rule.scalar == "float" and abs(value) > FLOAT_MAX:
             return where, f"must be within the floating-point range (|x| <= {FLOAT_MAX:.4g}), got {short_repr(value)}"
@@ -241,3 +256,22 @@ def per_joint(value: float | list[float] | tuple[float, ...], n: int, path: str)
             raise ValueError(f"{path}: needs one value per joint ({n}), got {len(value)}")
         return tuple(float(v) for v in value)
     return (float(value),) * n
+
+
+def spec_argument(spec: Any, name: str = "spec") -> Any:
+    """The assembled spec an API function was given: a ``Spec``, or the ``LoadedSpec`` holding one.
+
+    Raises
+    ------
+    SpecError
+        Naming the argument, for anything else (a path, ``None``, a dict).
+    """
+    from designkit.errors import SpecError
+
+    inner = getattr(spec, "spec", None)
+    if inner is not None and hasattr(inner, "controller") and hasattr(inner, "plant"):
+        return inner
+    if hasattr(spec, "controller") and hasattr(spec, "plant") and hasattr(spec, "simulation"):
+        return spec
+    raise SpecError(name, f"must be a designkit Spec (dk.load_spec(path).spec or dk.parse_spec(text).spec), got "
+                    f"{type(spec).__name__}")

@@ -66,7 +66,11 @@ def _robot_model(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
     path = Path(section.urdf)
     if not path.is_absolute() and base_dir is not None:
         path = base_dir / path
-    if not path.is_file():
+    try:
+        found = path.is_file()
+    except OSError as exc:  # a name too long for the file system, and the like
+        raise ModelError("urdf", f"cannot be read: {exc.strerror or exc}") from None
+    if not found:
         raise ModelError("urdf", f"file not found: {path}")
     try:
         description = description_from_urdf(path, base_link=section.base_link, tip_link=section.tip_link,

@@ -126,7 +126,9 @@ class Gains(Mapping[str, Any]):
         for g in self.entries:
             if g.name == name:
                 return g
-        raise KeyError(name)
+        from designkit.errors import NameNotFoundError
+
+        raise NameNotFoundError(f"gains[{name!r}]", f"no such gain; the design has {[g.name for g in self.entries]}")
 
     def __getitem__(self, name: str) -> Any:
         return self._find(name).value

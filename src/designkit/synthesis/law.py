@@ -401,7 +401,12 @@ def _anti_windup(section: Any, n: int, K3: np.ndarray) -> tuple[Callable, Callab
     """``(gate(e) -> SX, project(x_int) -> SX, settings)`` of ``simulation.anti_windup`` for ``n`` integrals."""
     if section is None:
         return (lambda e: ca.SX.ones(n)), (lambda xi: xi), {"kind": "none", "value": None}
-    values = np.broadcast_to(np.asarray(section.value, dtype=float), (n,)).copy()
+    given = np.asarray(section.value, dtype=float).reshape(-1)
+    if given.size not in (1, n):
+        from designkit.errors import SpecError
+
+        raise SpecError("simulation.anti_windup.value", f"needs one value or one per joint ({n}), got {given.size}")
+    values = np.broadcast_to(given, (n,)).copy()
     settings = {"kind": section.kind, "value": values.tolist() if n > 1 else float(values[0])}
     if section.kind == "threshold":
         return (lambda e: ca.vertcat(*[ca.if_else(ca.fabs(e[j]) <= values[j], 1.0, 0.0) for j in range(n)]),

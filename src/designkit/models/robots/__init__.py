@@ -44,6 +44,24 @@ def zoo_module(name: str) -> ModuleType:
         raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
 
 
+def _check_values(name: str, overrides: dict[str, Any]) -> None:
+    """Numeric overrides follow the plant's rule (``RobotPlant.with_params``): finite, and positive, or
+    non-negative for masses, inertias, frictions, torques and gravity."""
+    import math
+
+    from designkit.models.robot_plant import _NON_NEGATIVE_UNITS
+
+    units = getattr(zoo_module(name), "UNITS", {})
+    for key, value in overrides.items():
+        if key not in units or isinstance(value, bool | str) or not isinstance(value, int | float):
+            continue  # symbols, options and unknown names: the builder's own rules
+        positive = units[key][0] not in _NON_NEGATIVE_UNITS
+        v = float(value)
+        if not math.isfinite(v) or (positive and v <= 0) or (not positive and v < 0):
+            need = "positive and finite" if positive else "non-negative and finite"
+            raise ModelError(key, f"must be {need} ({units[key][1]}, {units[key][0]}), got {v:g}")
+
+
 def robot(name: str, **overrides: Any) -> Robot:
     """Build a built-in robot by name.
 
@@ -74,6 +92,7 @@ def robot(name: str, **overrides: Any) -> Robot:
     except KeyError:
         raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
     method = overrides.pop("consistent_inertia", None)
+    _check_values(name, overrides)
     arm = builder(**overrides)
     if method in (None, False):
         return arm

@@ -1,0 +1,33 @@
+"""Only JSON's types are read: text is not a number and a number is not a boolean (issue 14's fuzzed corpus)."""
+
+from __future__ import annotations
+
+import pytest
+
+from designkit.errors import SpecError
+from designkit.schema.loader import parse_spec
+
+LINK = "name: t\nplant: {kind: link, Km: 2.0, tau: 0.5}\ncontroller: {kind: pid_servo, poles: [-4, -5, -20]}\n"
+ROBOT = "name: t\nplant: {kind: robot, robot: planar2r}\ncontroller: {kind: computed_torque, poles: [-20, -20]}\n"
+
+
+@pytest.mark.parametrize("text, path, words", [
+    (LINK.replace("Km: 2.0", "Km: '2.0'"), "plant.Km", "must be a number, got the string '2.0'"),
+    (LINK.replace("tau: 0.5", 'tau: "0.5"'), "plant.tau", "must be a number"),
+    (LINK.replace("[-4, -5, -20]", "[-4, -5, -20], zero: '-3'"), "controller.zero", "must be a number"),
+    (ROBOT.replace("robot: planar2r", "robot: planar2r, parameters: {m2: '3'}"), "plant.parameters.m2",
+     "must be a number"),
+    (ROBOT.replace("robot: planar2r", "robot: planar2r, friction: 1"), "plant.friction", "must be true or false"),
+    (ROBOT.replace("robot: planar2r", "robot: planar2r, motor_inertia: 0"), "plant.motor_inertia",
+     "must be true or false"),
+])
+def test_loose_types_are_refused_with_the_key_path(text, path, words):
+    with pytest.raises(SpecError) as err:
+        parse_spec(text)
+    assert err.value.path == path and words in err.value.message
+
+
+def test_strings_where_strings_belong_are_still_read():
+    spec = parse_spec(ROBOT.replace("robot: planar2r", "robot: planar2r, friction: true")
+                      .replace("[-20, -20]", "['-20+1j', '-20-1j']")).spec
+    assert spec.plant.friction is True and spec.controller.poles is not None
