@@ -45,6 +45,13 @@ def test_each_controller_is_the_run_of_its_own_spec(comparison, label, block):
             assert a.achieved == pytest.approx(b.achieved, rel=1e-9, abs=1e-12), a.name
     np.testing.assert_allclose(inside.simulation.state, alone.simulation.state, rtol=1e-12, atol=1e-12)
     assert inside.verified == alone.verified
+    from designkit.comparison.metrics import baseline_simulation, compute_metrics
+
+    own = compute_metrics(alone.loaded.spec, alone.simulation, baseline_simulation(alone.loaded.spec, alone.plant))
+    table = comparison.table.row(label).values
+    assert own.keys() == table.keys()
+    for key, value in own.items():
+        assert (value is None and table[key] is None) or table[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
     assert dict(inside.design.gains.items()).keys() == dict(alone.design.gains.items()).keys()
 
 
@@ -125,3 +132,30 @@ def test_exit_codes_and_json(tmp_path, capsys):
     assert "controllers[1].gamma" in err
     assert main(["codegen", str(EXAMPLE), "--out", str(tmp_path)]) == 2
     assert "controllers" in capsys.readouterr().err
+    assert main(["simulate", str(EXAMPLE)]) == 2
+    assert "controllers" in capsys.readouterr().err
+
+
+STEP = """\
+name: step-comparison
+plant: {kind: link, Km: 2.0, tau: 0.5}
+controllers:
+  - {kind: pid_servo, poles: [-4, -5, -20], zero: -3, label: slow}
+  - {kind: pid_servo, poles: [-8, -10, -40], zero: -6, label: fast}
+"""
+
+
+def test_step_metrics_against_numpy():
+    result = run(parse_spec(STEP))
+    for label in ("slow", "fast"):
+        sim = result[label].simulation
+        t = np.asarray(sim.time)
+        x = np.asarray(sim.state)[:, 0]
+        target = float(np.asarray(sim.desired).ravel()[-1])
+        step = target - x[0]
+        row = result.table.row(label).values
+        assert row["overshoot"] == pytest.approx(max(0.0, (x.max() - x[0]) / step - 1.0) * 100.0, abs=1e-9)
+        outside = [k for k in range(len(t)) if abs(x[k] - target) > 0.02 * abs(step)]
+        assert row["settling_time"] == pytest.approx(t[outside[-1] + 1], abs=1e-12)
+        assert row["rms_error_after"] is None and row["reconvergence"] is None  # no plant change
+    assert result.table.value("fast", "settling_time") < result.table.value("slow", "settling_time")

@@ -141,5 +141,6 @@ def json_schema(form: str = "single") -> dict[str, Any]:
     from pydantic import TypeAdapter
 
     schema = TypeAdapter(Union[Spec, ComparisonSpec]).json_schema()  # noqa: UP007
+    schema["oneOf"] = schema.pop("anyOf")  # exclusive: each form forbids the other's key
     schema["title"] = "designkit spec (one controller, or a comparison of several)"
     return schema
