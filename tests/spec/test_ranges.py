@@ -245,7 +245,7 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "controller.max_condition": [(TASK, "controller.max_condition", "controller.max_condition")],
     **{f"requirements.{k}": [(SERVO, f"requirements.{k}", f"requirements.{k}")] for k in (
         "overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control",
-        "settling_band")},
+        "settling_band", "gain_margin", "phase_margin", "modulus_margin")},
     **{f"simulation.{k}": [(SERVO, f"simulation.{k}", f"simulation.{k}")] for k in (
         "duration", "step", "initial_position", "dt", "delay", "sampling_period")},
     "simulation.nonlinearity.limit": [(SERVO, "simulation.nonlinearity.limit", "simulation.nonlinearity.limit")],

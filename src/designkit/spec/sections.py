@@ -52,7 +52,10 @@ class Requirements(Section):
     (s, 10-90 %; 1e-6 to 1e9), steady_state_error (same unit as the positions, absolute; 0 to 100),
     tracking_error (largest |q - qD| over the run, rad or m; above 0, at most 100), max_control
     (peak |u| of every input, N*m, one value or one per input; 1e-6 to 1e6), settling_band (a
-    fraction of the step, strictly between 0 and 1).
+    fraction of the step, strictly between 0 and 1); and the classical margins of the loop broken at
+    every plant input (the ``loop_margins`` check, which they make part of the verdict):
+    gain_margin (dB, 0 to 100), phase_margin (deg, 0 to 180), modulus_margin (the smallest
+    ``|1 + L(jw)|``, 0 to 1).
     """
 
     overshoot: Ranged(0, 1000, "%", base=NonNegativeFinite) | None = None
@@ -62,6 +65,9 @@ class Requirements(Section):
     tracking_error: Ranged(0, 100, "rad or m", low_open=True, base=PositiveFinite) | None = None
     max_control: RangedPerJoint(*_TORQUE) | None = None
     settling_band: Ranged(0, 1, "", low_open=True, high_open=True) = 0.02
+    gain_margin: Ranged(0, 100, "dB", base=NonNegativeFinite) | None = None
+    phase_margin: Ranged(0, 180, "deg", base=NonNegativeFinite) | None = None
+    modulus_margin: Ranged(0, 1, "", base=NonNegativeFinite) | None = None
 
 
 # ----------------------------------------------------------------------------- nonlinear elements

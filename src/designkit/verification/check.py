@@ -38,6 +38,9 @@ class Check:
         not part of :meth:`to_dict`.
     label : str
         The check in words, for the report (stamped by the runner from its rule when empty).
+    warnings : tuple of str
+        Plain sentences a reviewer must see even when the check passes (a weak margin of an
+        informational check); the report's first page and ``--json``'s top-level ``warnings`` list them.
     required : bool
         Whether the verdict depends on this check.  An informational check (``False``) is
         reported with its status but does not make a design unverified, e.g. the common
@@ -56,6 +59,7 @@ class Check:
     required: bool = True
     data: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
     label: str = ""
+    warnings: tuple[str, ...] = ()
 
     @property
     def status(self) -> Status:
@@ -78,6 +82,7 @@ class Check:
             "certificate": dict(self.certificate),
             "required": self.required,
             "label": self.label,
+            "warnings": list(self.warnings),
         }
 
 

@@ -10,8 +10,17 @@ For the PID servo on the link this is ``L(s) = Km (K2 s^2 + K1 s + K3) / (s^2 (t
 i.e. ``C(s) P(s)`` with ``C(s) = K1 + K2 s + K3/s`` acting on ``x1`` and ``P(s) = Km / (s (tau s + 1))``;
 for the tracker the ``x2/Km`` term replaces ``K2`` by ``K2 - 1/Km`` (tested against these closed
 forms).  The ``loop_margins`` check reports, per input, the gain and phase margins and the modulus
-margin ``min |1 + L(jw)|``; it is informational (the spec states no margin requirement), and its
-data drives the report's Bode plots.
+margin ``min |1 + L(jw)|``, and its data drives the report's Bode plots.  With
+``requirements.gain_margin`` (dB), ``phase_margin`` (deg) or ``modulus_margin`` it decides the verdict;
+without, it is informational but **flags weak margins** against the defaults a controls engineer
+would accept (:data:`WEAK_MARGINS`: gain margin below 6 dB, phase margin below 30 deg, modulus margin
+below 0.5), in its detail and in its ``warnings``.
+
+**Numerical resolution.**  A crossover more than :data:`RESOLUTION_DECADES` decades below the
+loop's slowest time scale (the smallest non-zero ``|eigenvalue|`` of ``A`` and ``A_i``) is at the
+edge of what the polynomial roots resolve -- a double integrator's phase sits at -180 deg as
+``w -> 0`` and rounding puts a "crossing" at ``1e-7`` rad/s with ``|L| ~ 1e16`` -- and is read as
+no crossover (margin ``inf``).
 
 The crossovers are exact, not read off a grid (:func:`crossovers`): with ``L = n(s)/d(s)``,
 ``d = det(sI - A_i)`` and ``n = det(sI - A_i + b_i c_i) - d`` (the identity
@@ -36,9 +45,17 @@ import numpy as np
 from designkit.synthesis.design import loop_matrices
 from designkit.verification.check import Check
 
-__all__ = ["LoopMargins", "achieved_zeros", "classical_margins", "crossovers", "frequency_grid",
+__all__ = ["RESOLUTION_DECADES", "WEAK_MARGINS", "LoopMargins", "achieved_zeros", "classical_margins", "crossovers", "frequency_grid",
            "loop_frequency_response", "loop_margins",
            "loop_margins_check", "loop_matrices", "siso_zeros"]
+
+
+RESOLUTION_DECADES = 6
+"""Crossovers this many decades below the loop's slowest time scale are numerical artefacts."""
+
+WEAK_MARGINS = {"gain_margin_db": 6.0, "phase_margin_deg": 30.0, "modulus_margin": 0.5}
+"""Margins below these are flagged when the spec states no margin requirement (Skogestad & Postlethwaite,
+*Multivariable Feedback Control*, 2nd ed., sec. 2.4: GM > 2, PM > 30 deg, and MS < 2, i.e. min |1 + L| > 0.5)."""
 
 
 @dataclass(frozen=True)
@@ -140,7 +157,16 @@ def crossovers(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray,
         with np.errstate(all="ignore"):
             resp = _response(A, b, c, w_phase)
         w_phase = w_phase[np.isfinite(resp) & (resp.real < 0)]
-    return w_phase, _real_roots(mag, include_zero=False)
+    w_gain = _real_roots(mag, include_zero=False)
+    floor = _resolution(A, b, c)
+    return w_phase[(w_phase == 0) | (w_phase >= floor)], w_gain[w_gain >= floor]
+
+
+def _resolution(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+    """Frequencies (rad/s) below which a crossover is a numerical artefact (module docstring)."""
+    lam = np.abs(np.concatenate([np.linalg.eigvals(A), np.linalg.eigvals(A - b @ c)]))
+    nonzero = lam[lam > 1e-12 * max(float(lam.max(initial=0.0)), 1e-300)]
+    return float(nonzero.min()) * 10.0 ** -RESOLUTION_DECADES if nonzero.size else 0.0
 
 
 def _response(A: np.ndarray, b: np.ndarray, c: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -205,12 +231,45 @@ def _finite(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
-def loop_margins_check(design: Any) -> Check:
-    """Check ``"loop_margins"`` (informational): margins of the loop broken at each plant input.
+def _requirements(spec: Any) -> dict[str, float]:
+    req = getattr(spec, "requirements", None) if spec is not None else None
+    given = {"gain_margin_db": getattr(req, "gain_margin", None), "phase_margin_deg": getattr(req, "phase_margin", None),
+             "modulus_margin": getattr(req, "modulus_margin", None)}
+    return {k: float(v) for k, v in given.items() if v is not None}
 
-    ``achieved`` is the smallest modulus margin over the inputs (the distance of the Nyquist
-    curve to -1); the certificate lists every input's margins and crossovers; ``data`` holds the
-    frequency responses for the report's Bode plots.
+
+def _db(ratio: float | None) -> float | None:
+    return None if ratio is None else (math.inf if not math.isfinite(ratio) else 20.0 * math.log10(ratio))
+
+
+def _shortfalls(row: dict[str, Any], limits: dict[str, float]) -> list[tuple[str, float, float]]:
+    """``(what, value, limit)`` of each margin of ``row`` below its limit."""
+    # a gain margin below 1 (conditionally stable loop) is how far the gain may *fall*: its size is |dB|
+    values = {"gain_margin_db": abs(_db(row["gain_margin"])) if row["gain_margin"] is not None else math.inf,
+              "phase_margin_deg": row["phase_margin_deg"] if row["phase_margin_deg"] is not None else math.inf,
+              "modulus_margin": row["modulus_margin"]}
+    return [(k, values[k], v) for k, v in limits.items() if values[k] < v]
+
+
+_WORDS = {"gain_margin_db": ("gain margin", "dB"), "phase_margin_deg": ("phase margin", "°"),
+          "modulus_margin": ("modulus margin min |1 + L|", "")}
+
+
+def _sentence(name: str, what: str, value: float, limit: float) -> str:
+    words, unit = _WORDS[what]
+    sep = "" if unit in ("°", "") else " "
+    return f"{name}: {words} {value:.3g}{sep}{unit}, below {limit:.3g}{sep}{unit}"
+
+
+def loop_margins_check(design: Any, spec: Any = None) -> Check:
+    """Check ``"loop_margins"``: margins of the loop broken at each plant input.
+
+    Decides the verdict when the spec's requirements give ``gain_margin`` (dB; a gain margin below 1, of a
+    conditionally stable loop, counts by its size ``|20 log10 GM|``: how far the gain may fall),
+    ``phase_margin`` (deg) or ``modulus_margin``; otherwise informational, with a warning for every margin below
+    :data:`WEAK_MARGINS`.  ``achieved`` is the smallest modulus margin over the inputs (the distance of the
+    Nyquist curve to -1); the certificate lists every input's margins and crossovers and the limits applied;
+    ``data`` holds the frequency responses for the report's Bode plots.
     """
     inputs = list(design.input_loop.inputs) if design.input_loop is not None else []
     rows, data = [], {"frequency": frequency_grid(design).tolist(), "channels": []}
@@ -220,9 +279,9 @@ def loop_margins_check(design: Any) -> Check:
             continue
         resp = loop_frequency_response(design, np.asarray(data["frequency"]), i)
         rows.append({
-            "input": name, "gain_margin": _finite(m.gain_margin), "phase_margin_deg": _finite(m.phase_margin),
-            "phase_crossover_rad_s": _finite(m.w_phase_crossover), "gain_crossover_rad_s": _finite(m.w_gain_crossover),
-            "modulus_margin": m.modulus_margin,
+            "input": name, "gain_margin": _finite(m.gain_margin), "gain_margin_db": _finite(_db(m.gain_margin)),
+            "phase_margin_deg": _finite(m.phase_margin), "phase_crossover_rad_s": _finite(m.w_phase_crossover),
+            "gain_crossover_rad_s": _finite(m.w_gain_crossover), "modulus_margin": m.modulus_margin,
         })
         data["channels"].append({"input": name, "margins": m, "response": resp})
     if not rows:
@@ -232,13 +291,32 @@ def loop_margins_check(design: Any) -> Check:
     parts = []
     for r in rows:
         pm = f"PM {r['phase_margin_deg']:.3g}°" if r["phase_margin_deg"] is not None else "PM ∞"
-        gm = f"GM {r['gain_margin']:.3g}" if r["gain_margin"] is not None else "GM ∞"
+        gm = (f"GM {r['gain_margin']:.3g} ({r['gain_margin_db']:.3g} dB)" if r["gain_margin"] is not None
+              else "GM ∞")
         parts.append(f"{r['input']}: {pm}, {gm}, min|1+L| {r['modulus_margin']:.3g}")
+    required = _requirements(spec)
+    limits = required or dict(WEAK_MARGINS)
+    short = [(r["input"], *s) for r in rows for s in _shortfalls(r, limits)]
+    sentences = [_sentence(*s) for s in short]
+    certificate = {"loops": rows, "convention": "L_i(s) = C_i (sI - A - B_i C_i)^-1 B_i, C = -du/dz; "
+                   "negative feedback: the loop is -L in the feedback path",
+                   "limits": limits, "limits_source": "requirements" if required else "weak-margin defaults",
+                   "resolution": f"crossovers more than {RESOLUTION_DECADES} decades below the loop's slowest time "
+                                 "scale are read as none (numerical artefacts)"}
+    detail = "loop broken at each plant input, the others closed: " + "; ".join(parts)
+    if required:
+        passed = stable and not short
+        target = ", ".join(f"{_WORDS[k][0]} ≥ {v:g}{'' if _WORDS[k][1] in ('°', '') else ' '}{_WORDS[k][1]}"
+                           for k, v in required.items())
+        if short:
+            detail += ". Below the requirement: " + "; ".join(sentences)
+        return Check(name="loop_margins", passed=passed, target=target, achieved=worst["modulus_margin"],
+                     margin=None, unit="1 (min |1 + L|)", detail=detail, certificate=certificate, data=data)
+    warnings = tuple(f"Weak stability margin at {s} (no margin requirement in the spec; the default a controls "
+                     "engineer would accept)" for s in sentences)
+    detail += " [informational" + (": weak margins flagged]" if warnings else "]")
     return Check(
-        name="loop_margins", passed=stable, target="reported (no margin requirement in the spec)",
-        achieved=worst["modulus_margin"], margin=None, unit="1 (min |1 + L|)",
-        detail="loop broken at each plant input, the others closed: " + "; ".join(parts) + " [informational]",
-        certificate={"loops": rows, "convention": "L_i(s) = C_i (sI - A - B_i C_i)^-1 B_i, C = -du/dz; "
-                     "negative feedback: the loop is -L in the feedback path"},
-        required=False, data=data,
+        name="loop_margins", passed=stable, target="reported (no margin requirement in the spec; weak below 6 dB, "
+        "30°, min |1 + L| 0.5)", achieved=worst["modulus_margin"], margin=None, unit="1 (min |1 + L|)",
+        detail=detail, certificate=certificate, required=False, data=data, warnings=warnings,
     )

@@ -10,7 +10,7 @@ from designkit.verification.suite import CheckRule, Context
 def _run(design: Any, ctx: Context) -> tuple:
     from designkit.verification.loop import loop_margins_check
 
-    return (loop_margins_check(design),)
+    return (loop_margins_check(design, ctx.spec),)
 
 
 def _bode(result: Any, check: Any) -> Any:
