@@ -8,16 +8,17 @@ BASE = """\
 name: ranges-vsc
 plant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.4, 2.6], tau: [0.35, 0.65]}}
 controller: {kind: vsc, sliding_poles: [-5], perturbation_bound: 1.0, margin: 0.2, chattering_band: 0.005,
-             alpha: [-2.0, -3.0], beta: [2.0, 1.0], delta: 1.5}
+             alpha: [-2.0, -3.0], beta: [2.0, 1.0], relay_amplitude: 1.5}
 simulation: {duration: 2.0}
 """
 LAYER = BASE.replace("chattering_band: 0.005", "boundary_layer: 0.05")
 
 RANGES = {f"controller.{k}": [(BASE, f"controller.{k}", f"controller.{k}")]
-          for k in ("perturbation_bound", "margin", "chattering_band", "delta")}
+          for k in ("perturbation_bound", "margin", "chattering_band", "relay_amplitude")}
 RANGES["controller.boundary_layer"] = [(LAYER, "controller.boundary_layer", "controller.boundary_layer")]
-RANGES["controller.alpha[]"] = [(BASE, "controller.alpha.0", "controller.alpha[0]")]
-RANGES["controller.beta[]"] = [(BASE, "controller.beta.1", "controller.beta[1]")]
+# alpha and beta each alone (given together, alpha_i < beta_i is a cross-field rule, tested in test_specs.py)
+RANGES["controller.alpha[]"] = [(BASE.replace(" beta: [2.0, 1.0],", ""), "controller.alpha.0", "controller.alpha[0]")]
+RANGES["controller.beta[]"] = [(BASE.replace(" alpha: [-2.0, -3.0],", ""), "controller.beta.1", "controller.beta[1]")]
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
 CONFORMANCE = {
@@ -26,7 +27,7 @@ CONFORMANCE = {
              "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
              "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
     # ROBEL figure 5.3 on the default elastic joint (no uncertainty), relay given
-    "elastic_joint": ("{kind: vsc, sliding_poles: [-8, -10, -12], delta: 0.05}", "{duration: 1.5}",
+    "elastic_joint": ("{kind: vsc, sliding_poles: [-8, -10, -12], relay_amplitude: 0.05}", "{duration: 1.5}",
                       "{overshoot: 15, settling_time: 1.2, steady_state_error: 0.01}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""

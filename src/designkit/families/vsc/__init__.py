@@ -93,6 +93,8 @@ def _surface(spec: Any, model: Any, box: dict) -> np.ndarray:
     poles = [complex(p) for p in spec.controller.sliding_poles]
     ratio = controllability_ratio(A, B)
     if ratio < CONTROLLABILITY_TOL:
+        if A.shape[0] != 4:
+            raise SpecError("plant", f"the plant is not controllable (Hadamard ratio {ratio:.3g})")
         given = [k for k in COUPLING if getattr(spec.plant, k, None) is not None] or ["KR"]
         raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "
                         f"through the coupling k2 = KR R2^2/J2 = {-A[3, 2]:.3g} 1/s^2, and the controllability "
@@ -124,12 +126,12 @@ def synthesize(spec: Any, plant: Any) -> Design:
     d_bar = float(ctl.perturbation_bound if ctl.perturbation_bound is not None else (level or 0.0))
     ratio = bounds["cD/cB"]
     r_max = max(abs(ratio.lower), abs(ratio.upper))
-    delta = float(ctl.delta) if ctl.delta is not None else (1.0 + m) * d_bar * r_max
+    delta = float(ctl.relay_amplitude) if ctl.relay_amplitude is not None else (1.0 + m) * d_bar * r_max
     notes = []
-    if ctl.delta is None:
+    if ctl.relay_amplitude is None:
         src = "controller.perturbation_bound" if ctl.perturbation_bound is not None else "simulation.perturbation"
         notes.append(f"delta = (1 + {m:g}) x {d_bar:g} x sup|cD/cB| = {delta:.4g} (perturbation bound from {src}).")
-    given = [k for k in ("alpha", "beta", "delta") if getattr(ctl, k) is not None]
+    given = [k for k in ("alpha", "beta", "relay_amplitude") if getattr(ctl, k) is not None]
     if given:
         notes.append(f"Given by the spec (not designed): {', '.join(given)}.")
     rest = np.asarray(plant.rest_state(1.0), float) - np.asarray(plant.rest_state(0.0), float)

@@ -8,8 +8,9 @@ Fields (every number with its unit and range, refused with its key path otherwis
   ``margin S_i`` (:mod:`~designkit.families.vsc.gains`) and the relay its bound by ``(1 + margin)``.
 * ``alpha``, ``beta`` (input units per state unit, one per state, within 1e9): the switching gains given instead
   of designed (``alpha_i < beta_i`` each); the certificate judges them.
-* ``delta`` (input units, above 0, at most 1e6): the relay amplitude given instead of designed.  Required when no
-  perturbation is known (no ``perturbation_bound`` and no ``simulation.perturbation``).
+* ``relay_amplitude`` (input units, above 0, at most 1e6): the relay amplitude ``delta`` given instead of
+  designed (not ``delta``: that key path is another family's, with another range).  Required when no perturbation
+  is known (no ``perturbation_bound`` and no ``simulation.perturbation``).
 * ``perturbation_bound`` (the disturbance's unit, 1e-6 to 1e6): ``sup |d|`` of the plant's disturbance input
   (the link's input-equivalent perturbation, the elastic joint's load torque on the link).  Default:
   ``|simulation.perturbation.value|``.
@@ -48,7 +49,7 @@ class VscSpec(Section):
         default=None, description="Switching gains where x_i sigma > 0, one per state (given, not designed).")
     beta: list[Ranged(-1e9, 1e9, "input per state unit", base=Finite)] | None = Field(
         default=None, description="Switching gains where x_i sigma < 0, one per state (given, not designed).")
-    delta: Ranged(-1e6, 1e6, "input", base=Finite) | None = Field(
+    relay_amplitude: Ranged(0, 1e6, "input", low_open=True, base=Finite) | None = Field(
         default=None, description="Relay amplitude delta > 0 (input units), given instead of designed.")
     perturbation_bound: Ranged(1e-6, 1e6, "disturbance unit", base=Finite) | None = Field(
         default=None, description="sup |d| of the plant's disturbance input; default |simulation.perturbation|.")
@@ -66,7 +67,7 @@ class VscSpec(Section):
         check_poles(v)
         return v
 
-    @field_validator("delta")
+    @field_validator("relay_amplitude")
     @classmethod
     def _positive_delta(cls, v: float | None) -> float | None:
         if v is not None and v <= 0:
@@ -118,9 +119,9 @@ def validate(spec: Any) -> None:
         raise ValueError(f"controller.perturbation_bound: {ctl.perturbation_bound:g} is below the simulated "
                          f"perturbation {level:g} (simulation.perturbation.value): the certificate would not cover "
                          "the run")
-    if ctl.delta is None and ctl.perturbation_bound is None and not level:
-        raise ValueError("controller.delta: give the relay amplitude delta > 0 (input units), or a perturbation "
-                         "(controller.perturbation_bound or simulation.perturbation) to design it from")
+    if ctl.relay_amplitude is None and ctl.perturbation_bound is None and not level:
+        raise ValueError("controller.relay_amplitude: give the relay amplitude delta > 0 (input units), or a "
+                         "perturbation (controller.perturbation_bound or simulation.perturbation) to design it from")
     if sim.anti_windup is not None:
         raise ValueError("simulation.anti_windup: the variable structure law has no integral to wind up")
     if spec.plant.kind == "elastic_joint" and (spec.plant.mgl or 0.0) > 0:

@@ -1,0 +1,109 @@
+"""The example specs through the CLI: the JSON contract, bad input (exit 2), the schema round trip."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from designkit.cli import main
+from designkit.models.elastic import elastic_state_space
+from designkit.models.robots.elastic_link import DEFAULTS
+from tests.cli_input import assert_bad_input
+from tests.families.vsc.common import ELASTIC_SPEC, LINK_SPEC, NARROW_SPEC
+
+
+def _synth(path, tmp_path, capsys) -> tuple[int, dict]:
+    code = main(["synth", str(path), "--json", "--out", str(tmp_path / "out")])
+    return code, json.loads(capsys.readouterr().out)
+
+
+def test_elastic_joint_json_contract(tmp_path, capsys):
+    code, data = _synth(ELASTIC_SPEC, tmp_path, capsys)
+    assert code == 0 and data["verified"] is True
+    c = [data["c1"], data["c2"], data["c3"], data["c4"]]
+    assert data["c2"] == 1.0 and data["c"] == c
+    # sigma = c1 x1 + ... + c4 x4 with the order [theta_m, theta_m', theta_l, theta_l']: the reduced system on
+    # sigma = 0 (x2 eliminated) has the requested poles, computed here by hand from the model's state space
+    A, _ = elastic_state_space(DEFAULTS)
+    keep = [0, 2, 3]
+    Ar = A[np.ix_(keep, keep)] + np.outer(A[keep, 1], -np.array(c)[keep])
+    assert np.sort(np.linalg.eigvals(Ar).real) == pytest.approx([-12, -10, -8], rel=1e-9)
+    assert len(data["alpha"]) == len(data["beta"]) == 4 and data["delta"] > 0
+    lr = data["vsc"]["l_ranges"]
+    for i in range(4):
+        lo, hi = lr[f"l_{i + 1}"]
+        assert data["alpha"][i] < lo <= hi < data["beta"][i]
+    statuses = {ch["name"]: ch["status"] for ch in data["checks"]}
+    assert all(statuses[n] == "PASS" for n in ("vsc_gains", "vsc_relay", "vsc_orientation", "vsc_band",
+                                                 "vsc_sliding_poles", "vsc_equivalent_control", "vsc_offset"))
+
+
+def test_link_json_contract(tmp_path, capsys):
+    code, data = _synth(LINK_SPEC, tmp_path, capsys)
+    assert code == 0 and data["c"] == [5.0, 1.0] and "c1" not in data
+    assert data["delta"] == pytest.approx(1.2)  # (1 + 0.2) x 1 N*m, cD/cB = 1 (matched)
+
+
+def test_narrow_gains_exit_1_and_say_what_would_do(tmp_path, capsys):
+    code, data = _synth(NARROW_SPEC, tmp_path, capsys)
+    assert code == 1
+    gains = next(ch for ch in data["checks"] if ch["name"] == "vsc_gains")
+    assert gains["status"] == "FAIL"
+    assert "beta_1 = 45 is not above max l_1 = 48.11 (at Km = 1.8, J2 = 0.45) by 3.11" in gains["detail"]
+    assert "beta_1 >= 57.73 with the 20 % margin" in gains["detail"]
+
+
+BAD = {
+    "pole_rhp": (("[-8, -10, -12]", "[-8, -10, 0.5]"), "controller.sliding_poles[2]: must have negative real part"),
+    "pole_zero": (("[-8, -10, -12]", "[-8, -10, 0]"), "controller.sliding_poles[2]"),
+    "delta_zero": (("  margin: 0.2\n", "  margin: 0.2\n  relay_amplitude: 0\n"),
+                   "controller.relay_amplitude: must be"),
+    "delta_negative": (("  margin: 0.2\n", "  margin: 0.2\n  relay_amplitude: -1\n"),
+                       "controller.relay_amplitude: must be"),
+    "poles_count": (("[-8, -10, -12]", "[-8, -10]"), "controller.sliding_poles: the elastic_joint plant has 4 "
+                    "states"),
+    "uncontrollable": (("  kind: elastic_joint\n", "  kind: elastic_joint\n  KR: 1.0e-6\n"),
+                       "plant.KR: makes the plant uncontrollable"),
+    "alpha_above_beta": (("  margin: 0.2\n", "  margin: 0.2\n  alpha: [45, -0.3, -45, 0.6]\n"
+                          "  beta: [40, -0.2, -40, 0.8]\n"), "controller.alpha[0]: alpha_1 = 45 must be below"),
+    "alpha_count": (("  margin: 0.2\n", "  margin: 0.2\n  alpha: [1, 2]\n"), "controller.alpha: one gain per "
+                    "state"),
+    "gravity": (("  kind: elastic_joint\n", "  kind: elastic_joint\n  mgl: 1.0\n"), "plant.mgl"),
+    "band_and_layer": (("  margin: 0.2\n", "  margin: 0.2\n  chattering_band: 0.01\n  boundary_layer: 0.01\n"),
+                       "controller.boundary_layer"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_input_exits_2_with_the_key_path(case, tmp_path, capsys):
+    (old, new), message = BAD[case]
+    text = ELASTIC_SPEC.read_text()
+    assert old in text
+    assert_bad_input(tmp_path, capsys, text.replace(old, new, 1), message)
+
+
+def test_no_relay_and_no_perturbation_is_refused(tmp_path, capsys):
+    text = ELASTIC_SPEC.read_text().replace("  perturbation: {value: 0.2, time: 1.0}\n", "")
+    assert_bad_input(tmp_path, capsys, text, "controller.relay_amplitude: give the relay amplitude")
+
+
+@pytest.mark.parametrize("path", [ELASTIC_SPEC, LINK_SPEC, NARROW_SPEC], ids=["elastic", "link", "narrow"])
+def test_example_specs_round_trip_through_the_json_schema(path):
+    import jsonschema
+
+    from designkit.schema.loader import load_spec
+    from designkit.schema.spec import Spec
+
+    loaded = load_spec(path)
+    data = json.loads(loaded.spec.model_dump_json())
+    jsonschema.validate(data, Spec.model_json_schema())
+    assert Spec.model_validate(data) == loaded.spec
+
+
+def test_no_linear_check_is_offered(elastic_result):
+    d = elastic_result.design
+    assert d.linearization.kind == "none" and d.closed_loop is None
+    names = {c.name for c in elastic_result.checks}
+    assert not names & {"pole_placement", "routh_hurwitz", "lyapunov", "loop_margins", "robustness", "designed_loop"}
