@@ -36,6 +36,8 @@ def _f(x: float | None, unit: str = "", digits: int = 3) -> str:
         return "—"
     if math.isinf(x):
         return "never" if unit == "s" else "diverged"
+    if 1e3 <= abs(x) < 1e9 and float(x) == round(x):
+        return f"{int(round(x))} {unit}".strip()  # an adaptation gain of 10000, not 1e+04
     return f"{fmt_number(x, digits)} {unit}".strip()
 
 
