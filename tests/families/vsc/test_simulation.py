@@ -126,6 +126,10 @@ def test_boundary_layer_keeps_sigma_in_the_layer():
     assert run.reach is not None and np.all(np.abs(sigma[run.reach:]) <= eps)
     assert r.design.extra["vsc"]["max_step"] <= eps / (10 * r.design.extra["vsc"]["S0"]) * (1 + 1e-12)
     assert check(r, "vsc_band").passed is True
+    g = measure(r.design, r.simulation).sigma_gain  # rest offset per unit sigma: c x~ = sigma, x~ at rest
+    c = r.design.extra["vsc"]["c"]
+    assert g == pytest.approx(1.0 / (c[0] + c[2]), rel=1e-9)  # x1 = x3 at rest (no load), (c1 + c3) x3 = sigma
+    assert "leaves the controlled position within" in check(r, "vsc_band").detail
 
 
 def test_narrow_gains_run_slides_at_nominal_but_the_certificate_fails(narrow_result):

@@ -26,6 +26,16 @@ for ``tau2`` in the last term).
 moves ``sigma`` by at most ``h S(x~)`` (:mod:`~designkit.families.vsc.measure`).  ``h`` is chosen so that the
 first held step at the initial error moves ``sigma`` by at most the band (``chattering_band``, default
 ``BAND_FRACTION |sigma(0)|``); with a boundary layer, a tenth of it.
+
+**Boundary layer.**  ``psi_i x~_i = m_i x~_i + h_i |x~_i| sign(sigma)`` with ``m_i = (alpha_i + beta_i)/2`` and
+``h_i = (alpha_i - beta_i)/2 < 0`` (``psi_i = alpha_i`` exactly when ``x~_i`` and ``sigma`` have one sign), so the
+law is ``u = sum m_i x~_i + (sum h_i |x~_i| - delta) sign(sigma)``: one switch.  ``boundary_layer: epsilon``
+replaces it by ``sat(sigma/epsilon)``: the law is then continuous (not held over the step); outside the layer it is
+the switching law, so the layer is reached and kept (``|sigma| <= epsilon``), and inside it the motion on the
+surface is perturbed by ``|sigma| <= epsilon``: at rest the controlled position is off by at most
+``|g_sigma| epsilon`` (``g_sigma`` the static gain from ``sigma`` to it on the reduced system) beyond the offset an
+unmatched disturbance leaves.  Step ``h = epsilon/(10 S0)``: the layer's gain ``cB (sum |h_i x~_i| + delta)/epsilon``
+times ``h`` stays below 0.1.
 """
 
 from __future__ import annotations
@@ -189,8 +199,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
-    """``u = sum_i psi_i x~_i - delta sign(sigma)`` (or ``delta sat(sigma/epsilon)``), held over each step of at
-    most ``max_step``; records ``sigma`` and ``u_eq = -(cB)^-1 c A x~`` (nominal model, no perturbation)."""
+    """``u = sum_i psi_i x~_i - delta sign(sigma)``, held over each step of at most ``max_step``; with a boundary
+    layer the continuous ``u = sum_i m_i x~_i + (sum_i h_i |x~_i| - delta) sat(sigma/epsilon)``, ``m_i = (alpha_i +
+    beta_i)/2``, ``h_i = (alpha_i - beta_i)/2`` (the same law outside the layer: ``psi_i x_i = m_i x_i +
+    h_i |x_i| sign(sigma)``).  Records ``sigma`` and ``u_eq = -(cB)^-1 c A x~`` (nominal model, no perturbation)."""
     info = design.extra[KIND]
     c, al, be = (np.asarray(info[k], float) for k in ("c", "alpha", "beta"))
     delta, eps = float(info["delta"]), info["boundary_layer"]
@@ -203,13 +215,21 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     def sigma(s: Any) -> Any:
         return ca.dot(ca.DM(c), error(s))
 
+    mid, half = (al + be) / 2.0, (al - be) / 2.0
+
     def command(s: Any) -> Any:
         x, sg = error(s), sigma(s)
-        u = 0
+        if eps is None:
+            u = 0
+            for i in range(len(c)):
+                u = u + ca.if_else(x[i] * sg > 0, al[i], be[i]) * x[i]
+            return u - delta * ca.sign(sg)
+        # psi_i x_i = mid_i x_i + half_i |x_i| sign(sigma) (psi_i = alpha_i iff sign(x_i) = sign(sigma)), so
+        # u = sum mid_i x_i + (sum half_i |x_i| - delta) sign(sigma): the layer replaces this one sign(sigma)
+        gap = 0
         for i in range(len(c)):
-            u = u + ca.if_else(x[i] * sg > 0, al[i], be[i]) * x[i]
-        relay = ca.sign(sg) if eps is None else ca.fmin(ca.fmax(sg / eps, -1.0), 1.0)
-        return u - delta * relay
+            gap = gap + half[i] * ca.fabs(x[i])
+        return ca.dot(ca.DM(mid), x) + (gap - delta) * ca.fmin(ca.fmax(sg / eps, -1.0), 1.0)
 
     def u_eq(s: Any) -> Any:
         return -ca.dot(ca.DM(cA), error(s)) / cB
@@ -222,7 +242,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
         KIND, design.plant, command=command,
         settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": info["band"]},
         signals={"sigma": sigma, "u_eq": u_eq}, signal_units=(unit, design.plant.inputs[0].unit),
-        discontinuous=True, max_step=float(info["max_step"]), max_step_reason=reason,
+        discontinuous=eps is None, max_step=float(info["max_step"]), max_step_reason=reason,
     )
 
 

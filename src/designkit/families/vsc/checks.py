@@ -164,7 +164,10 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     ok = run.worst_ratio <= 1 + 1e-9
     band = Check("vsc_band", ok, "|sigma| <= h S(x~) after reaching", run.worst_ratio, 1 - run.worst_ratio, "1",
                  f"after reaching, the largest |sigma| relative to the hold band is {run.worst_ratio:.3g} (at t = "
-                 f"{run.worst_at:.4g} s); " + ("it stays within the band" if ok else "it leaves the band"), cert)
+                 f"{run.worst_at:.4g} s); " + ("it stays within the band" if ok else "it leaves the band") + (
+                     "" if info["boundary_layer"] is None else
+                     f"; the layer |sigma| <= {info['boundary_layer']:.4g} leaves the controlled position within "
+                     f"{abs(run.sigma_gain) * info['boundary_layer']:.3g} rad of the sliding motion's rest"), cert)
     out = [reach, band]
     req = [complex(*p) for p in info["sliding_poles"]]
     if run.poles is None:

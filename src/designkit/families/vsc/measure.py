@@ -63,6 +63,7 @@ class VscRun:
     predicted_offset: float
     final_offset: float
     offset_tolerance: float = 0.0
+    sigma_gain: float = 0.0
     data: dict[str, Any] = field(default_factory=dict, repr=False)
 
 
@@ -134,7 +135,7 @@ def measure(design: Any, sim: Any) -> VscRun:
     offset_tol = abs(g_sigma) * float(np.max(band[tail])) + 0.02 * abs(pred)
     if reach is None:
         return VscRun(hold, None, None, None, None, None, 0, 0, 0.0, None, 0.0, None, None, matched, pred, final,
-                      offset_tol, out)
+                      offset_tol, g_sigma, out)
     after = np.abs(sigma[reach:]) / band[reach:]
     j = int(np.argmax(after))
     # the sliding samples: after the first sign change of sigma past the reaching time
@@ -184,5 +185,5 @@ def measure(design: Any, sim: Any) -> VscRun:
         ueq_fraction=float(np.mean(ok)) if ok.size else None,
         ueq_model_error=float(np.max(np.abs(ueq_model[sl] - nominal_ueq[sl]))) if ok.size else None,
         matched=matched, predicted_offset=pred, final_offset=final, offset_tolerance=offset_tol,
-        data={**out, "k1": k1, "dt": dt},
+        sigma_gain=g_sigma, data={**out, "k1": k1, "dt": dt},
     )

@@ -41,6 +41,9 @@ def json_summary(result: Any) -> dict[str, Any]:
             "switching_frequency": run.switching_frequency, "total_variation_u": run.total_variation,
             "u_eq_inside_fraction": run.ueq_fraction, "matched": run.matched,
             "predicted_offset": run.predicted_offset, "final_offset": run.final_offset,
+            "sigma_to_position_gain": run.sigma_gain,
+            "boundary_layer_precision": (None if info["boundary_layer"] is None else
+                                         abs(run.sigma_gain) * info["boundary_layer"]),
         })
     out[KIND] = vsc
     return out
