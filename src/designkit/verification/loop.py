@@ -45,8 +45,8 @@ import numpy as np
 from designkit.synthesis.design import loop_matrices
 from designkit.verification.check import Check
 
-__all__ = ["RESOLUTION_DECADES", "WEAK_MARGINS", "LoopMargins", "achieved_zeros", "classical_margins", "crossovers", "frequency_grid",
-           "loop_frequency_response", "loop_margins",
+__all__ = ["RESOLUTION_DECADES", "WEAK_MARGINS", "LoopMargins", "achieved_zeros", "classical_margins", "crossovers",
+           "frequency_grid", "loop_frequency_response", "loop_margins",
            "loop_margins_check", "loop_matrices", "siso_zeros"]
 
 
@@ -233,7 +233,8 @@ def _finite(x: float) -> float | None:
 
 def _requirements(spec: Any) -> dict[str, float]:
     req = getattr(spec, "requirements", None) if spec is not None else None
-    given = {"gain_margin_db": getattr(req, "gain_margin", None), "phase_margin_deg": getattr(req, "phase_margin", None),
+    given = {"gain_margin_db": getattr(req, "gain_margin", None),
+             "phase_margin_deg": getattr(req, "phase_margin", None),
              "modulus_margin": getattr(req, "modulus_margin", None)}
     return {k: float(v) for k, v in given.items() if v is not None}
 

@@ -112,6 +112,9 @@ class CheckRule:
         ``(result, check) -> Figure | None``: figures drawn from one of its checks.
     diagnose : callable or None
         ``(result, check) -> (cause, fix) | None``: why one of its checks failed and what would fix it.
+    universal : bool
+        Offered for every family, whether or not its ``checks`` name it (a property of any simulated loop,
+        such as a chattering command); ``applies`` still decides.
     """
 
     name: str
@@ -124,6 +127,7 @@ class CheckRule:
     glossary: tuple[tuple[str, str], ...] = ()
     figures: tuple[Callable[[Any, Any], Any], ...] = ()
     diagnose: Callable[[Any, Any], Any] | None = None
+    universal: bool = False
 
     def offered_for(self, design: Any, ctx: Context) -> bool:
         """True when the check runs for ``design``: its linearization (if it needs one) and what ``applies`` asks."""
@@ -194,7 +198,8 @@ GENERIC: Mapping[str, CheckRule] = _Generic()
 
 
 def resolve(offered: Sequence[str | CheckRule]) -> tuple[CheckRule, ...]:
-    """The rules of ``offered`` (generic names and rules of a family's own), in report order.
+    """The rules of ``offered`` (generic names and rules of a family's own) and the universal generic rules, in
+    report order.
 
     Raises
     ------
@@ -209,6 +214,8 @@ def resolve(offered: Sequence[str | CheckRule]) -> tuple[CheckRule, ...]:
             rules.append(generic()[item])
         else:
             raise ValueError(f"unknown check {item!r}; the generic checks are {sorted(generic())}")
+    names = {r.name for r in rules}
+    rules += [r for r in generic().values() if r.universal and r.name not in names]
     return tuple(sorted(rules, key=lambda r: r.order))
 
 
