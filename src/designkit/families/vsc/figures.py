@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from designkit.display.figure import EVENT_STYLE, Figure, plain_ticks
-from designkit.display.numbers import fmt_number, sci
+from designkit.display.numbers import fmt_number
 from designkit.display.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
 from designkit.families.vsc.measure import VscRun, measure
 from designkit.families.vsc.spec import KIND
@@ -18,6 +18,7 @@ from designkit.families.vsc.spec import KIND
 __all__ = ["FIGURES"]
 
 COLORS = (BLUE, ORANGE, GREEN, PURPLE)
+SUB = dict(enumerate("₀₁₂₃₄₅₆₇₈₉"))
 
 
 def _sentence(parts: Sequence[str]) -> str:
@@ -39,7 +40,7 @@ def _ok(result: Any) -> bool:
     return result.simulation is not None and KIND in result.design.extra
 
 
-def _draw_sigma(run: VscRun) -> tuple[Any, dict[str, Any]]:
+def _draw_sigma(run: VscRun, unit: str) -> tuple[Any, dict[str, Any]]:
     d = run.data
     t, s, band = d["time"], d["sigma"], d["band"]
     fig, (ax,) = new_figure(6.8, 3.6)
@@ -52,7 +53,7 @@ def _draw_sigma(run: VscRun) -> tuple[Any, dict[str, Any]]:
     plain_ticks(ax.yaxis)
     ax.set_xlim(t[0], t[-1])
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("σ")
+    ax.set_ylabel(f"σ ({unit})")
     ax.legend(loc="best", framealpha=0.9)
     return fig, {}
 
@@ -62,7 +63,9 @@ def sigma_figure(result: Any) -> Figure | None:
     if not _ok(result):
         return None
     run = measure(result.design, result.simulation)
-    svg, keys, _ = render_tagged(_draw_sigma, run)
+    k = result.design.extra[KIND]["drive_index"]
+    unit = result.design.plant.states[k].unit if k is not None else ""
+    svg, keys, _ = render_tagged(_draw_sigma, run, unit)
     phrases = {"band": "the band one held step can move σ by (green)", "sigma": "the switching function σ (blue)",
                "reaching": "the reaching time (dotted)"}
     when = "" if run.reaching_time is None else f" It reaches the band after {fmt_number(run.reaching_time, 4)} s."
@@ -136,20 +139,20 @@ def control_figure(result: Any) -> Figure | None:
 
 def _draw_l(info: dict) -> tuple[Any, dict[str, Any]]:
     n = len(info["c"])
-    fig, axes = new_figure(6.8, 1.2 + 0.9 * n, rows=n, sharex=False)
+    fig, axes = new_figure(6.8, 0.8 + 1.1 * n, rows=n, sharex=False, layout="constrained")
     axes = list(axes)
     for i, ax in enumerate(axes):
         b = info["bounds"][f"l_{i + 1}"]
         al, be = info["alpha"][i], info["beta"][i]
         tag(fig, "range", *ax.barh([0], [b["upper"] - b["lower"]], left=[b["lower"]], height=0.5, color=BLUE,
-                                  alpha=0.5, label="range of l_i over the box" if i == 0 else None))
-        tag(fig, "alpha", ax.axvline(al, color=ORANGE, lw=2, label="α_i" if i == 0 else None))
-        tag(fig, "beta", ax.axvline(be, color=GREEN, lw=2, label="β_i" if i == 0 else None))
+                                  alpha=0.5, label="range of lᵢ over the box" if i == 0 else None))
+        tag(fig, "alpha", ax.axvline(al, color=ORANGE, lw=2, label="αᵢ" if i == 0 else None))
+        tag(fig, "beta", ax.axvline(be, color=GREEN, lw=2, label="βᵢ" if i == 0 else None))
         lo, hi = min(al, b["lower"]), max(be, b["upper"])
         pad = 0.1 * (hi - lo) if hi > lo else 1.0
         ax.set_xlim(lo - pad, hi + pad)
         ax.set_yticks([0])
-        ax.set_yticklabels([f"l_{i + 1}"])
+        ax.set_yticklabels([f"l{SUB[i + 1]}"])
     axes[0].legend(loc="best", framealpha=0.9, fontsize=7)
     axes[-1].set_xlabel("gain (input per state unit)")
     return fig, {}
@@ -161,10 +164,10 @@ def gains_figure(result: Any) -> Figure | None:
         return None
     info = result.design.extra[KIND]
     svg, keys, _ = render_tagged(_draw_l, info)
-    phrases = {"range": "the range of each equivalent-control gain l_i over the parameter box (blue bar)",
-               "alpha": "α_i (orange)", "beta": "β_i (green)"}
+    phrases = {"range": "the range of each equivalent-control gain lᵢ over the parameter box (blue bar)",
+               "alpha": "αᵢ (orange)", "beta": "βᵢ (green)"}
     return Figure("Variable structure control: the gains against the equivalent-control gains", _caption(
-        f"Theorem 3 asks α_i < l_i < β_i for every plant of the box ({sci(len(info['box']))} uncertain "
+        f"Theorem 3 asks αᵢ < lᵢ < βᵢ for every plant of the box ({len(info['box'])} uncertain "
         "parameters); each row is one state.", phrases, keys), svg, "fig-vsc-gains.svg",
         _present(result, ("vsc_gains", "vsc_gains_enclosed")))
 
