@@ -99,6 +99,21 @@ class PipelineResult:
 
         return result_html(self._report_model)
 
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What a reviewer must see even when every check passes, one plain sentence each: the checks' own
+        warnings (weak margins, chattering commands) and inertial parameters of the plant that are not physically
+        consistent."""
+        out = [w for c in self.checks for w in c.warnings]
+        robot = getattr(self.design.plant, "robot", None)
+        if robot is not None:
+            from designkit.models.physical import check_inertia
+
+            consistency = check_inertia(robot.description)
+            if not consistency.consistent:
+                out.append(consistency.sentences()[0])
+        return tuple(dict.fromkeys(out))
+
     def to_json(self) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json``."""
         from designkit.families import family
@@ -119,6 +134,7 @@ class PipelineResult:
                              "zeros": [[z.real, z.imag] for z in loop.zeros]}
                       for name, loop in zip(d.loop_names, d.loops, strict=True)},
             "verified": self.verified,
+            "warnings": list(self.warnings),
             "checks": [c.to_dict() for c in self.checks],
             "notes": list(d.notes),
             "versions": dict(self.versions),
@@ -194,6 +210,8 @@ class ComparisonResult:
                         if all(map(_finite, (w.value, w.second)))],
             "passed": self.verified,
             "verified": self.verified,
+            "warnings": [f"{label}: {w}" for label, r in zip(self.labels, self.results, strict=True)
+                         for w in r.warnings],
             "checks": [{**c.to_dict(), "controller": label}
                        for label, r in zip(self.labels, self.results, strict=True) for c in r.checks],
             "versions": dict(self.versions),

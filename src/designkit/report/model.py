@@ -167,6 +167,7 @@ class ReportModel:
     provenance: tuple[tuple[str, str], ...] = ()
     figure_anchors: tuple[str, ...] = ()
     contents: tuple[Section, ...] = ()
+    warnings: tuple[str, ...] = ()
 
 
 # ----------------------------------------------------------------------------- contents
@@ -242,6 +243,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         verdict=verdict,
         verdict_kind=kind,
         verdict_summary=verdict_summary(checks),
+        warnings=tuple(getattr(result, "warnings", ())),
         verified=bool(result.verified),
         spec_text=loaded.text,
         spec_sha256=loaded.sha256,
