@@ -107,3 +107,29 @@ def test_no_linear_check_is_offered(elastic_result):
     assert d.linearization.kind == "none" and d.closed_loop is None
     names = {c.name for c in elastic_result.checks}
     assert not names & {"pole_placement", "routh_hurwitz", "lyapunov", "loop_margins", "robustness", "designed_loop"}
+
+
+def test_uncertain_ratio_is_judged_on_the_proven_enclosure(tmp_path, capsys):
+    """R1 uncertain: l_1 and l_3 are certified on their enclosures (vsc_gains_enclosed), the others at vertices;
+    an alpha_1 above a value of l_1 attained inside the box fails."""
+    text = ELASTIC_SPEC.read_text().replace("Km: [1.8, 2.2]}", "R1: [0.019, 0.021]}")
+    path = tmp_path / "r1.yaml"
+    path.write_text(text)
+    code, data = _synth(path, tmp_path, capsys)
+    checks = {ch["name"]: ch for ch in data["checks"]}
+    assert code == 0 and checks["vsc_gains_enclosed"]["status"] == "PASS"
+    assert data["vsc"]["l_methods"] == {"l_1": "enclosure", "l_2": "vertices", "l_3": "enclosure", "l_4": "vertices"}
+    lo, hi = data["vsc"]["l_ranges"]["l_1"]
+    # independent: l_1 = (tau1/Km) KR (R1^2/J1 - c4 R2^2/J2) is largest at R1 = 0.021, J2 = 0.45 and smallest at
+    # R1 = 0.019, J2 = 0.55 (c4 < 0: both terms grow with R1 and fall with J2)
+    c4, p = data["c4"], DEFAULTS
+
+    def l1(R1, J2):
+        return p.tau1 / p.Km * p.KR * (R1**2 / p.J1 - c4 * p.R2**2 / J2)
+    assert lo <= l1(0.019, 0.55) <= lo + 1e-5 * abs(lo) and hi - 1e-5 * abs(hi) <= l1(0.021, 0.45) <= hi
+    gains = "  alpha: [40, -0.3, -57, 0.4]\n  beta: [57, -0.15, -29, 0.9]\n"
+    bad = text.replace("  margin: 0.2\n", "  margin: 0.2\n" + gains)
+    path.write_text(bad)
+    code, data = _synth(path, tmp_path, capsys)
+    enc = next(ch for ch in data["checks"] if ch["name"] == "vsc_gains_enclosed")
+    assert code == 1 and enc["status"] == "FAIL" and "alpha_1 = 40 >= 38.7989" in enc["detail"]

@@ -176,7 +176,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "c": c.tolist(), "alpha": list(al), "beta": list(be), "delta": delta, "margin": m, "S": list(S),
         "box": {kk: list(v) for kk, v in box.items()}, "d_bar": d_bar, "bounds": {
             kk: {"lower": b.lower, "upper": b.upper, "argmin": b.argmin, "argmax": b.argmax, "method": b.method,
-                 "form": b.form} for kk, b in bounds.items()},
+                 "form": b.form, "min_value": b.min_value, "max_value": b.max_value} for kk, b in bounds.items()},
         "G": G.tolist(), "cB_max": cB_max, "cD_max": cD_max, "cB_nominal": cB_nom, "cA_nominal": cA.tolist(),
         "rest_direction": rest.tolist(), "position_index": position, "band": band, "max_step": h,
         "sigma0": sigma0, "S0": float(S0), "boundary_layer": eps, "plant_kind": plant.kind,

@@ -75,20 +75,23 @@ def shortfall_sentence(f: dict[str, Any], margin: float) -> str:
 def _enclosed(design: Any) -> Check | None:
     info = design.extra[KIND]
     rows = []
-    ok = True
+    ok: bool | None = True
     for i, (al, be) in enumerate(zip(info["alpha"], info["beta"], strict=True)):
         b = info["bounds"][f"l_{i + 1}"]
         if b["method"] != "enclosure":
             continue
-        good = al < b["lower"] and be > b["upper"]
-        ok = ok and good
+        if al >= b["min_value"] or be <= b["max_value"]:  # violated at an evaluated point of the box
+            ok = False
+        elif not (al < b["lower"] and be > b["upper"]) and ok is not False:  # between the bound and the value
+            ok = None
         rows.append(f"alpha_{i + 1} = {al:.4g} {'<' if al < b['lower'] else '>='} {b['lower']:.6g} <= l_{i + 1} <= "
                     f"{b['upper']:.6g} {'<' if be > b['upper'] else '>='} beta_{i + 1} = {be:.4g}")
     if not rows:
         return None
     return Check("vsc_gains_enclosed", ok, "alpha_i < l_i < beta_i on the whole box (proven enclosure of l_i)",
                  None, None, "", "proven ranges of l_i over the box (ball arithmetic, branch and bound; the cleared "
-                 "condition is not multi-affine): " + "; ".join(rows), {"bounds": info["bounds"]})
+                 "condition is not multi-affine; a gain inside the enclosure's gap is undecided, one beyond a value "
+                 "attained at a point of the box fails): " + "; ".join(rows), {"bounds": info["bounds"]})
 
 
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:

@@ -87,6 +87,9 @@ class Bound:
         ``"vertices"`` (the cleared form is affine or multi-affine) or ``"enclosure"``.
     form : str
         The cleared form: ``"constant"``, ``"affine"``, ``"multiaffine"`` or ``"general"``.
+    min_value, max_value : float or None
+        The values attained at ``argmin`` and ``argmax`` (equal to ``lower``, ``upper`` at vertices; within the
+        enclosure's tolerance of them otherwise).
     """
 
     label: str
@@ -97,6 +100,8 @@ class Bound:
     monomial: tuple[str, ...]
     method: str
     form: str
+    min_value: float | None = None
+    max_value: float | None = None
 
 
 def rational_forms(plant_kind: str, c: Sequence[float]) -> dict[str, tuple[Any, Any]]:
@@ -163,14 +168,15 @@ def bound_ranges(forms: Mapping[str, tuple[Any, Any]], model: Any, box: Box) -> 
             verts = _vertices(names, box)
             vals = [float(f(list(v.values()))) for v in verts]
             i, j = int(np.argmin(vals)), int(np.argmax(vals))
-            out[label] = Bound(label, vals[i], vals[j], verts[i], verts[j], (), "vertices", form)
+            out[label] = Bound(label, vals[i], vals[j], verts[i], verts[j], (), "vertices", form, vals[i], vals[j])
         else:
             lo = np.array([box[n][0] for n in names], float)
             hi = np.array([box[n][1] for n in names], float)
             enc = enclose(f, {"p": (lo, hi)}, rel_tol=ENCLOSE_TOL)
             amin = dict(zip(names, np.asarray(enc.argmin["p"]).ravel().tolist(), strict=True))
             amax = dict(zip(names, np.asarray(enc.argmax["p"]).ravel().tolist(), strict=True))
-            out[label] = Bound(label, float(enc.lower), float(enc.upper), amin, amax, (), "enclosure", form)
+            out[label] = Bound(label, float(enc.lower), float(enc.upper), amin, amax, (), "enclosure", form,
+                               float(enc.min_value), float(enc.max_value))
     return out
 
 
