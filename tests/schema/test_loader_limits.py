@@ -24,7 +24,9 @@ from tests.cli_input import assert_bad_input
 from tests.problems import POSSPEED_YAML
 
 TIME_BOUND = 1.0
-"""Seconds within which a hostile input must be refused (issue 8)."""
+"""CPU seconds within which a hostile input must be refused (issue 8).  CPU time of this process, not wall time: the
+bound is on the work done, which another process loading the machine does not change (a bomb that expanded would cost
+far more than a second either way)."""
 
 MEMORY_BOUND = 200e6
 """Bytes of Python allocations (tracemalloc peak) a hostile input may cost (issue 8)."""
@@ -48,14 +50,14 @@ class Cost:
 
 @contextmanager
 def measured() -> Iterator[Cost]:
-    """Wall time (``time.perf_counter``) and tracemalloc peak of the block."""
+    """CPU time (``time.process_time``) and tracemalloc peak of the block."""
     cost = Cost()
     tracemalloc.start()
-    start = time.perf_counter()
+    start = time.process_time()
     try:
         yield cost
     finally:
-        cost.seconds = time.perf_counter() - start
+        cost.seconds = time.process_time() - start
         cost.peak_bytes = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
 

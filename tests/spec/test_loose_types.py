@@ -31,3 +31,15 @@ def test_strings_where_strings_belong_are_still_read():
     spec = parse_spec(ROBOT.replace("robot: planar2r", "robot: planar2r, friction: true")
                       .replace("[-20, -20]", "['-20+1j', '-20-1j']")).spec
     assert spec.plant.friction is True and spec.controller.poles is not None
+
+
+@pytest.mark.parametrize("written", ["0x1F", "017", "1_000", "1:30", "0o17"])
+def test_numbers_only_as_json_writes_them(written):
+    with pytest.raises(SpecError) as err:
+        parse_spec(LINK.replace("Km: 2.0", f"Km: {written}"))
+    assert err.value.path == "plant.Km" and f"got the string '{written}'" in err.value.message
+
+
+@pytest.mark.parametrize("written, value", [("2", 2.0), ("2.5", 2.5), ("1e-3", 1e-3), ("2.5E+2", 250.0), (".5", 0.5)])
+def test_json_numbers_are_read(written, value):
+    assert parse_spec(LINK.replace("Km: 2.0", f"Km: {written}")).spec.plant.Km == value

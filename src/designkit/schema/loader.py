@@ -143,19 +143,25 @@ _TAG = "tag:yaml.org,2002:"
 _STR, _INT, _FLOAT, _BOOL, _NULL = (_TAG + t for t in ("str", "int", "float", "bool", "null"))
 _SEQ, _MAP, _MERGE = _TAG + "seq", _TAG + "map", _TAG + "merge"
 
-_JSON_FLOAT = re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
-"""Floats written as in JSON (``1e-3``, ``2.5E4``) that YAML 1.1 would read as strings."""
+_JSON_INT = re.compile(r"^[-+]?(?:0|[1-9][0-9]*)$")
+"""Integers as JSON writes them: decimal, no leading zero (YAML 1.1's ``0x1F``, ``017``, ``1_000``, ``1:30`` are
+text)."""
+
+_JSON_FLOAT = re.compile(r"^[-+]?(?:(?:0|[1-9][0-9]*)(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?|\.[0-9]+(?:[eE][-+]?[0-9]+)?"
+                         r"|\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$")
+"""Floats as JSON writes them (``2.5``, ``1e-3``, ``2.5E4``), plus ``.5`` and YAML's ``.inf`` / ``.nan`` (refused
+later as not finite, with the key path)."""
 
 
 def _resolvers() -> dict[str | None, list[tuple[str, re.Pattern[str]]]]:
-    """SafeLoader's implicit resolvers without dates and ``=`` (strings), plus JSON floats."""
+    """SafeLoader's implicit resolvers without dates and ``=`` (strings), with numbers only as JSON writes them."""
     table: dict[str | None, list[tuple[str, re.Pattern[str]]]] = {}
     for first, entries in yaml.SafeLoader.yaml_implicit_resolvers.items():
-        kept = [(tag, rx) for tag, rx in entries if tag not in (_TAG + "timestamp", _TAG + "value")]
+        kept = [(tag, rx) for tag, rx in entries if tag not in (_TAG + "timestamp", _TAG + "value", _INT, _FLOAT)]
         if kept:
             table[first] = kept
-    for first in "-+0123456789":
-        table.setdefault(first, []).append((_FLOAT, _JSON_FLOAT))
+    for first in "-+0123456789.":
+        table.setdefault(first, []).extend([(_INT, _JSON_INT), (_FLOAT, _JSON_FLOAT)])
     return table
 
 

@@ -110,8 +110,8 @@ def _number_problem(rule: _NumberRule, value: object, where: str = "") -> tuple[
     elif isinstance(value, int | float) and rule.bool_only:
         return where, f"must be true or false, got {short_repr(value)} (numbers are not read as booleans)"
     elif isinstance(value, str) and rule.scalar is not None and not rule.str_ok:
-        return where, (f"must be a number, got the string {short_repr(value)} (a quoted value is text: write the "
-                       "number without quotes)")
+        return where, (f"must be a number, got the string {short_repr(value)} (only numbers as JSON writes them are "
+                       "read: decimal, without quotes)")
     elif isinstance(value, int):
         if rule.scalar == "float" and abs(value) > FLOAT_MAX:
             return where, f"must be within the floating-point range (|x| <= {FLOAT_MAX:.4g}), got {short_repr(value)}"
