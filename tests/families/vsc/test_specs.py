@@ -133,3 +133,13 @@ def test_uncertain_ratio_is_judged_on_the_proven_enclosure(tmp_path, capsys):
     code, data = _synth(path, tmp_path, capsys)
     enc = next(ch for ch in data["checks"] if ch["name"] == "vsc_gains_enclosed")
     assert code == 1 and enc["status"] == "FAIL" and "alpha_1 = 40 >= 38.7989" in enc["detail"]
+
+
+def test_narrow_gains_diagnosis_names_the_fix(narrow_result):
+    from designkit.families.vsc.diagnoses import diagnose
+
+    gains = next(c for c in narrow_result.checks if c.name == "vsc_gains")
+    cause, fix = diagnose(narrow_result, gains)
+    assert "alpha_1 = 40 is not below min l_1 = 38.82" in cause
+    assert "alpha_1 <= 29.2 (any value below 38.82 meets the condition)" in fix
+    assert "beta_1 >= 57.73 (any value above 48.11 meets the condition)" in fix

@@ -47,6 +47,7 @@ import numpy as np
 
 from designkit.errors import SpecError
 from designkit.families.vsc.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.vsc.diagnoses import diagnose
 from designkit.families.vsc.figures import FIGURES
 from designkit.families.vsc.gains import bound_ranges, design_gains, rational_forms
 from designkit.families.vsc.report import json_summary, section
@@ -266,5 +267,6 @@ FAMILY = Family(
     validate=validate,
     figures=FIGURES,
     sections=(section,),
+    diagnoses=(diagnose,),
     json=json_summary,
 )
