@@ -28,8 +28,8 @@ def _gains(result: Any) -> tuple[str, str] | None:
         rel, side = ("<=", "below") if f["relation"] == "<" else (">=", "above")
         fixes.append(f"{f['gain']} {rel} {f['with_margin']:.4g} (any value {side} {f['bound']:.4g} meets the "
                      f"condition)")
-    return (cause + ": at those corners of the box the switching does not turn sigma' against sigma, so the sliding mode is "
-            "not guaranteed for every plant of the box.",
+    return (cause + ": at those corners of the box the switching does not turn sigma' against sigma, so the "
+            "sliding mode is not guaranteed for every plant of the box.",
             "Leave alpha and beta out of the spec so the design chooses them, or give " + "; ".join(fixes) + ".")
 
 
