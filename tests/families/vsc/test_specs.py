@@ -143,3 +143,18 @@ def test_narrow_gains_diagnosis_names_the_fix(narrow_result):
     assert "alpha_1 = 40 is not below min l_1 = 38.82" in cause
     assert "alpha_1 <= 29.2 (any value below 38.82 meets the condition)" in fix
     assert "beta_1 >= 57.73 (any value above 48.11 meets the condition)" in fix
+
+
+def test_the_box_holds_the_nominal_plant_and_the_plant_change():
+    from designkit.pipeline import run
+    from designkit.schema.loader import parse_spec
+
+    text = LINK_SPEC.read_text().replace("  perturbation: {value: 1.0, time: 1.0}\n", "  perturbation: {value: 1.0, "
+                                         "time: 1.0}\n  plant_change: {time: 2.0, values: {Km: 3.0}}\n")
+    result = run(parse_spec(text))
+    assert {k: list(v) for k, v in result.design.extra["vsc"]["box"].items()} == {"Km": [1.4, 3.0], "tau": [0.35, 0.65]}
+    lo, hi = result.design.extra["vsc"]["bounds"]["l_2"]["lower"], result.design.extra["vsc"]["bounds"]["l_2"]["upper"]
+    # l_2 = (1 - c1 tau)/Km with c1 = 5: negative on the box, so smallest at Km = 1.4, tau = 0.65, largest at
+    # Km = 3.0, tau = 0.35
+    assert lo == pytest.approx((1 - 5 * 0.65) / 1.4) and hi == pytest.approx((1 - 5 * 0.35) / 3.0)
+    assert result.verified

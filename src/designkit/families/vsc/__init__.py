@@ -81,15 +81,19 @@ COUPLING = ("KR", "J2", "R2")
 
 
 def design_box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
-    """``plant.uncertainty`` widened to hold the nominal plant; ``{"Km": (nominal, nominal)}`` without one."""
+    """``plant.uncertainty`` widened to hold the nominal plant and ``simulation.plant_change``'s values (so that
+    the certificate covers every plant the run meets); ``{"Km": (nominal, nominal)}`` without either."""
     unc = spec.plant.uncertainty
     intervals = dict(unc.intervals) if unc is not None else {}
+    change = spec.simulation.plant_change
+    changed = {k: float(v) for k, v in (change.values.items() if change is not None else ())}
     box = {}
     for name in model.names:
-        if name in intervals:
-            nominal = float(model.nominal[model.names.index(name)])
-            lo, hi = intervals[name]
-            box[name] = (min(lo, nominal), max(hi, nominal))
+        nominal = float(model.nominal[model.names.index(name)])
+        if name in intervals or name in changed:
+            lo, hi = intervals.get(name, (nominal, nominal))
+            values = [lo, hi, nominal] + ([changed[name]] if name in changed else [])
+            box[name] = (min(values), max(values))
     if not box:
         box["Km"] = (float(model.nominal[model.names.index("Km")]),) * 2
     if box.get("mgl", (0.0, 0.0))[1] > 0:

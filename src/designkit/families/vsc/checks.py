@@ -4,7 +4,7 @@ what the run shows.
 ``vsc_conditions`` (order 55) certifies with the condition-certificate core
 (:func:`designkit.verification.conditions.certify`) the sets of :func:`~designkit.families.vsc.gains.condition_sets`:
 
-* ``vsc_gains``: ``alpha_i < l_i < beta_i`` for every plant of the box (each cleared by its positive monomial;
+* ``vsc_gains``: ``alpha_i < l_i < beta_i`` for every plant of the box (each cleared by its positive monomial ``M_i``;
   a gain whose cleared form is not multi-affine -- an uncertain ``R1`` or ``R2`` -- is judged on the proven
   enclosure of ``l_i`` instead, ``vsc_gains_enclosed``);
 * ``vsc_relay``: ``delta > d_bar sup |cD/cB|`` (``delta > 0`` without a perturbation);
@@ -102,7 +102,8 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
     box = {k: tuple(v) for k, v in info["box"].items()}
     from designkit.families.vsc.gains import Bound
 
-    bounds = {k: Bound(k, v["lower"], v["upper"], v["argmin"], v["argmax"], (), v["method"], v["form"])
+    bounds = {k: Bound(k, v["lower"], v["upper"], v["argmin"], v["argmax"], v["method"], v["form"],
+                   v["min_value"], v["max_value"])
               for k, v in info["bounds"].items()}
     forms = rational_forms(info["plant_kind"], g.c)
     out = []

@@ -21,12 +21,12 @@ give ``sigma sigma' <= -(cB delta - |cD| d_bar)|sigma|`` everywhere: ``sigma`` r
 ``<= |sigma(0)| / min_box(cB delta - |cD| d_bar)`` and stays (theorem 3 with ``delta > 0``).
 
 **Form over the box.**  ``l_i`` is a ratio (``1/Km``, ``1/J1``, ``1/J2``, ``1/tau2`` on the elastic joint), not
-multi-affine.  Each condition is multiplied by a positive monomial ``m_i(p)`` (a product of box parameters,
-found coordinate by coordinate: a parameter ``q`` enters it when ``d^2(l m)/dq^2 != 0`` but
-``d^2(l m q)/dq^2 = 0``), e.g. ``Km (l_2 - alpha_2) = 1 - c_1 tau1 - alpha_2 Km`` (affine) or
+multi-affine.  :func:`rational_forms` writes each as ``N_i(p)/M_i(p)`` with ``M_i`` a positive monomial (derived by
+hand per plant kind, checked against the plant's own linearisation in the tests), and each condition is certified
+multiplied by ``M_i``, e.g. ``Km (l_2 - alpha_2) = 1 - c_1 tau1 - alpha_2 Km`` (affine) or
 ``Km J1 J2 (l_1 - alpha_1) = tau1 KR (R1^2 J2 - c4 R2^2 J1) - alpha_1 Km J1 J2`` (multi-affine while
 ``R1, R2`` are fixed).  When the cleared form is multi-affine in the box's parameters, ``min_box l_i`` and
-``max_box l_i`` are attained at vertices (``(l_i - a) m_i`` is multi-affine for every number ``a``; its minimum is
+``max_box l_i`` are attained at vertices (``N_i - a M_i`` is multi-affine for every number ``a``; its minimum is
 at a vertex, so ``a = min_vertices l_i`` keeps it ``>= 0`` on the box) and the condition-certificate core certifies
 them exactly.  Otherwise (``R1`` or ``R2`` uncertain: ``R1^2``) the range is the proven enclosure of
 :func:`designkit.bounds.enclose`, and the certificate is that enclosure.
@@ -81,8 +81,6 @@ class Bound:
         Its range: exact (at vertices) for ``method == "vertices"``, proven bounds for ``"enclosure"``.
     argmin, argmax : dict
         Where the ends are attained (a vertex or the enclosure's witness).
-    monomial : tuple of str
-        The parameters the conditions on it are multiplied by.
     method : str
         ``"vertices"`` (the cleared form is affine or multi-affine) or ``"enclosure"``.
     form : str
@@ -97,7 +95,6 @@ class Bound:
     upper: float
     argmin: dict[str, float]
     argmax: dict[str, float]
-    monomial: tuple[str, ...]
     method: str
     form: str
     min_value: float | None = None
@@ -168,14 +165,14 @@ def bound_ranges(forms: Mapping[str, tuple[Any, Any]], model: Any, box: Box) -> 
             verts = _vertices(names, box)
             vals = [float(f(list(v.values()))) for v in verts]
             i, j = int(np.argmin(vals)), int(np.argmax(vals))
-            out[label] = Bound(label, vals[i], vals[j], verts[i], verts[j], (), "vertices", form, vals[i], vals[j])
+            out[label] = Bound(label, vals[i], vals[j], verts[i], verts[j], "vertices", form, vals[i], vals[j])
         else:
             lo = np.array([box[n][0] for n in names], float)
             hi = np.array([box[n][1] for n in names], float)
             enc = enclose(f, {"p": (lo, hi)}, rel_tol=ENCLOSE_TOL)
             amin = dict(zip(names, np.asarray(enc.argmin["p"]).ravel().tolist(), strict=True))
             amax = dict(zip(names, np.asarray(enc.argmax["p"]).ravel().tolist(), strict=True))
-            out[label] = Bound(label, float(enc.lower), float(enc.upper), amin, amax, (), "enclosure", form,
+            out[label] = Bound(label, float(enc.lower), float(enc.upper), amin, amax, "enclosure", form,
                                float(enc.min_value), float(enc.max_value))
     return out
 
