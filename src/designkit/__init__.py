@@ -37,6 +37,8 @@ _EXPORTS: dict[str, str] = {
     "LinearSystem": "designkit.models.linear_system",
     "run": "designkit.pipeline",
     "PipelineResult": "designkit.pipeline",
+    "ComparisonResult": "designkit.pipeline",
+    "ComparisonSpec": "designkit.schema.comparison",
     "Check": "designkit.verification.check",
     "simulate": "designkit.simulation.run",
     "build": "designkit.simulation.run",

@@ -365,6 +365,13 @@ def _header_comment(code: LawCode, design: Design, law: Law, law_lines: tuple[st
         lines += ["", "Settings:"]
         for k, v in settings.items():
             lines += _wrapped(f"  {k}: ", json.dumps(v), 6)
+    period = getattr(law, "sampling_period", None)
+    if getattr(law, "command_after_update", False):
+        lines += ["", "Order at each controller sample" + (f" (every {period:g} s)" if period else "") + ": measure y, "
+                  "then m = update(y, xc, m, r), then u = command(y, xc, m, r) with the updated memory."]
+    elif law.memory_names:
+        lines += ["", "Order at each controller sample: u = command(y, xc, m, r) with the memory of the previous "
+                  "sample, then m = update(y, xc, m, r)."]
     lines += ["", "Functions: int NAME(const casadi_real** arg, casadi_real** res, casadi_int* iw, "
                   "casadi_real* w, int mem);", "  arrays of doubles, matrices column-major; "
                   "work sizes from NAME_work() or the NAME_SZ_* macros."]

@@ -128,7 +128,9 @@ def test_without_the_focus_a_trajectory_reaches_the_origin_inside_e_s_positive()
     assert k < alpha < av**2 / (4 * bv)
     mu = max(np.roots([1, av, bv * alpha]).real)
     assert mu > -CV  # the eigenvector line is inside e s > 0: s = (mu + c) e has the sign of e
-    stay = _alpha_structure(av, bv, alpha, [-1.0, -mu], 40.0 / abs(mu))
+    # 18 time constants of the slow mode (to 1.5e-8): far enough to be at the origin, not so far that the integrator
+    # meets s = 0 in the rounding of a 1e-13 state
+    stay = _alpha_structure(av, bv, alpha, [-1.0, -mu], 18.0 / abs(mu))
     assert stay.t_events[0].size == 0 and abs(stay.y[0, -1]) < 1e-6  # to the origin, never sliding
     focus = _alpha_structure(av, bv, 1.2 * av**2 / (4 * bv), [-1.0, -mu], 40.0 / abs(mu))
     assert focus.t_events[0].size == 1

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from designkit.verification.suite import CheckRule, Context
 
 
@@ -45,11 +47,14 @@ def _run(design: Any, ctx: Context) -> tuple:
                             f"{100 * m.jump_share:.0f} % of its total variation ({m.variation:.3g}); source: {why}.")
             rows.append(m)
         certificate.append(row)
-    cert = {"inputs": certificate, "criterion": "at least 10 step-to-step jumps above 10 % of the command's range that "
+    from designkit.verification.certificate import to_json
+
+    cert = {"inputs": to_json(certificate), "criterion": "at least 10 step-to-step jumps above 10 % of the command's range that "
             "no jump of the reference explains, at least 80 % of consecutive ones reversing direction"}
     if rows:
         worst = max(rows, key=lambda m: m.rate)
-        return (Check("command_chatter", False, "no commanded input chatters", worst.rate, None, "jumps per second",
+        rate = worst.rate if np.isfinite(worst.rate) else None
+        return (Check("command_chatter", False, "no commanded input chatters", rate, None, "jumps per second",
                       " ".join(warnings), cert, required=False, warnings=tuple(warnings)),)
     return (Check("command_chatter", True, "no commanded input chatters", 0.0, None, "jumps per second",
                   f"none of the {len(sim.input_names)} commanded inputs chatters", cert, required=False),)
