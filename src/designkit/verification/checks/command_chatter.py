@@ -49,8 +49,9 @@ def _run(design: Any, ctx: Context) -> tuple:
         certificate.append(row)
     from designkit.verification.certificate import to_json
 
-    cert = {"inputs": to_json(certificate), "criterion": "at least 10 step-to-step jumps above 10 % of the command's range that "
-            "no jump of the reference explains, at least 80 % of consecutive ones reversing direction"}
+    cert = {"inputs": to_json(certificate),
+            "criterion": "at least 10 step-to-step jumps above 10 % of the command's range that no jump of the "
+                         "reference explains, at least 80 % of consecutive ones reversing direction"}
     if rows:
         worst = max(rows, key=lambda m: m.rate)
         rate = worst.rate if np.isfinite(worst.rate) else None
