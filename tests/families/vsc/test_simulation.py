@@ -138,3 +138,20 @@ def test_narrow_gains_run_slides_at_nominal_but_the_certificate_fails(narrow_res
     assert "alpha_1 = 40 is not below min l_1 = 38.82 (at Km = 2.2, J2 = 0.55) by 1.18" in g.detail
     assert check(narrow_result, "vsc_band").passed is True
     assert not narrow_result.verified
+
+
+def test_at_an_interior_plant_the_run_slides_with_that_plants_reduced_poles(elastic_simulator, elastic_result):
+    """c is fixed at the nominal plant, so at another J2 the motion on sigma = 0 has other poles: the fit finds the
+    poles of that plant's reduced system (numpy, from the model module's state space), not the requested ones."""
+    import dataclasses
+
+    from designkit.families.vsc.surface import reduced_poles
+
+    p = {"J2": 0.54, "Km": 1.85}
+    sim = elastic_simulator.run(parameters=p)
+    assert sim.settings["plant"]["J2"] == 0.54
+    run = measure(elastic_result.design, sim)
+    A, B = elastic_state_space(dataclasses.replace(DEFAULTS, **p))
+    want = np.sort(reduced_poles(A, B, np.asarray(elastic_result.design.extra["vsc"]["c"])).real)
+    assert np.max(np.abs(want - np.array([-12.0, -10.0, -8.0]))) > 0.05  # not the requested ones
+    assert np.sort([z.real for z in run.poles]) == pytest.approx(want, rel=1e-3)

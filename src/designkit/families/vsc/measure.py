@@ -18,7 +18,8 @@ state (``x*`` the rest state at the reference):
   steps (trapezoid rule; samples across a jump of ``d`` left out); ``eig F`` against the requested poles (the
   reduced system's poles at the nominal plant).
 * **chattering**: sign changes of ``sigma`` per second after reaching, total variation of ``u``.
-* **equivalent control**: ``u_eq = -(cB)^-1 (c A x~ + c D d)`` with the run's plant and perturbation, and the
+* **equivalent control**: ``u_eq = -(cB)^-1 (c A x~ + c D d)`` with the run's plant (``settings["plant"]``, then
+  the changed one after a ``plant_change``) and perturbation, and the
   fraction of the sliding samples where it lies in ``[min(u+, u-), max(u+, u-)]`` (theorem 1), ``u+`` and
   ``u-`` the law's two controls at ``sigma = 0+`` and ``0-``.
 * **matching** (theorem 4): ``rank [B D] == rank B``; the offset of the sliding motion under a constant ``d``,
@@ -28,6 +29,7 @@ state (``x*`` the rest state at the reference):
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -64,6 +66,7 @@ class VscRun:
     final_offset: float
     offset_tolerance: float = 0.0
     sigma_gain: float = 0.0
+    expected_poles: tuple[complex, ...] = ()
     data: dict[str, Any] = field(default_factory=dict, repr=False)
 
 
@@ -84,6 +87,26 @@ def static_offset(A: np.ndarray, B: np.ndarray, D: np.ndarray, c: np.ndarray, d:
     M = np.vstack([proj @ A, c])
     rhs = np.concatenate([-(proj @ D.reshape(n, -1)[:, :1]).ravel() * d, [sigma]])
     return np.linalg.lstsq(M, rhs, rcond=None)[0]
+
+
+@functools.lru_cache(maxsize=8)
+def _model(plant: Any) -> Any:
+    from designkit.families.vsc.surface import linear_model
+
+    return linear_model(plant)
+
+
+def run_models(design: Any, sim: Any) -> list[tuple[float, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """``[(t_start, (A, B, D))]``: the linear model of the plant the run simulates (``settings["plant"]``), and
+    after ``simulation.plant_change`` the changed one."""
+    model = _model(design.plant)
+    st = sim.settings
+    values = dict(st.get("plant") or {})
+    out = [(float(sim.time[0]), model.at(values))]
+    change = st.get("plant_change")
+    if change:
+        out.append((float(change.get("time_applied", change["time"])), model.at({**values, **change["values"]})))
+    return out
 
 
 def _sign_changes(s: np.ndarray) -> int:
@@ -116,10 +139,14 @@ def measure(design: Any, sim: Any) -> VscRun:
     inside = np.abs(sigma) <= band * (1 + 1e-9)
     idx = np.flatnonzero(inside)
     reach = int(idx[0]) if idx.size else None
-    A, B, D = (np.asarray(m, float) for m in info["run_model"])
+    pieces = run_models(design, sim)
+    A, B, D = pieces[-1][1]  # the plant the run ends with
     d = np.asarray(sim.perturbation, float).reshape(len(t), -1)[:, 0]
-    cB, cD = float(c @ B.ravel()), float(c @ D[:, 0]) if D.size else 0.0
-    u_eq = -((xt @ A.T) @ c + cD * d) / cB
+    u_eq = np.empty(len(t))
+    for (t0, (Ak, Bk, Dk)), nxt in zip(pieces, [*pieces[1:], (np.inf, None)], strict=True):
+        sel = (t >= t0) & (t < nxt[0])
+        cDk = float(c @ Dk[:, 0]) if Dk.size else 0.0
+        u_eq[sel] = -((xt[sel] @ Ak.T) @ c + cDk * d[sel]) / float(c @ Bk.ravel())
     ueq_model = np.asarray(sim.signals["u_eq"], float)
     out: dict[str, Any] = {"time": t, "xt": xt, "sigma": sigma, "band": band, "u": u, "u_eq": u_eq,
                            "u_eq_law": ueq_model, "S": S}
@@ -165,6 +192,7 @@ def measure(design: Any, sim: Any) -> VscRun:
     norm = np.linalg.norm(z[keep] / np.where(scale > 0, scale, 1.0), axis=1)
     keep = keep[norm >= 1e-3 * (norm.max() if norm.size else 0.0)]
     keep = keep[(d[keep + 1] == d[keep]) & (d[keep - 1] == d[keep])]  # not across a jump of the disturbance
+    keep = keep[t[keep - 1] >= pieces[-1][0]]  # on the plant the run ends with (after a plant change)
     poles: tuple[complex, ...] | None = None
     if keep.size >= MIN_FIT_SAMPLES:
         # integral form over [t_k-1, t_k+1] (trapezoid): sigma chatters from sample to sample, its integral does not
@@ -176,6 +204,9 @@ def measure(design: Any, sim: Any) -> VscRun:
         F = np.linalg.lstsq(reg, dz, rcond=None)[0].T[:, :len(keep_cols)]
         eig = np.linalg.eigvals(F)
         poles = tuple(complex(v) for v in eig[np.lexsort((eig.imag, eig.real))])
+    from designkit.families.vsc.surface import reduced_poles
+
+    expected = tuple(complex(v) for v in reduced_poles(A, B, c))
     nominal_ueq = -(xt @ np.asarray(info["cA_nominal"])) / info["cB_nominal"]
     return VscRun(
         hold=hold, reach=reach, reaching_time=float(t[reach] - t[0]), worst_ratio=float(after[j]),
@@ -185,5 +216,5 @@ def measure(design: Any, sim: Any) -> VscRun:
         ueq_fraction=float(np.mean(ok)) if ok.size else None,
         ueq_model_error=float(np.max(np.abs(ueq_model[sl] - nominal_ueq[sl]))) if ok.size else None,
         matched=matched, predicted_offset=pred, final_offset=final, offset_tolerance=offset_tol,
-        sigma_gain=g_sigma, data={**out, "k1": k1, "dt": dt},
+        sigma_gain=g_sigma, expected_poles=expected, data={**out, "k1": k1, "dt": dt},
     )
