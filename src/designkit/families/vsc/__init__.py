@@ -57,6 +57,7 @@ from designkit.families.vsc.surface import (
     controllability_ratio,
     drive_index,
     linear_model,
+    reduced_poles,
     sliding_surface,
 )
 from designkit.synthesis.closed_loop import with_law
@@ -177,6 +178,14 @@ def synthesize(spec: Any, plant: Any) -> Design:
               for i in range(n)]
     gains.append(Gain("delta", delta, u_unit, "relay amplitude"))
     position = int(plant.positions[0])
+    import itertools
+
+    names = list(box)
+    vertex_poles = []
+    for v in itertools.product(*[sorted(set(box[nm])) for nm in names]):
+        Av, Bv, _ = model.at(dict(zip(names, v, strict=True)))
+        vertex_poles.append({"at": dict(zip(names, v, strict=True)),
+                             "poles": [[z.real, z.imag] for z in reduced_poles(Av, Bv, c)]})
     extra = {KIND: {
         "c": c.tolist(), "alpha": list(al), "beta": list(be), "delta": delta, "margin": m, "S": list(S),
         "box": {kk: list(v) for kk, v in box.items()}, "d_bar": d_bar, "bounds": {
@@ -187,7 +196,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "sigma0": sigma0, "S0": float(S0), "boundary_layer": eps, "plant_kind": plant.kind,
         "nominal_model": [A.tolist(), B.tolist(), D.tolist()], "run_model": [A.tolist(), B.tolist(), D.tolist()],
         "sliding_poles": [[complex(p).real, complex(p).imag] for p in ctl.sliding_poles],
-        "drive_index": k,
+        "drive_index": k, "vertex_poles": vertex_poles,
     }}
     formulas = (
         "σ = c x̃ with c from the sliding poles (Ackermann: c = e P(A), e = last row of [B AB … A^(n−1)B]^−1), "

@@ -30,6 +30,7 @@ def json_summary(result: Any) -> dict[str, Any]:
         "cD_over_cB": [info["bounds"]["cD/cB"]["lower"], info["bounds"]["cD/cB"]["upper"]],
         "perturbation_bound": info["d_bar"], "band": info["band"], "max_step": info["max_step"],
         "boundary_layer": info["boundary_layer"],
+        "sliding_poles_at_box_vertices": info["vertex_poles"],
     }
     sim = result.simulation
     if sim is not None:
@@ -69,6 +70,18 @@ def section(result: Any) -> ReportSection | None:
         f"The equivalent-control gains l_i = −(cA)_i/(cB) were computed over the box of {len(info['box'])} "
         f"uncertain parameters; the gains clear them by {fmt_number(100 * info['margin'], 3)} % of each gain's "
         f"size, and the relay amplitude is δ = {_num(info['delta'])}.",), (table,))
+    re_ = [p[0] for v in info["vertex_poles"] for p in v["poles"]]
+    im_ = [abs(p[1]) for v in info["vertex_poles"] for p in v["poles"]]
+    moved = max(abs(a - b) for v in info["vertex_poles"] for a, b in zip(
+        sorted(p[0] for p in v["poles"]), sorted(p[0] for p in info["sliding_poles"]), strict=True))
+    q3 = Question(q3.question, (*q3.sentences, (
+        "c is placed at the nominal plant. The motion on σ = 0 does not depend on the parameters that enter only "
+        "the driven state's equation, but it does on the others: at the box's corners its poles have real parts from "
+        f"{_num(min(re_))} to {_num(max(re_))} 1/s" + (f" and imaginary parts up to {_num(max(im_))} 1/s" if
+                                                       max(im_) > 0 else "") +
+        (", the requested ones at every corner." if moved <= 1e-9 * max(1.0, max(abs(x) for x in re_)) else
+         ", not only the requested ones: the sliding motion is invariant to matched uncertainty only.")),),
+        q3.tables)
     questions = [q3]
     sim = result.simulation
     if sim is not None:
