@@ -102,8 +102,8 @@ def test_table_of_contents_links_every_section(servo_model, servo_html):
 
 @pytest.mark.parametrize(("fixture", "kind", "verdict"), [
     ("servo_result", "verified", "VERIFIED"),
-    ("failed_result", "failed", "FAILED: overshoot"),
-    ("undecided_result", "undecided", "UNDECIDED: overshoot"),
+    ("failed_result", "failed", "FAILED: Overshoot"),
+    ("undecided_result", "undecided", "UNDECIDED: Overshoot"),
 ])
 def test_verdict_banner_matches_result(request, fixture, kind, verdict):
     result = request.getfixturevalue(fixture)

@@ -27,20 +27,28 @@ def test_failed_verdict_names_the_failed_checks(failed_result):
     model = build_report_model(failed_result)
     assert not failed_result.verified
     assert model.verified is False
-    assert model.verdict == "FAILED: overshoot"
+    assert model.verdict == "FAILED: Overshoot"
     assert model.verdict_kind == "failed"
 
 
 def test_undecided_verdict_is_not_a_pass(undecided_result):
     model = build_report_model(undecided_result)
     assert not undecided_result.verified
-    assert model.verdict == "UNDECIDED: overshoot"
+    assert model.verdict == "UNDECIDED: Overshoot"
     assert model.verdict_kind == "undecided"
 
 
 def test_failed_and_undecided_together():
     checks = (Check("a", True), Check("b", None), Check("c", False), Check("d", False))
-    assert verdict_of(checks) == ("FAILED: c, d; UNDECIDED: b", "failed")
+    assert verdict_of(checks) == ("FAILED: C, D; UNDECIDED: B", "failed")
+
+
+def test_the_verdict_names_checks_in_words_per_joint_ones_grouped():
+    checks = (Check("pole_placement[joint1]", False, label="Pole placement (joint1)"),
+              Check("pole_placement[joint2]", False, label="Pole placement (joint2)"),
+              Check("settling_time", False, label="Settling time (2 % band)"), Check("max_control", None))
+    assert verdict_of(checks) == ("FAILED: Pole placement (joint1, joint2), Settling time (2 % band); UNDECIDED: "
+                                  "Max control", "failed")
 
 
 def test_no_checks_is_vacuously_verified_and_says_so():

@@ -28,7 +28,7 @@ def test_report_files_layout(written):
 def test_rewriting_replaces_both_files(written, failed_result):
     files = write_report(failed_result, written.html.parent.parent)
     assert files == written
-    assert "FAILED: overshoot" in files.html.read_text(encoding="utf-8")
+    assert "FAILED: Overshoot" in files.html.read_text(encoding="utf-8")
     assert sorted(p.name for p in files.html.parent.iterdir()) == ["report.html", "report.pdf"]
 
 

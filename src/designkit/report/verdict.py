@@ -8,17 +8,40 @@ from typing import Any
 __all__ = ["verdict_of", "verdict_summary"]
 
 
+def _words(check: Any) -> str:
+    label = getattr(check, "label", "") or ""
+    if label:
+        return label
+    base, _, suffix = check.name.partition("[")
+    words = base.replace("_", " ").capitalize()
+    return f"{words} ({suffix.rstrip(']')})" if suffix else words
+
+
+def _listing(checks: Sequence[Any]) -> str:
+    """The checks in words, per-joint checks of one kind grouped: ``Pole placement (joint1, joint2)``."""
+    groups: dict[str, list[str]] = {}
+    for c in checks:
+        words = _words(c)
+        head, sep, tail = words.partition(" (")
+        key = head if sep and tail.endswith(")") and tail.startswith(("joint", "u", "loop")) else words
+        groups.setdefault(key, [])
+        if key != words:
+            groups[key].append(tail[:-1])
+    return ", ".join(f"{k} ({', '.join(v)})" if v else k for k, v in groups.items())
+
+
 def verdict_of(checks: Sequence[Any]) -> tuple[str, str]:
-    """``(verdict, kind)`` of a list of checks; see :class:`~designkit.report.model.ReportModel`."""
-    failed = [c.name for c in checks if c.passed is False and getattr(c, "required", True)]
-    undecided = [c.name for c in checks if c.passed is None and getattr(c, "required", True)]
+    """``(verdict, kind)`` of a list of checks (the checks named in words); see
+    :class:`~designkit.report.model.ReportModel`."""
+    failed = [c for c in checks if c.passed is False and getattr(c, "required", True)]
+    undecided = [c for c in checks if c.passed is None and getattr(c, "required", True)]
     if failed:
-        text = "FAILED: " + ", ".join(failed)
+        text = "FAILED: " + _listing(failed)
         if undecided:
-            text += "; UNDECIDED: " + ", ".join(undecided)
+            text += "; UNDECIDED: " + _listing(undecided)
         return text, "failed"
     if undecided:
-        return "UNDECIDED: " + ", ".join(undecided), "undecided"
+        return "UNDECIDED: " + _listing(undecided), "undecided"
     return "VERIFIED", "verified"
 
 
