@@ -99,5 +99,5 @@ def _draw(name: str, data: GridData) -> Any:
         fig.colorbar(mesh, ax=ax, label=data.label)
         ax.set_xlabel(_axis_label(data.axes[0]))
         ax.set_ylabel(_axis_label(data.axes[1]))
-    ax.set_title(f"{name}: {data.label}")
+    ax.set_title(data.label[:1].upper() + data.label[1:])  # the quantity in words; the check is the figure's caption
     return fig

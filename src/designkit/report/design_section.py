@@ -103,7 +103,7 @@ def linearization_note(design: Any) -> str:
     if lin.kind == "frozen":
         return (f"The closed loop below is the law {lin.describe()} (its initial values): an adaptive law has no "
                 "equilibrium of its own in the adapted parameters, so the linear checks judge the loop with them "
-                "held; the frozen_final check judges the loop with the values the run ends with.")
+                "held; the check of the loop frozen at the final values judges it with the values the run ends with.")
     return (f"No closed-loop poles: {lin.reason}. No linear check is offered"
             + (f"; the requested pole{'s' if len(design.poles) > 1 else ''} {requested} 1/s "
                f"{'are' if len(design.poles) > 1 else 'is'} measured on the run instead." if design.poles else "."))

@@ -191,9 +191,10 @@ def explain_divergence(result: Any, div: Any, element: dict[str, Any],
         if below.any() and below[-1]:
             k = int(np.flatnonzero(~below)[-1]) + 1 if (~below).any() else 0
             text += (f"; the loop is only conditionally stable (it goes unstable when its gain drops below "
-                     f"{fmt_number(margins.gain_margin, 3)} times the design's) and the saturation's gain "
-                     f"|u_applied/u_command| is below that {fmt_number(100.0 * float(np.mean(below)), 3)} % of the "
-                     f"run, for good from {at_time(float(t[k] - t[0]))}")
+                     f"{fmt_number(margins.gain_margin, 3)} times the design's) and the saturation's gain, the "
+                     f"applied over the commanded control, is below that "
+                     f"{fmt_number(100.0 * float(np.mean(below)), 3)} % of the run, for good from "
+                     f"{at_time(float(t[k] - t[0]))}")
     aw = _anti_windup(sim)
     xc = np.asarray(sim.controller_state, float)
     fix = ""
