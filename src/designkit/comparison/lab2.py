@@ -16,19 +16,21 @@ from typing import Any
 from designkit.comparison.studies import perturbation_run, rise_times, variant
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
+from designkit.families.mrac.laws import KIND as MRAC
+from designkit.families.self_tuning.laws import KIND as SELF_TUNING
 
 __all__ = ["ADAPTATION_SETTINGS", "applies", "section"]
 
 ADAPTATION_SETTINGS: dict[str, tuple[str, str, tuple[Any, ...]]] = {
-    "mrac": ("gamma", "adaptation gain γ", (0.1, 10.0)),  # factors of the spec's value
-    "self_tuning": ("forgetting", "forgetting factor λ", (0.95, 0.999)),  # values
+    MRAC: ("gamma", "adaptation gain γ", (0.1, 10.0)),  # factors of the spec's value
+    SELF_TUNING: ("forgetting", "forgetting factor λ", (0.95, 0.999)),  # values
 }
 """Kind -> (controller field, its name in words, the values tried: factors for ``gamma``, values otherwise)."""
 
 
 def applies(kinds: tuple[str, ...]) -> bool:
     """The comparison includes an MRAC and a self-tuning controller."""
-    return "mrac" in kinds and "self_tuning" in kinds
+    return MRAC in kinds and SELF_TUNING in kinds
 
 
 def _f(x: float | None, unit: str = "", digits: int = 3) -> str:
@@ -69,7 +71,7 @@ def _why(result: Any) -> Question:
         how = (f"{label}: departure from its run on the unchanged link {_f(v.get('rms_deviation'), eu)} RMS "
                f"({_f(v.get('max_deviation'), eu)} at most), back within 1 % of the reference's range "
                f"{_f(v.get('reconvergence'), 's')} after the change.")
-        if run.design.kind == "mrac" and "adaptation" in own:
+        if run.design.kind == MRAC and "adaptation" in own:
             a = own["adaptation"]
             err = a.get("error_rms") or {}
             sentences.append(
@@ -78,8 +80,8 @@ def _why(result: Any) -> Question:
                 f"{_vector(a.get('final'))}, against {_vector(a.get('matching'))} that put the changed link on "
                 f"the model; its output error against the reference model is {_f(err.get('adaptive'), eu)} RMS, "
                 f"against {_f(err.get('fixed'), eu)} with the coefficients frozen at their initial values. " + how)
-        elif run.design.kind == "self_tuning" and "theta_hat" in own:
-            names = ", ".join(own.get("self_tuning", {}).get("parameters", ()))
+        elif run.design.kind == SELF_TUNING and "theta_hat" in own:
+            names = ", ".join(own.get(SELF_TUNING, {}).get("parameters", ()))
             sentences.append(
                 f"{label} adapts because its estimates of the sampled speed equation ({names}) no longer fit the "
                 f"measurements: recursive least squares ends at {_vector(own['theta_hat'])} against the changed "
@@ -94,9 +96,9 @@ def _difference(result: Any) -> Question:
     keys = ("rms_deviation", "max_deviation", "reconvergence", "rms_error_after", "peak_command", "rms_command")
     winners = [w.sentence for w in result.table.winners() if w.metric.key in keys]
     kinds = {r.design.kind: label for label, r, _ in _pairs(result)}
-    ts = next((r.design.extra.get("Ts") for r in result.results if r.design.kind == "self_tuning"), None)
-    words = (f"The difference is one of structure: {kinds['mrac']} is a direct scheme (it adjusts the controller's "
-             f"gains from the output error against a reference model, in continuous time), {kinds['self_tuning']} "
+    ts = next((r.design.extra.get("Ts") for r in result.results if r.design.kind == SELF_TUNING), None)
+    words = (f"The difference is one of structure: {kinds[MRAC]} is a direct scheme (it adjusts the controller's "
+             f"gains from the output error against a reference model, in continuous time), {kinds[SELF_TUNING]} "
              f"an indirect one (it estimates the link's parameters and recomputes the controller from them, "
              f"sampled every {_f(ts, 's')}). On the same run:")
     return Question("What is the comparative difference?", (words, *winners))
@@ -148,13 +150,13 @@ def _strategies(result: Any) -> Question:
         d = run.design
         c = run.loaded.spec.controller
         poles = ", ".join(_f(complex(p).real, digits=3) for p in (getattr(c, "poles", None) or d.poles))
-        if d.kind == "mrac":
+        if d.kind == MRAC:
             law = family(d.kind).display.law
             sentences.append(f"{label}: a PD position servo {law[0].split(',')[0]} whose coefficients α1, α2 follow "
                              f"the gradient rule ({law[-1].split(',')[0]}) with γ = "
                              f"{_f(c.gamma if not isinstance(c.gamma, list) else c.gamma[0])}, in continuous time; the "
                              f"reference model has the poles {poles} 1/s.")
-        elif d.kind == "self_tuning":
+        elif d.kind == SELF_TUNING:
             observer = min(p.real for p in d.poles)
             extra = f" (observer pole {_f(observer, digits=3)} 1/s)" if len(d.poles) > 2 else ""
             sentences.append(f"{label}: recursive least squares with forgetting factor {_f(c.forgetting, digits=4)} "

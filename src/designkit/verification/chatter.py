@@ -118,7 +118,7 @@ def input_chatter(name: str, t: np.ndarray, u: np.ndarray, speed: np.ndarray | N
 
 def source(measured: InputChatter, law: Any, nonlinearity: Any, model_coulomb: float) -> str:
     """Where the chattering of one input comes from, in words (module docstring's order)."""
-    if law is not None and getattr(law, "discontinuous", False):
+    if law is not None and getattr(law, "discontinuous", False):  # the check is not offered for one; the API may ask
         return "the control law switches by design (the sign of its sliding function)"
     kind = getattr(nonlinearity, "kind", None)
     if kind in ("relay", "quantizer"):

@@ -2,8 +2,8 @@
 
 See :mod:`designkit.verification.chatter` for the criterion and the attribution.  PASS: no input
 chatters.  FAIL (informational): an input chatters; the detail and ``warnings`` say which, how fast and
-how much, and from what.  A switching law that chatters by design is reported the same way (its own
-family measures the chattering band against its boundary layer).
+how much, and from what.  It is not offered for a switching law (``Law.discontinuous``), which chatters by
+design: its family measures the chattering band against what it designed.
 """
 
 from __future__ import annotations
@@ -61,8 +61,14 @@ def _run(design: Any, ctx: Context) -> tuple:
                   f"none of the {len(sim.input_names)} commanded inputs chatters", cert, required=False),)
 
 
-RULE = CheckRule(name="command_chatter", order=145, universal=True,
-                 applies=lambda d, c: c.simulation is not None and getattr(c.simulation, "u_command", None) is not None,
+def _applies(design: Any, ctx: Context) -> bool:
+    """A simulated loop whose law is not a switching law (a switching family measures its own chattering band)."""
+    law = ctx.law if ctx.law is not None else design.law
+    return (ctx.simulation is not None and getattr(ctx.simulation, "u_command", None) is not None
+            and not getattr(law, "discontinuous", False))
+
+
+RULE = CheckRule(name="command_chatter", order=145, universal=True, applies=_applies,
                  run=_run, label="Chattering of the commanded inputs",
                  glossary=(("jump", "a step-to-step change of the command above 10 % of its range"),
                            ("total variation", "the sum of the command's step-to-step changes")))
