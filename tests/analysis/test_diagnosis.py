@@ -317,9 +317,13 @@ def test_infeasible_requirements_diverges_with_saturation_and_windup():
 def test_infeasible_anti_windup_advice_is_what_a_rerun_gives():
     """The fix re-simulates with the anti-windup it names; check that against an independent pipeline run."""
     d = _diagnosis("infeasible-requirements")
-    fix = d.findings[0].fix
-    m = re.search(r"steady-state error ([0-9.e+-]+) rad", fix)
-    assert m is not None and "stalls" in fix
+    # the anti-windup stalls short of the command: said as tried and not a fix, never offered as a fix
+    tried = d.findings[0].cause
+    assert "anti-windup" not in d.findings[0].fix and "tried, and not a fix" in tried
+    m = re.search(r"steady-state error ([0-9.e+-]+) rad", tried)
+    assert m is not None and "stalls" in tried
+    # the root cause leads: no controller meets the settling time with this actuator
+    assert d.root_cause.startswith("Root cause:") and "cannot be met with this actuator" in d.root_cause
     text = Path(f"{SPECS}/infeasible-requirements.yaml").read_text().replace(
         "  nonlinearity: {kind: saturation, limit: 5}",
         "  nonlinearity: {kind: saturation, limit: 5}\n  anti_windup: {kind: saturation, value: 5}")

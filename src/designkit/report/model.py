@@ -191,6 +191,16 @@ def _contents(model_parts: Mapping[str, Any]) -> tuple[Section, ...]:
     return tuple(sections)
 
 
+def _divergence(diagnosis: Any) -> str:
+    """The lead of "why it failed": the root cause first, then how the run diverged."""
+    if diagnosis is None or isinstance(diagnosis, Exception):
+        return ""
+    parts = [getattr(diagnosis, "root_cause", "")]
+    if diagnosis.diverged:
+        parts.append(diagnosis.divergence)
+    return unit(" ".join(p for p in parts if p))
+
+
 def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
                        processes: int = 1) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
@@ -268,7 +278,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         why=why,
         why_note=why_note,
         why_fixes=why_fixes,
-        divergence=(unit(diagnosis.divergence) if diagnosis is not None and diagnosis.diverged else ""),
+        divergence=_divergence(diagnosis),
         limit_cycle=parts["limit_cycle"],
         linear_vs_nonlinear=parts["linear_vs_nonlinear"],
         compliance=tuple(r for r in rows if r.required),

@@ -64,8 +64,10 @@ def why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, t
         parts.append(_fix_parts(found) if found is not None else ())
         if found is not None:
             cause = unit(found.cause)
-            if diagnosis.diverged and diagnosis.divergence and cause.strip() == diagnosis.divergence.strip():
-                cause = "The nonlinear loop diverges (see above)."
+            lead = unit(diagnosis.divergence).strip().rstrip(".") if diagnosis.diverged and diagnosis.divergence else ""
+            if lead and cause.strip().startswith(lead):
+                rest = cause.strip()[len(lead):].lstrip(".;, ")
+                cause = "The nonlinear loop diverges (see above)." + (" " + rest[0].upper() + rest[1:] if rest else "")
             row = dataclasses.replace(
                 row, cause=cause, fix=unit(found.fix),
                 # the check's own numbers first (same format as the compliance table); the diagnosis' when it has none

@@ -95,6 +95,9 @@ class Diagnosis:
     linear_vs_nonlinear : tuple of MetricPair
         Overshoot, settling time, rise time, steady-state error, peak |u| (step runs); max tracking error,
         settling time, final error, peak |u| (trajectory runs).
+    root_cause : str
+        A cause no controller could remove, stated before everything it explains (``""`` when there is none):
+        requirements the actuator cannot meet (the time-optimal settling bound).
     """
 
     findings: tuple[Finding, ...]
@@ -102,6 +105,7 @@ class Diagnosis:
     divergence: str
     limit_cycle: LimitCycle | None
     linear_vs_nonlinear: tuple[MetricPair, ...]
+    root_cause: str = ""
 
 
 def shortfall(target: str, margin: float | None, unit: str) -> tuple[str, str]:

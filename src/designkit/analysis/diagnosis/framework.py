@@ -187,7 +187,9 @@ def _finding(check: Any, ctx: _Context, demand: dict[str, Any], specific: tuple[
     if check.name in _TIME_DOMAIN:
         if ctx.divergence is not None and ctx.divergence.diverged:
             causes.append(ctx.divergence_text.rstrip("."))
-            if ctx.divergence_fix:
+            if ctx.divergence_fix and _not_a_fix(ctx.divergence_fix):
+                causes.append("tried, and not a fix: " + ctx.divergence_fix)
+            elif ctx.divergence_fix:
                 fixes.append(ctx.divergence_fix)
         elif ctx.limit_cycle is not None:
             causes.append(ctx.limit_cycle.sentence.rstrip("."))
@@ -218,6 +220,20 @@ def _finding(check: Any, ctx: _Context, demand: dict[str, Any], specific: tuple[
     parts = tuple(dict.fromkeys(_sentence(f) for f in fixes if f.strip()))
     return Finding(check=check.name, status=check.status, requirement=requirement, achieved=achieved,
                    shortfall=absolute, shortfall_percent=relative, cause=cause, fix=fix, fixes=parts)
+
+
+def _not_a_fix(text: str) -> bool:
+    """A remedy its own re-simulation shows does not meet the requirements (it is said, never numbered as a fix)."""
+    return "does not help" in text or "stalls short of the command" in text or "could not be tried" in text
+
+
+def _root_cause(ctx: _Context) -> str:
+    """The actuator-limited settling bound, when it says the settling requirement cannot be met by any controller."""
+    text = ctx.settling_fix or ""
+    if "cannot be met" not in text:
+        return ""
+    return ("Root cause: " + text[0].lower() + text[1:].rstrip(".") + ". Everything below follows from asking more "
+            "than the actuator can give.")
 
 
 def _demand(result: Any, peak: float | None) -> dict[str, Any]:
@@ -264,4 +280,5 @@ def diagnose(result: Any) -> Diagnosis:
     findings = tuple(_finding(c, ctx, demand, _specific(result, c)) for c in failing)
     div = ctx.divergence
     return Diagnosis(findings=findings, diverged=bool(div is not None and div.diverged),
-                     divergence=ctx.divergence_text, limit_cycle=ctx.limit_cycle, linear_vs_nonlinear=pairs)
+                     divergence=ctx.divergence_text, limit_cycle=ctx.limit_cycle, linear_vs_nonlinear=pairs,
+                     root_cause=_root_cause(ctx))

@@ -219,7 +219,7 @@ def _anti_windup_trial(result: Any, limit: float, measure: Callable[[Any], Any])
     from designkit.verification.time_domain import response_metrics
 
     spec = result.loaded.spec
-    setting = f"{{kind: saturation, value: {fmt_number(limit)}}}"
+    setting = f"the saturation anti-windup at {quantity(limit, 'N*m')}"
     try:
         sim_spec = spec.simulation.model_copy(update={"anti_windup": AntiWindup(kind="saturation", value=limit)})
         trial_spec = spec.model_copy(update={"simulation": sim_spec})
@@ -229,7 +229,7 @@ def _anti_windup_trial(result: Any, limit: float, measure: Callable[[Any], Any])
         return f"an anti-windup could not be tried ({type(exc).__name__})"
     div = measure(trial)
     if div.diverged:
-        return (f"an anti-windup alone does not help: re-simulated with simulation.anti_windup: {setting}, the "
+        return (f"an anti-windup alone does not help: re-simulated with {setting} (simulation.anti_windup), the "
                 "loop still diverges")
     req = spec.requirements
     band = req.settling_band if req is not None else 0.02
@@ -245,7 +245,7 @@ def _anti_windup_trial(result: Any, limit: float, measure: Callable[[Any], Any])
     verdict = "stops the divergence" + (
         "" if m.steady_state_error is None or div.scale <= 0 or m.steady_state_error <= 0.05 * div.scale else
         ", but the loop then stalls short of the command")
-    text = (f"an anti-windup (simulation.anti_windup: {setting}, the integral torque clamped at the actuator "
+    text = (f"an anti-windup ({setting}, simulation.anti_windup: the integral torque clamped at the actuator "
             f"limit) {verdict}: re-simulated with it, " + ", ".join(parts))
     law_gains = dict(dict(trial.settings).get("controller", {}) or {}).get("gains", {})
     if "K3" in law_gains and "K4" in law_gains and verdict.endswith("command"):
