@@ -119,7 +119,7 @@ def _switching(design: Any, ctx: Context) -> tuple[Check, ...]:
     ok = bool(x["c"] > ea and x["d"] > eb)
     e0 = (abs(a[0] - x["initial"][0]), abs(b[0] - x["initial"][1]))
     covered = bool(e0[0] <= x["error_bounds"][0] and e0[1] <= x["error_bounds"][1])
-    margin = min(x["c"] - ea, x["d"] - eb)
+    ratio = min(x["c"] / ea if ea > 0 else math.inf, x["d"] / eb if eb > 0 else math.inf)
     detail = (f"largest estimation errors along the run |a − â| = {_f(ea)} 1/s (c = {_f(x['c'])} 1/s) and "
               f"|b − b̂| = {_f(eb)} rad/(s²·N·m) (d = {_f(x['d'])} rad/(s²·N·m)); the condition "
               f"{'holds' if ok else 'is violated'}; the least gains the stated error bounds require are "
@@ -129,8 +129,12 @@ def _switching(design: Any, ctx: Context) -> tuple[Check, ...]:
                    f"({_f(x['error_bounds'][0])}, {_f(x['error_bounds'][1])})")
     cert = {"max_error": [ea, eb], "gains": [x["c"], x["d"]], "required": list(x["required"]),
             "initial_error": list(e0), "bounds_cover_initial": covered}
-    return (Check("switching_condition", ok, "c > max|â − a| and d > max|b̂ − b|", margin, margin, "(mixed)", detail,
-                  cert),)
+    return (Check("switching_condition", ok, "min(c / max|â − a|, d / max|b̂ − b|) > 1", _json(ratio),
+                  _json(ratio - 1.0), "1 (ratio)", detail, cert),)
+
+
+def _json(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
 
 
 def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
@@ -205,10 +209,11 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
                 f"Use c > {need:.4g} 1/s and d > {needd:.4g} rad/(s²·N·m) (leave them out to get "
                 "1.5 times the least the error bounds require), or state error bounds that cover the initial errors.")
     if check.name == "determinant_condition":
-        return ("The two time points see proportional speed and command, so the determinant that tells a from b "
-                "is zero: " + check.detail + ".",
-                "Drive the link with a square wave or PRBS reference that changes within the window D, or choose "
-                "D near a quarter of the reference's period.")
+        return ("Most of the time the speed and the command at the two time points are zero or proportional, so "
+                "the determinant that tells a from b vanishes and the update cannot separate them: " + check.detail
+                + ".",
+                "Drive the link with a reference that keeps changing through the whole run: a square wave whose "
+                "period is a few times D (2 s with D = 0.25 s identifies this link to 1e-6), or a PRBS.")
     if check.name == "identification_convergence":
         return ("The estimates did not reach the true values although the excitation justifies it: " + check.detail
                 + ".", "Raise the adaptation gains or run longer; check the switching condition.")
