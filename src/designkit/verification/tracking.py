@@ -224,7 +224,8 @@ def tracking_bounds_check(spec: Any, design: Any, plant: Any, law: Any = None) -
             zip(box.names, map(float, thetas[worst_run]), strict=True)),
     }
     data = {"time": np.asarray(runs[worst_run].time), "errors": np.asarray(runs[worst_run].tracking_errors),
-            "envelope": np.max(np.abs(np.array([r.tracking_errors for r in runs])), axis=0)}
+            "envelope": np.max(np.abs(np.array([r.tracking_errors for r in runs])), axis=0),
+            "peaks": peaks, "parameters": np.asarray(thetas, float), "parameter_names": tuple(box.names)}
     finite = np.isfinite(bound)
     detail = (f"largest |q - qD| over {len(thetas)} runs on the true plant (corners and samples of the box): "
               f"{bound:.4g} rad, joint {joint + 1}, at {where}" if finite else

@@ -13,6 +13,12 @@ def _run(design: Any, ctx: Context) -> tuple:
     return (tracking_bounds_check(ctx.spec, design, ctx.true_plant(design), law=ctx.law),)
 
 
-RULE = CheckRule(name="tracking_bounds", order=100,
+def _figure(result: Any, check: Any) -> Any:
+    from designkit.verification.figures.tracking_bounds import tracking_bounds_figure
+
+    return tracking_bounds_figure(result, check)
+
+
+RULE = CheckRule(name="tracking_bounds", order=100, figures=(_figure,),
                  applies=lambda d, c: c.uncertainty() is not None and d.reference == "trajectory", run=_run,
                  label="Tracking error within bounds")
