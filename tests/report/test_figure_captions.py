@@ -39,6 +39,10 @@ PHRASES = {
         "perturbation": r"perturbation torque",
         "perturbation-onset": r"onset at t =",
         "tracking-error": r"tracking error",
+        "tracking-band": r"tracking-error requirement ±\S+ on the error panel",
+        "error-steady-band": r"steady-state requirement ±\S+ on the error panel",
+        "torque-limits": r"actuator torque limits of the plant",
+        "u-applied": r"as commanded by the controller and as applied",
     },
     "fig-linear-response.svg": {
         "control-limit": r"limit \|u\| ≤ \S+ N·m \(dashed\)",
@@ -91,9 +95,11 @@ def test_every_caption_names_exactly_what_its_svg_draws(figures, name):
 def test_no_requirement_no_envelope_no_limit_no_perturbation(figures):
     fig = figures["posspeed-link"]["fig-simulation.svg"]
     keys = set(svg.svg_keys(fig.svg))
-    assert {"reference", "position", "u-command", "u-applied"} <= keys
+    assert {"reference", "position", "u-command"} <= keys
+    assert "u-applied" not in keys and "commanded and applied alike" in fig.caption  # one line: nothing between
     assert not keys & {"overshoot-limit", "settling-band", "steady-state-band", "rise-time", "control-limit",
-                       "perturbation", "perturbation-onset", "element-levels"}
+                       "perturbation", "perturbation-onset", "element-levels", "tracking-band", "error-steady-band",
+                       "torque-limits"}
     for word in ("limit", "band", "perturbation", "ξ", "xi", "saturation", "delay ", "noise (", "checks are"):
         assert word not in fig.caption.replace("no saturation, delay, sampling, noise or other", ""), word
 

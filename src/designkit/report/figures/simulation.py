@@ -145,10 +145,42 @@ def _onset(t: np.ndarray, pert: np.ndarray) -> float | None:
     return float(t[idx[0]]) if idx.size else None
 
 
-def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, dict[str, Any]]:
+def _error_bands(fig: Any, ax: Any, t: np.ndarray, err: np.ndarray, req: Any, info: dict[str, Any]) -> None:
+    """The error requirements on the error panel, and a zoom that shows them: the ``tracking_error`` band over the
+    run, the ``steady_state_error`` band over the steady-state window; the axis spans the bands and the error over
+    the window they judge (an early transient many times larger is clipped, and the caption says so)."""
+    if req is None:
+        return
+    spans = []
+    if req.tracking_error is not None:
+        e = float(req.tracking_error)
+        tag(fig, "tracking-band", ax.axhline(e, color=RED, **LIMIT_STYLE, label=f"tracking requirement ±{e:g}"),
+            ax.axhline(-e, color=RED, **LIMIT_STYLE))
+        spans.append(max(e, float(np.nanmax(np.abs(err))) if np.isfinite(err).any() else e))
+        info["tracking_band"] = e
+    if req.steady_state_error is not None and t.size > 1:
+        e = float(req.steady_state_error)
+        t0, t1 = steady_state_interval(t)
+        tag(fig, "error-steady-band", ax.fill_between([t0, t1], -e, e, color=ORANGE, alpha=0.25, lw=0,
+                                                      label=f"steady-state requirement ±{e:g}"))
+        window = (t >= t0) & (t <= t1)
+        late = float(np.nanmax(np.abs(err[window]))) if np.isfinite(err[window]).any() else e
+        spans.append(max(e, late))
+        info["steady_band"] = e
+    finite = err[np.isfinite(err)]
+    if spans and finite.size:
+        span = 1.3 * max(spans)
+        if float(np.max(np.abs(finite))) > span:
+            ax.set_ylim(-span, span)
+            info["zoomed"] = span
+
+
+def _draw_simulation(design: Any, sim: Any, req: Any, torque_limits: Sequence[float] | None = None
+                     ) -> tuple[Any, dict[str, Any]]:
     t = np.asarray(sim.time, float)
     n = sim.n_joints
-    rows = 3 if (sim.kind == "trajectory" or n > 1) else 2
+    steady_req = req is not None and req.steady_state_error is not None
+    rows = 3 if (sim.kind == "trajectory" or n > 1 or steady_req) else 2
     fig, axes = new_figure(6.8, 6.2 if rows == 3 else 4.6, rows=rows)
     ax, ax_u = axes[0], axes[-1]
     info: dict[str, Any] = {}
@@ -158,9 +190,12 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, dict[str, An
     n = len(names)
     for j in range(n):
         color = JOINT_COLORS[j % len(JOINT_COLORS)]
-        tag(fig, "reference", *plot_decimated(
-            ax, t, sim.desired[:, j], color=color, **REFERENCE_STYLE,
-            label=f"{names[j]}D (reference)" if task else f"xD{joint_label(design, j)} (reference)"))
+        if n > 2:  # one legend entry for all references: a long legend hides the lines
+            ref_label = "references (dash-dot, each joint's colour)" if j == 0 else None
+        else:
+            ref_label = f"{names[j]}D (reference)" if task else f"xD{joint_label(design, j)} (reference)"
+        tag(fig, "reference", *plot_decimated(ax, t, sim.desired[:, j], color=color, **REFERENCE_STYLE,
+                                              label=ref_label))
         tag(fig, "position", *plot_decimated(ax, t, sim.tracked_positions[:, j], color=color, label=names[j]))
     if req is not None and t.size > 1 and n == 1 and _at_rest(t, sim.desired[:, 0]):
         _draw_envelope(fig, ax, t, sim.tracked_positions[:, 0], float(sim.desired[-1, 0]), req,
@@ -174,8 +209,9 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, dict[str, An
                 ax_e, t, sim.tracking_errors[:, j], color=JOINT_COLORS[j % len(JOINT_COLORS)],
                 label=f"{names[j]} − {names[j]}D" if task else f"{names[j]} − xD{joint_label(design, j)}"))
         ax_e.axhline(0.0, color=GREY, lw=0.8)
+        _error_bands(fig, ax_e, t, np.asarray(sim.tracking_errors, float), req, info)
         ax_e.set_ylabel(f"error ({unit})")
-        ax_e.legend(loc="best", framealpha=0.9)
+        ax_e.legend(loc="best", framealpha=0.9, ncols=2 if n > 2 else 1)
         info["task"] = task
     limit = common_limit(req.max_control) if req is not None else None
     element = sim.settings.get("nonlinearity")
@@ -185,13 +221,27 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, dict[str, An
     _element_levels(fig, ax_u, element, sim.u_command, sim.u_applied)
     if _element_level_values(element):
         info["element"] = str(element["kind"])
+    same = np.array_equal(np.asarray(sim.u_applied), np.asarray(sim.u_command))  # no element between them
     for k in range(sim.u_applied.shape[1]):
         color = JOINT_COLORS[k % len(JOINT_COLORS)]
         name = sim.input_names[k]
+        if same:  # one line per input: the legend stays short enough to read
+            tag(fig, "u-command", *plot_decimated(ax_u, t, sim.u_command[:, k], color=PURPLE if n == 1 else color,
+                                                  lw=1.2, ls="-", label=name))
+            continue
         tag(fig, "u-applied", *plot_decimated(ax_u, t, sim.u_applied[:, k], color=ORANGE if n == 1 else color,
                                               lw=1.3, alpha=0.8, zorder=2.5, label=f"{name} applied"))
         tag(fig, "u-command", *plot_decimated(ax_u, t, sim.u_command[:, k], color=PURPLE if n == 1 else color,
                                               lw=1.2, ls="-", label=f"{name} command"))
+    if torque_limits is not None:
+        for k, lim in enumerate(torque_limits):
+            color = ORANGE if n == 1 else JOINT_COLORS[k % len(JOINT_COLORS)]
+            tag(fig, "torque-limits", ax_u.axhline(lim, color=color, ls=":", lw=1.0,
+                                                   label="actuator torque limits" if k == 0 else None),
+                ax_u.axhline(-lim, color=color, ls=":", lw=1.0))
+        levels_extra = [float(v) for v in torque_limits]
+    else:
+        levels_extra = []
     pert = np.asarray(sim.perturbation, float)
     onset = _onset(t, pert)
     if onset is not None:
@@ -204,7 +254,7 @@ def _draw_simulation(design: Any, sim: Any, req: Any) -> tuple[Any, dict[str, An
             for a in axes:
                 tag(fig, "perturbation-onset", a.axvline(onset, color=RED, **EVENT_STYLE))
             info["onset"] = onset
-    levels = [lv for lv in [limit, *_element_level_values(element)] if lv is not None]
+    levels = [lv for lv in [limit, *_element_level_values(element), *levels_extra] if lv is not None]
     linthresh = control_linthresh(levels, sim.u_command, sim.u_applied)
     if linthresh is not None:
         ax_u.set_yscale("symlog", linthresh=linthresh, linscale=1.0)
@@ -250,6 +300,10 @@ _SIM_PHRASES = {
     "element-levels": "the {element}'s output levels (dashed, orange)",
     "element-levels-offscale": "the {element}'s output levels (off scale, in the legend only)",
     "perturbation": "the perturbation torque (red)",
+    "tracking-band": "the tracking-error requirement ±{tracking_band:g} on the error panel (dashed)",
+    "error-steady-band": "the steady-state requirement ±{steady_band:g} on the error panel over the window it is "
+                         "judged on (orange)",
+    "torque-limits": "the actuator torque limits of the plant (dotted)",
     "perturbation-onset": "its onset at t = {onset:.3g} s (dotted vertical line)",
 }
 """Caption phrase of each optional key a simulation figure may draw (formatted with the drawing's info)."""
@@ -266,8 +320,13 @@ def _simulation_caption(keys: Sequence[str], info: Mapping[str, Any], plant_kind
     if "tracking-error" in keys:
         text += (" Middle: the tracking error, position minus reference, of every "
                  + ("end-effector coordinate." if info.get("task") else "joint."))
-    if "u-command" in keys:
+    if "tracking-error" in keys and "zoomed" in info:
+        text += (f" The error axis is zoomed to ±{info['zoomed']:.3g} so that the requirement is visible; the larger "
+                 "early transient runs off it.")
+    if "u-applied" in keys:
         text += " Bottom: the control as commanded by the controller and as applied to the plant."
+    elif "u-command" in keys:
+        text += " Bottom: the control, commanded and applied alike (no element between them)."
     fmt = {"window": 100 * STEADY_STATE_WINDOW, **info}
     also = [_SIM_PHRASES[k].format(**fmt) for k in keys if k in _SIM_PHRASES]
     if also:
@@ -289,7 +348,13 @@ def simulation_figure(result: Any) -> Figure | None:
     sim = result.simulation
     if sim is None:
         return None
-    svg, keys, info = render_tagged(_draw_simulation, result.design, sim, result.loaded.spec.requirements)
+    plant_spec = result.loaded.spec.plant
+    limits = getattr(getattr(plant_spec, "limits", None), "torque", None)
+    torque = None
+    if limits is not None:
+        width = sim.u_command.shape[1]
+        torque = [float(v) for v in np.broadcast_to(np.atleast_1d(np.asarray(limits, float)), (width,))]
+    svg, keys, info = render_tagged(_draw_simulation, result.design, sim, result.loaded.spec.requirements, torque)
     what = ("the end effector's coordinates (" + ", ".join(sim.coordinate_names) + "; orientation as the rotation "
             "from the held orientation)" if getattr(sim, "task_space", False) else "joint positions")
     evidence = present_checks(result, _SIM_EVIDENCE)

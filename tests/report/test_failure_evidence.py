@@ -1,0 +1,43 @@
+"""A failing requirement's figure shows its band where a reviewer can see it (issue 14's relay and payload runs)."""
+
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+import pytest
+
+import designkit as dk
+from designkit.display import svg
+from designkit.report.figures.simulation import _draw_simulation
+
+
+def _draw(name):
+    result = dk.run(dk.load_spec(f"specs/{name}.yaml"))
+    with matplotlib.rc_context(svg.RC_PARAMS):
+        fig, info = _draw_simulation(result.design, result.simulation, result.loaded.spec.requirements)
+    return result, fig, info
+
+
+def test_the_relay_cases_steady_state_band_is_on_a_zoomed_error_axis():
+    result, fig, info = _draw("posspeed-relay")
+    check = next(c for c in result.checks if c.name == "steady_state_error")
+    assert check.passed is False
+    error_axis = fig.axes[1]
+    low, high = error_axis.get_ylim()
+    band = result.loaded.spec.requirements.steady_state_error
+    assert high - low <= 30 * band  # the ±2 mrad band is a visible share of the axis (not 0-1 rad)
+    assert high > abs(check.achieved) and high > band  # the error it fails by is inside the axis too
+    assert info["steady_band"] == band and "zoomed" in info
+
+
+@pytest.mark.slow
+def test_the_payload_runs_error_panel_has_its_tracking_band_and_a_short_legend():
+    result, fig, info = _draw("puma560-computed-torque-payload")
+    error_axis = fig.axes[1]
+    band = result.loaded.spec.requirements.tracking_error
+    assert info["tracking_band"] == band and error_axis.get_ylim()[1] >= band
+    top_legend = fig.axes[0].get_legend()
+    assert len(top_legend.get_texts()) <= 7  # one entry for all references, one per joint
+    labels = [t.get_text() for t in fig.axes[-1].get_legend().get_texts()]
+    assert "u1" in labels and len(labels) <= 7
+    assert np.all(np.isfinite(error_axis.get_ylim()))
