@@ -41,3 +41,11 @@ def test_the_payload_runs_error_panel_has_its_tracking_band_and_a_short_legend()
     labels = [t.get_text() for t in fig.axes[-1].get_legend().get_texts()]
     assert "u1" in labels and len(labels) <= 7
     assert np.all(np.isfinite(error_axis.get_ylim()))
+
+
+def test_a_prismatic_joint_is_drawn_in_metres_and_newtons():
+    result = dk.run(dk.load_spec("specs/scara-decentralized-pid.yaml"), simulate=True)
+    with matplotlib.rc_context(svg.RC_PARAMS):
+        fig, _ = _draw_simulation(result.design, result.simulation, result.loaded.spec.requirements)
+    labels = [a.get_ylabel() for a in fig.axes]
+    assert labels[0] == "position (rad, m)" and labels[-1] == "control (N·m, N)"

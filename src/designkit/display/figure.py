@@ -19,6 +19,7 @@ import numpy as np
 from designkit.display.svg import BLUE, GREEN, GREY, MAX_DRAWN, ORANGE, PURPLE, RED, drawable
 
 __all__ = [
+    "joint_units",
     "EVENT_STYLE",
     "Figure",
     "JOINT_COLORS",
@@ -129,3 +130,19 @@ def plain_ticks(axis: Any) -> None:
     from matplotlib.ticker import FuncFormatter
 
     axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}".replace("-", "−")))
+
+
+def joint_units(plant: Any, which: str) -> str:
+    """The distinct units of a plant's ``"inputs"`` or ``"positions"``, typeset and joined (``"N·m, N"`` for an arm
+    with a prismatic joint); ``"N·m"`` / ``"rad"`` when the plant names none."""
+    from designkit.display.numbers import unit as typeset
+
+    if which == "inputs":
+        units = [getattr(s, "unit", "") for s in getattr(plant, "inputs", ())]
+        default = "N·m"
+    else:
+        states = getattr(plant, "states", ())
+        units = [getattr(states[i], "unit", "") for i in getattr(plant, "positions", ()) if i < len(states)]
+        default = "rad"
+    found = [typeset(u) for u in dict.fromkeys(u for u in units if u)]
+    return ", ".join(found) if found else default

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.display.figure import JOINT_COLORS, REFERENCE_STYLE, Figure
+from designkit.display.figure import JOINT_COLORS, REFERENCE_STYLE, Figure, joint_units
 from designkit.display.svg import drawable, new_figure, render_tagged, tag
 from designkit.report.figures.control import common_limit, control_limit
 from designkit.report.figures.naming import joint_label, position_name
@@ -38,7 +38,7 @@ def _draw_linear(design: Any, t: np.ndarray, ref: np.ndarray, positions: np.ndar
                                        label=f"xD{joint_label(design, j)} (reference)"))
         tag(fig, "position", *ax.plot(t, drawable(positions[:, j]), color=color,
                                       label=f"{position_name(design, j)} (linear, nominal)"))
-    ax.set_ylabel("position (rad)")
+    ax.set_ylabel(f"position ({joint_units(design.plant, 'positions')})")
     ax.legend(loc="best", framealpha=0.9)
     for k in range(u.shape[1]):
         tag(fig, "control", *ax_u.plot(t, drawable(u[:, k]), color=JOINT_COLORS[k % len(JOINT_COLORS)],
@@ -48,7 +48,7 @@ def _draw_linear(design: Any, t: np.ndarray, ref: np.ndarray, positions: np.ndar
         control_limit(fig, ax_u, limit, u)
         info["limit"] = limit
     ax_u.set_xlabel("time (s)")
-    ax_u.set_ylabel("control (N·m)")
+    ax_u.set_ylabel(f"control ({joint_units(design.plant, 'inputs')})")
     ax_u.legend(loc="best", framealpha=0.9)
     ax_u.set_xlim(t[0], t[-1])
     return fig, info

@@ -15,6 +15,7 @@ from designkit.display.figure import (
     LIMIT_STYLE,
     REFERENCE_STYLE,
     Figure,
+    joint_units,
     off_scale_entry,
     on_scale,
     plain_ticks,
@@ -186,7 +187,7 @@ def _draw_simulation(design: Any, sim: Any, req: Any, torque_limits: Sequence[fl
     info: dict[str, Any] = {}
     task = getattr(sim, "task_space", False)
     names = sim.coordinate_names
-    unit = ", ".join(dict.fromkeys(sim.coordinate_units))
+    unit = ", ".join(dict.fromkeys(sim.coordinate_units)) if task else joint_units(design.plant, "positions")
     n = len(names)
     for j in range(n):
         color = JOINT_COLORS[j % len(JOINT_COLORS)]
@@ -260,7 +261,7 @@ def _draw_simulation(design: Any, sim: Any, req: Any, torque_limits: Sequence[fl
         ax_u.set_yscale("symlog", linthresh=linthresh, linscale=1.0)
         plain_ticks(ax_u.yaxis)
         info.update(linthresh=linthresh, peak=signal_peak(sim.u_command), levels=sorted({abs(lv) for lv in levels}))
-    ax_u.set_ylabel("control (N·m)")
+    ax_u.set_ylabel(f"control ({joint_units(design.plant, 'inputs')})")
     ax_u.set_xlabel("time (s)")
     ax_u.set_xlim(t[0], t[-1])
     ax_u.legend(loc="best", framealpha=0.9, ncols=2 if n > 1 else 1)
