@@ -1,0 +1,152 @@
+"""The PID/sliding-mode controller's own checks: its conditions certified on the box, and what the run shows.
+
+``pid_sm_conditions`` (order 55) certifies with the condition-certificate core
+(:func:`designkit.verification.conditions.certify`) three labelled sets:
+
+* ``pid_sm_dynamics``: ``-p3 > 0`` (``slm' = p3 slm + ...`` decays), ``a1 > 0`` and ``a2 > 0`` (the sliding
+  motion ``1/(1 + a1 s + a2 s^2)`` is stable) and ``a2 Km > 0`` on the box (the relay's gain
+  ``g = a2 Km/tau`` is positive, so ``-M sign(slm)`` turns ``slm'`` against ``slm``);
+* ``pid_sm_relay``: ``M > sup|xi_p| + xi_e`` (:func:`~designkit.families.pid_sliding_mode.bound.relay_set`);
+* ``pid_sm_band`` (a switching band or a dead zone): ``(M - sup|xi|) a2 Km - |p3| band tau > 0``, i.e. the band is
+  inside the strip ``|slm| < g (M - sup|xi|)/|p3|`` where ``slm slm' < 0`` for either held sign, so it is invariant
+  once entered.
+
+``pid_sm_run`` (order 127) measures the run (:mod:`~designkit.families.pid_sliding_mode.measure`):
+``pid_sm_in_band`` (required: after reaching, ``|slm|`` stays in the band), ``pid_sm_precision`` and
+``pid_sm_chattering`` (informational).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from designkit.families.pid_sliding_mode.bound import PARAMETERS, PerturbationBound, relay_set
+from designkit.families.pid_sliding_mode.measure import measure
+from designkit.verification.check import Check
+from designkit.verification.conditions import Condition, ConditionSet, certify
+from designkit.verification.suite import CheckRule, Context
+
+__all__ = ["CERTIFICATE_RULE", "RUN_RULE", "condition_sets", "shortfall"]
+
+
+def condition_sets(info: dict) -> dict[str, ConditionSet]:
+    """The labelled sets the certificate checks (module docstring)."""
+    a1, a2, p3, M = info["a1"], info["a2"], info["p3"], info["M"]
+    bound = PerturbationBound(info["xi_parameter"], info["xi_external"], tuple(info["xi_corner"]), info["xi_at"],
+                              tuple(tuple(p) for p in info["hull"]), 0.0, 0.0)
+    Km0, tau0 = info["nominal"]
+    sets = {
+        "pid_sm_dynamics": ConditionSet(
+            title="the sliding variable's dynamics and the sliding motion", parameters=PARAMETERS,
+            conditions=(
+                Condition(f"-p3 > 0 (p3 = {p3:.6g} 1/s)", lambda p: -p3 + 0.0 * p["Km"], "1/s",
+                          "slm' = p3 slm + g (du + xi): without the relay slm decays"),
+                Condition(f"a1 > 0 (a1 = {a1:.6g} s)", lambda p: a1 + 0.0 * p["Km"], "s",
+                          "the sliding motion 1/(1 + a1 s + a2 s^2) is stable"),
+                Condition(f"a2 > 0 (a2 = {a2:.6g} s^2)", lambda p: a2 + 0.0 * p["Km"], "s^2",
+                          "the sliding motion 1/(1 + a1 s + a2 s^2) is stable"),
+                Condition(f"a2 Km > 0 (g = a2 Km/tau, a2 = {a2:.6g} s^2)", lambda p: a2 * p["Km"], "s^2 (rad/s)/(N*m)",
+                          "the relay's gain on slm' is positive: -M sign(slm) turns slm' against slm"),
+            )),
+        "pid_sm_relay": relay_set(M, bound, Km0, tau0),
+    }
+    band = info["band_certified"]
+    if band is not None:
+        xi = info["xi_total"]
+        sets["pid_sm_band"] = ConditionSet(
+            title="the band inside the strip where slm slm' < 0", parameters=PARAMETERS,
+            conditions=(Condition(
+                f"(M - sup|xi|) a2 Km - |p3| band tau > 0 (band = {band:.4g} rad*s)",
+                lambda p: (M - xi) * a2 * p["Km"] - abs(p3) * band * p["tau"], "rad",
+                "either held sign of the relay turns slm' against slm within the band: it is invariant"),))
+    return sets
+
+
+def shortfall(info: dict) -> str:
+    """``"M = 0.8 N*m is below sup|xi| = 1.2 N*m by 0.4 N*m; M >= 1.44 N*m with the 20 % margin"``."""
+    M, xi, m = info["M"], info["xi_total"], info["margin"]
+    return (f"M = {M:.4g} N*m is below sup|ξ| = {xi:.4g} N*m (parameter change {info['xi_parameter']:.4g} N*m, "
+            f"external {info['xi_external']:.4g} N*m) by {xi - M:.3g} N*m; any M above {xi:.4g} N*m meets the "
+            f"condition, M = {(1 + m) * xi:.4g} N*m keeps the {100 * m:g} % margin")
+
+
+def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
+    info = design.extra["pid_sm"]
+    box = {k: tuple(v) for k, v in info["box"].items()}
+    out = []
+    for name, set_ in condition_sets(info).items():
+        check = certify(name, set_, box, solver=ctx.solver)
+        if name == "pid_sm_relay":
+            cert = {**dict(check.certificate), "M": info["M"], "sup_xi": info["xi_total"],
+                    "sup_xi_parameter": info["xi_parameter"], "sup_xi_external": info["xi_external"],
+                    "worst_corner": info["xi_corner"], "worst_time": info["xi_at"], "shortfall": info["xi_total"]
+                    - info["M"]}
+            detail = check.detail
+            if check.passed is False:
+                detail = shortfall(info) + ". " + detail
+            check = dataclasses.replace(check, detail=detail, certificate=cert)
+        out.append(check)
+    return tuple(out)
+
+
+CERTIFICATE_RULE = CheckRule(
+    name="pid_sm_conditions", order=55, applies=lambda d, c: "pid_sm" in d.extra, run=_certificates,
+    label="PID/sliding-mode conditions on the parameter box",
+    labels={"pid_sm_dynamics": "Sliding variable and sliding motion stable (whole box)",
+            "pid_sm_relay": "Relay dominates the input-equivalent perturbation (whole box)",
+            "pid_sm_band": "Band invariant around slm = 0 (whole box)"},
+    glossary=(("slm", "the sliding variable a1 x1 + a2 x2 + x3, rad·s"),
+              ("ξ", "the input-equivalent perturbation: the load plus the parameter change of notes §5.4, N·m")),
+)
+
+
+def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
+    info = design.extra["pid_sm"]
+    run = measure(design, ctx.simulation)
+    cert = {"band": run.band, "hold": run.hold, "reaching_time": run.reaching_time, "max_abs_slm": run.slm_max}
+    what = {None: "the band the relay held over a step leaves",
+            "saturation": "the boundary layer ε", "dead_zone": "the dead zone ε plus one held step"}[
+        None if info["epsilon"] is None else info["layer"]]
+    if run.reach is None:
+        band = Check("pid_sm_in_band", False, f"|slm| <= {run.band:.4g} rad*s after reaching", None, None, "rad*s",
+                     f"|slm| never entered {what} ({run.band:.4g} rad*s): the loop does not slide", cert)
+        return (band,)
+    ok = run.worst <= run.band * (1 + 1e-9)
+    how = ("stays within it" if ok else f"leaves it: |slm| = {run.worst:.4g} rad*s at t = {run.worst_at:.4g} s, "
+           f"{run.worst / run.band:.3g} times the band")
+    band = Check("pid_sm_in_band", ok, f"|slm| <= {run.band:.4g} rad*s after reaching", run.worst,
+                 run.band - run.worst, "rad*s", f"|slm| entered {what} ({run.band:.4g} rad*s) after "
+                 f"{run.reaching_time:.4g} s and {how}; largest |slm| after reaching {run.worst:.4g} rad*s", cert)
+    dev_ok = run.deviation <= run.deviation_bound * (1 + 1e-3) + 1e-12
+    precision = Check(
+        "pid_sm_precision", dev_ok, "|x1 − x1 of the sliding motion| <= ||s/N||₁ max|slm|", run.deviation,
+        run.deviation_bound - run.deviation, "rad",
+        f"the position stays within {run.deviation:.4g} rad of the plant-independent sliding motion, against the "
+        f"bound ||s/N||₁ max|slm| = {info['l1']:.4g} 1/s × {run.slm_max:.4g} rad*s = {run.deviation_bound:.4g} rad "
+        f"and ||s/N||₁ × band = {run.deviation_at_band:.4g} rad [informational]",
+        {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
+         "l1": info["l1"]}, required=False)
+    freq = run.switching_frequency
+    chatter = Check(
+        "pid_sm_chattering", True if ok else None, "reported", freq, None, "1/s",
+        f"after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
+        f"({0.0 if freq is None else freq:.4g} per s, at most {1 / run.hold:.4g} per s with a {run.hold:.3g} s "
+        f"hold); total variation of u {run.total_variation:.4g} N*m, of the switching part "
+        f"{run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of the run "
+        f"{run.relay_ptp_tail:.4g} N*m [informational]",
+        {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
+         run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail},
+        required=False)
+    return band, precision, chatter
+
+
+RUN_RULE = CheckRule(
+    name="pid_sm_run", order=127,
+    applies=lambda d, c: c.simulation is not None and "pid_sm" in d.extra and "slm" in c.simulation.signals,
+    run=_run_checks, label="Sliding mode in the simulated run",
+    labels={"pid_sm_in_band": "The run stays in the band around slm = 0",
+            "pid_sm_precision": "Distance from the sliding motion (measured)",
+            "pid_sm_chattering": "Chattering (measured)"},
+    glossary=(("band", "|slm| ≤ δ: the boundary layer, or how far the relay held over a step can leave slm"),),
+)
