@@ -82,9 +82,9 @@ class SmidSpec(Section):
     servo: Servo = Field(default_factory=Servo)
     initial_estimates: list[float] = Field(min_length=2, max_length=2)
     error_bounds: ErrorBounds
-    c: Ranged(0.0, 1e9, "1/s", low_open=True) | None = None
-    d: Ranged(0.0, 1e9, "rad/(s^2*N*m)", low_open=True) | None = None
-    window: Ranged(0.0, 1e6, "s", low_open=True) = 0.25
+    c: Ranged(0.0, 1e9, "1/s", base=PositiveFinite, low_open=True) | None = None
+    d: Ranged(0.0, 1e9, "rad/(s^2*N*m)", base=PositiveFinite, low_open=True) | None = None
+    window: Ranged(0.0, 1e6, "s", base=PositiveFinite, low_open=True) = 0.25
     adaptation_gains: list[Ranged(1e-12, 1e12, "")] = Field(default_factory=lambda: [1.0, 1.0], min_length=2,
                                                             max_length=2)
     sampling_period: Ranged(1e-5, 10.0, "s", base=PositiveFinite) = 0.002
