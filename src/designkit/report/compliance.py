@@ -55,6 +55,9 @@ def percent_of(value: float | None, limit: float | None) -> str:
     if value is None or limit is None or limit == 0 or not math.isfinite(value):
         return ""
     x = 100 * value / abs(limit)
+    if abs(x) >= 1000:  # three significant digits: "+268000 %", not "+267623 %"
+        rounded = float(f"{x:.3g}")
+        return f"{'+' if rounded > 0 else '-'}{abs(rounded):.0f} %"
     text = f"{x:+.0f}" if abs(x) >= 100 else fmt_signed(float(f"{x:.3g}"), 3)
     return f"{text} %"
 
