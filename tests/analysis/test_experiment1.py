@@ -335,3 +335,15 @@ def test_report_of_a_robot_spec_has_the_lab_section(exact):
     unit_rows = [row for row in gain_table.rows if row[1] == "× 1"]
     assert len(unit_rows) == 2 and all(row[2] == "as designed" for row in unit_rows)
     assert compile_pdf(model).startswith(b"%PDF")
+
+
+def test_coupling_the_law_cancels_is_not_called_dominant():
+    """Resolved acceleration with the exact model: the coupling torques are in the arm, not in the loop."""
+    from designkit.analysis.lab.coupling import JointCoupling, coupling_sentences
+
+    strong = JointCoupling(1, "N*m", 3.0, 0.1, 3.1, 0.5, 1.0, 3.1, 0.0)  # coupling 3.1x the own torque, cancelled
+    text = " ".join(coupling_sentences([strong], "model-based"))
+    assert "dominant in the arm's dynamics, but cancelled by the controller's model" in text
+    assert ": dominant." not in text
+    felt = JointCoupling(1, "N*m", 3.0, 0.1, 3.1, 0.5, 1.0, 3.1, 1.0)  # a model error of 1 N*m: felt by the loop
+    assert ": dominant." in " ".join(coupling_sentences([felt], "model-based"))

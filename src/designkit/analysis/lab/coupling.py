@@ -101,8 +101,13 @@ def coupling_sentences(joints: Sequence[JointCoupling], nature: str, label: str 
         The ``coupling`` check's ``intercoupling_error`` rows (``joint``, ``max_abs_rad``, ``at_s``), if any.
     """
     out = []
+    cancelled = nature == "model-based" and bool(joints) and all(
+        j.model_error is not None and (j.model_error == 0 or j.model_error < NEGLIGIBLE_COUPLING * j.coupling)
+        for j in joints)
     for j in joints:
         level = coupling_level(j.ratio)
+        if cancelled and level != "negligible":  # the arm has it, the loop does not feel it: no claim of dominance
+            level = f"{level} in the arm's dynamics, but cancelled by the controller's model (below)"
         own = (f"{fmt_percent(j.ratio)} of its own inertial torque D_{j.joint}{j.joint} q̈_{j.joint} "
                f"(peak {quantity(j.own_inertial, j.unit, 3)})" if math.isfinite(j.ratio)
                else "while the joint has no inertial torque of its own (it does not accelerate by itself)")
