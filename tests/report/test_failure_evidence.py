@@ -49,3 +49,12 @@ def test_a_prismatic_joint_is_drawn_in_metres_and_newtons():
         fig, _ = _draw_simulation(result.design, result.simulation, result.loaded.spec.requirements)
     labels = [a.get_ylabel() for a in fig.axes]
     assert labels[0] == "position (rad, m)" and labels[-1] == "control (N·m, N)"
+
+
+def test_the_sensitivity_caption_does_not_contradict_itself():
+    from designkit.verification.figures.loop_margins import _sensitivity_caption
+
+    calm = _sensitivity_caption([], [{"input": "u", "Ms": 1.0, "w_Ms": float("inf"), "Mt": 1.0, "w_Mt": 1.0}])
+    assert "|S| < 1 at every frequency" in calm and "above 0 dB amplifies" not in calm
+    peaked = _sensitivity_caption([], [{"input": "u", "Ms": 4.7, "w_Ms": 3.0, "Mt": 4.2, "w_Mt": 3.0}])
+    assert "above 0 dB amplifies" in peaked

@@ -156,8 +156,11 @@ def _sensitivity_caption(keys: Sequence[str], peaks: Sequence[Mapping[str, Any]]
     if "mt-peak" in keys:
         text += " " + "; ".join(f"{p['input'] + ': ' if several else ''}Mt = {p['Mt']:.3g} at ω = {sci(p['w_Mt'])} "
                                 "rad/s" for p in peaks) + " (○)."
-    return text + " |S| above 0 dB amplifies output disturbances at those frequencies; |T| is the response to " \
-                  "measurement noise and to the reference."
+    if any(math.isfinite(p["w_Ms"]) for p in peaks):
+        text += " |S| above 0 dB amplifies output disturbances at those frequencies."
+    else:
+        text += " |S| stays below 0 dB: no output disturbance is amplified at any frequency of the grid."
+    return text + " |T| is the response to measurement noise and to the reference."
 
 
 def sensitivity_figure(result: Any, check: Any) -> Figure | None:
