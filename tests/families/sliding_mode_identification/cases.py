@@ -8,16 +8,14 @@ BASE = """\
 name: ranges-smid
 plant: {kind: link, Km: 2.0, tau: 0.5}
 controller: {kind: sliding_mode_identification, initial_estimates: [1.0, 1.0], error_bounds: {a: 3.0, b: 5.0},
-             servo: {K1: 5.0, K2: 0.5}, c: 9.0, d: 9.0, window: 0.25, sampling_period: 0.002,
-             filter_time_constant: 0.02}
+             servo: {K1: 5.0, K2: 0.5}, c: 9.0, d: 9.0, window: 0.25, sampling_period: 0.002}
 simulation: {duration: 2.0, trajectory: {kind: square, amplitude: 0.5, period: 2}}
 """
 
 RANGES = {
     path: [(BASE, path, path)] for path in (
         "controller.servo.K1", "controller.servo.K2", "controller.error_bounds.a", "controller.error_bounds.b",
-        "controller.c", "controller.d", "controller.window", "controller.sampling_period",
-        "controller.filter_time_constant")
+        "controller.c", "controller.d", "controller.window", "controller.sampling_period")
 }
 _GAINS = BASE.replace("window: 0.25,", "window: 0.25, adaptation_gains: [1.0, 1.0],")
 RANGES["controller.adaptation_gains[]"] = [(_GAINS, "controller.adaptation_gains.1", "controller.adaptation_gains[1]")]

@@ -74,8 +74,7 @@ class SmidSpec(Section):
     ``initial_estimates``: ``[ah(0), bh(0)]`` (1/s, (rad/s^2)/(N*m)).  ``error_bounds``: the bounds on their errors.
     ``c``, ``d``: the observer's switching gains (1/s, (rad/s^2)/(N*m), > 0; default from the bounds).
     ``window``: ``D`` (s, > 0), the distance of the two time points.  ``adaptation_gains``: ``[ga, gb]``
-    (s/rad^2, 1/(s (N*m)^2)).  ``sampling_period`` (s): the identifier's period.  ``filter_time_constant``
-    (s): the filter giving the switching term's equivalent value (default 10 samples).
+    (s/rad^2, 1/(s (N*m)^2)).  ``sampling_period`` (s): the identifier's period.
     """
 
     kind: Literal[KIND]
@@ -88,7 +87,6 @@ class SmidSpec(Section):
     adaptation_gains: list[Ranged(1e-12, 1e12, "")] = Field(default_factory=lambda: [1.0, 1.0], min_length=2,
                                                             max_length=2)
     sampling_period: Ranged(1e-5, 10.0, "s", base=PositiveFinite) = 0.002
-    filter_time_constant: Ranged(1e-6, 1e6, "s", base=PositiveFinite) | None = None
 
 
 def switching_bounds(bounds: tuple[float, float], gamma: tuple[float, float]) -> tuple[float, float]:
@@ -127,9 +125,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("controller.window", f"must be between one and {MAX_WINDOW_SAMPLES} sampling periods "
                         f"({Ts:g} s to {MAX_WINDOW_SAMPLES * Ts:g} s: the signals D seconds ago are kept in shift "
                         f"registers of D/Ts samples), got {cs.window:g}")
-    Tf = float(cs.filter_time_constant) if cs.filter_time_constant is not None else 10.0 * Ts
     ident = Identifier(K1=float(cs.servo.K1), K2=float(cs.servo.K2), c=c, d=d, window=float(cs.window), gamma=gamma,
-                       initial=(float(cs.initial_estimates[0]), float(cs.initial_estimates[1])), Ts=Ts, Tf=Tf)
+                       initial=(float(cs.initial_estimates[0]), float(cs.initial_estimates[1])), Ts=Ts)
     return design(plant, ident, bounds, need, notes=tuple(notes))
 
 
@@ -146,7 +143,7 @@ def design(plant: Any, ident: Identifier, bounds: tuple[float, float], need: tup
         Gain("gamma_b", ident.gamma[1], "1/(s*N^2*m^2)", "adaptation gain of b"),
     ])
     extra = {"K1": ident.K1, "K2": ident.K2, "c": ident.c, "d": ident.d, "window": ident.window,
-             "gamma": list(ident.gamma), "initial": list(ident.initial), "Ts": ident.Ts, "Tf": ident.Tf,
+             "gamma": list(ident.gamma), "initial": list(ident.initial), "Ts": ident.Ts,
              "error_bounds": list(bounds), "required": list(need), "signals": list(RECORDED)}
     formulas = (
         "x2' = −a x2 + b u,  a = 1/τ,  b = Km/τ  (the sign convention of §5.1)",
@@ -165,8 +162,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     """The law of ``design`` rebuilt from ``design.extra`` (``anti_windup`` is refused at the spec)."""
     x = design.extra
     return identifier_law(design.plant, Identifier(K1=x["K1"], K2=x["K2"], c=x["c"], d=x["d"], window=x["window"],
-                                                   gamma=tuple(x["gamma"]), initial=tuple(x["initial"]), Ts=x["Ts"],
-                                                   Tf=x["Tf"]))
+                                                   gamma=tuple(x["gamma"]), initial=tuple(x["initial"]), Ts=x["Ts"]))
 
 
 def _family() -> Family:

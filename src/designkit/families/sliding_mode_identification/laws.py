@@ -8,14 +8,15 @@ is ``x2' = -a x2 + b u`` with ``a = 1/tau`` (1/s) and ``b = Km/tau`` ((rad/s^2)/
 At each sample ``k`` (period ``Ts``), from the measured ``x2`` and the command ``u`` of that sample::
 
     slm   = x2h - x2                                     sliding variable of the observer (rad/s)
-    sw    = -(c |x2| + d |u|) sign(slm)                  switching term (rad/s^2)
-    x2h  <- x2h + Ts (-ah x2 + bh u + sw)                observer x2h' = -ah x2 + bh u + sw (Euler, held sample)
-    w    <- w + (1 - exp(-Ts/Tf)) (sw - w)               equivalent value of sw (first-order filter, Tf)
-    eps1  = w                                            x2' - phi' thetah at t (on slm = 0, sw_eq = x2' - phi' thetah)
-    x2d   = -ah x2 + bh u + w                            estimate of x2'(t), stored for t + D
-    eps2  = x2d(t-D) - (-ah x2(t-D) + bh u(t-D))         the same at t - D with today's estimates
-    ah   <- ah + Ts ga (-x2 eps1 - x2(t-D) eps2)
-    bh   <- bh + Ts gb ( u eps1 +  u(t-D) eps2)
+    sw    = -(c |x2| + d |u|) sign(slm)                  switching term (rad/s^2), held over the sample
+    x2h  <- x2h + Ts (-ah x2 + bh u + sw)                observer x2h' = -ah x2 + bh u + sw (exact for the hold)
+    sw_eq = sw(k-1) + (slm(k-1) - slm(k))/Ts             the last sample's equivalent switching term
+    x2d   = model(k-1) + sw_eq                           mean x2' over the last sample (exact)
+    xm    = (x2(k-1) + x2(k))/2                          mean speed over it (to O(Ts^2)), u(k-1) its command
+    eps1  = x2d - (-ah xm + bh u(k-1))                   regression error now
+    eps2  = x2d(t-D) - (-ah xm(t-D) + bh u(t-D))         the same D earlier with today's estimates
+    ah   <- ah + Ts ga (-xm eps1 - xm(t-D) eps2)
+    bh   <- bh + Ts gb ( u(k-1) eps1 + u(t-D) eps2)
 
 The delayed values come from shift registers of ``N = round(D/Ts)`` samples (zeros before the first ``D``
 seconds, which makes ``eps2 = 0`` there).  The recorded signals are the memory after the sample: the
@@ -24,7 +25,6 @@ estimates, ``slm``, ``eps1``, ``eps2``, the determinant ``x2(t) u(t-D) - u(t) x2
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,8 +60,6 @@ class Identifier:
         ``(ah(0), bh(0))``.
     Ts : float
         Sampling period (s).
-    Tf : float
-        Time constant (s) of the filter extracting the switching term's equivalent value.
     """
 
     K1: float
@@ -72,7 +70,6 @@ class Identifier:
     gamma: tuple[float, float]
     initial: tuple[float, float]
     Ts: float
-    Tf: float
 
     @property
     def samples(self) -> int:
@@ -84,7 +81,6 @@ def identifier_law(plant: Any, ident: Identifier) -> Law:
     """The PD servo with the sampled sliding-mode identifier alongside (module docstring)."""
     N = ident.samples
     Ts, ga, gb = ident.Ts, float(ident.gamma[0]), float(ident.gamma[1])
-    alpha = 1.0 - math.exp(-Ts / ident.Tf)
     memo: dict[int, dict[str, ca.SX]] = {}
 
     def parts(s: LawSymbols) -> dict[str, ca.SX]:
@@ -92,7 +88,7 @@ def identifier_law(plant: Any, ident: Identifier) -> Law:
         if key not in memo:
             x1, x2 = s.q[0], s.qd[0]
             u = -ident.K1 * (x1 - s.qD[0]) - ident.K2 * x2
-            ah, bh, x2h, w = (s.memory(n) for n in ("a_hat", "b_hat", "x2h", "w"))
+            ah, bh, x2h = (s.memory(n) for n in ("a_hat", "b_hat", "x2h"))
             px2, pu, pslm, psw, pmodel = (s.memory(n) for n in ("px2", "pu", "pslm", "psw", "pmodel"))
             slm = x2h - x2
             sw = -(ident.c * ca.fabs(x2) + ident.d * ca.fabs(u)) * ca.sign(slm)
@@ -105,7 +101,7 @@ def identifier_law(plant: Any, ident: Identifier) -> Law:
             x2D, uD, xdD = (s.memory(f"{n}_{N - 1}") for n in ("bx2", "bu", "bxd"))
             eps2 = xdD - (-ah * x2D + bh * uD)
             memo[key] = {
-                "u": u, "x2": x2, "xm": xm, "pu": pu, "x2h": x2h + Ts * (model + sw), "w": w + alpha * (sw_eq - w),
+                "u": u, "x2": x2, "xm": xm, "pu": pu, "x2h": x2h + Ts * (model + sw),
                 "a_hat": ah + Ts * ga * (-xm * eps1 - x2D * eps2),
                 "b_hat": bh + Ts * gb * (pu * eps1 + uD * eps2),
                 "px2": x2, "pslm": slm, "psw": sw, "pmodel": model,
@@ -117,7 +113,7 @@ def identifier_law(plant: Any, ident: Identifier) -> Law:
 
     memory = [Memory("a_hat", take("a_hat"), float(ident.initial[0]), "1/s"),
               Memory("b_hat", take("b_hat"), float(ident.initial[1]), "rad/(s^2*N*m)"),
-              Memory("x2h", take("x2h"), 0.0, "rad/s"), Memory("w", take("w"), 0.0, "rad/s^2"),
+              Memory("x2h", take("x2h"), 0.0, "rad/s"),
               Memory("px2", take("px2"), 0.0, "rad/s"), Memory("pu", take("u"), 0.0, "N*m"),
               Memory("pslm", take("pslm"), 0.0, "rad/s"), Memory("psw", take("psw"), 0.0, "rad/s^2"),
               Memory("pmodel", take("pmodel"), 0.0, "rad/s^2")]
@@ -134,5 +130,5 @@ def identifier_law(plant: Any, ident: Identifier) -> Law:
         sampling_period_source="controller.sampling_period", discontinuous=True,
         settings={"servo": {"K1": ident.K1, "K2": ident.K2}, "c": ident.c, "d": ident.d, "window": ident.window,
                   "gamma": list(ident.gamma), "initial": list(ident.initial), "sampling_period": Ts,
-                  "filter_time_constant": ident.Tf, "delay_samples": N},
+                  "delay_samples": N},
     )
