@@ -136,3 +136,31 @@ HEAD = ("name: bad\nplant: {kind: link, Km: 2.0, tau: 0.5}\n"
 ])
 def test_bad_input(extra, message, tmp_path, capsys):
     assert_bad_input(tmp_path, capsys, HEAD + extra + "\n", message)
+
+
+def test_a_prbs_reference_identifies_the_link(tmp_path):
+    """A seeded PRBS (the other exciting reference the family follows) on another link: Km = 1.5, tau = 0.8 s."""
+    path = tmp_path / "spec.yaml"
+    path.write_text(SPEC.format(Km=1.5, tau=0.8, K1=4.0, K2=0.4, a0=2.0, b0=1.0, ea=2.0, eb=2.0, D=0.25, ga=1.0,
+                                gb=1.0, T=15.0, P=2.0).replace("{kind: square, amplitude: 0.5, period: 2.0}",
+                                                               "{kind: prbs, amplitude: 0.5, bit: 0.5, order: 7}"))
+    result = run(load_spec(path))
+    sim = result.simulation
+    assert "prbs" in path.read_text()
+    assert sim.signals["a_hat"][-1] == pytest.approx(1 / 0.8, rel=1e-3)
+    assert sim.signals["b_hat"][-1] == pytest.approx(1.5 / 0.8, rel=1e-3)
+
+
+def test_report_section_and_figures(step_result):
+    from designkit.families.sliding_mode_identification.report import FIGURES, section
+
+    sec = section(step_result)
+    assert sec is not None and len(sec.questions) == 2
+    rows = sec.questions[0].tables[0].rows
+    assert len(rows) == 2  # the segments before and after the change
+    figures = [f(step_result) for f in FIGURES]
+    assert [f.title for f in figures] == ["Estimates against the true values", "The observer's sliding variable",
+                                          "Determinant monitor"]
+    assert all("t = 10 s" in f.caption for f in figures)
+    text = " ".join([sec.intro, *[s for q in sec.questions for s in q.sentences], *[f.caption for f in figures]])
+    assert "_" not in text and "np." not in text
