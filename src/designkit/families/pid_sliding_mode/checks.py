@@ -34,7 +34,8 @@ def condition_sets(info: dict) -> dict[str, ConditionSet]:
     """The labelled sets the certificate checks (module docstring)."""
     a1, a2, p3, M = info["a1"], info["a2"], info["p3"], info["M"]
     bound = PerturbationBound(info["xi_parameter"], info["xi_external"], tuple(info["xi_corner"]), info["xi_at"],
-                              tuple(tuple(p) for p in info["hull"]), 0.0, 0.0)
+                              tuple(tuple(p) for p in info["hull"]), 0.0, 0.0,
+                              info["xi_sampled"])
     Km0, tau0 = info["nominal"]
     sets = {
         "pid_sm_dynamics": ConditionSet(
@@ -84,7 +85,7 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
                     - info["M"]}
             detail = check.detail
             if check.passed is False:
-                detail = shortfall(info) + ". " + detail
+                detail = shortfall(info) + ". " + detail[:1].upper() + detail[1:]
             check = dataclasses.replace(check, detail=detail, certificate=cert)
         out.append(check)
     return tuple(out)

@@ -1,0 +1,35 @@
+"""The test cases the shared suites run for the pid_sliding_mode family, found by discovery so that adding the family
+edits no shared test: its ranged fields (tests/spec/test_ranges.py), its conformance case (tests/problems.py) and its
+example specs' exit codes (tests/test_cli.py)."""
+
+from __future__ import annotations
+
+BASE = """\
+name: ranges-pid-sm
+plant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.6, 2.4], tau: [0.4, 0.6]}}
+controller: {kind: pid_sliding_mode, poles: [-4, -5, -20], perturbation_bound: 0.5, margin: 0.2, M: 4.0,
+             switching_band: 0.0002}
+simulation: {duration: 0.5}
+"""
+LAYER = BASE.replace("switching_band: 0.0002", "epsilon: 0.002")
+
+RANGES = {f"controller.{k}": [(BASE, f"controller.{k}", f"controller.{k}")]
+          for k in ("perturbation_bound", "margin", "M", "switching_band")}
+RANGES["controller.epsilon"] = [(LAYER, "controller.epsilon", "controller.epsilon")]
+"""Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
+
+CONFORMANCE = {
+    # notes §5.3: the PID/sliding-mode servo on the link box, against a 0.5 N*m input perturbation from t = 1 s
+    "link": ("{kind: pid_sliding_mode, poles: [-4, -5, -20], perturbation_bound: 0.5}",
+             "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
+             "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
+}
+"""Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
+
+EXAMPLES = {
+    "pid-sm-link": 0,
+    "pid-sm-link-boundary-layer": 0,
+    "pid-sm-link-parameter-step": 0,
+    "pid-sm-link-weak-relay": 1,  # M below the section 5.4 bound: the certificate says by how much
+}
+"""Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
