@@ -13,13 +13,15 @@ from typing import Any
 
 from designkit.display.figure import Figure
 from designkit.report.figures.linear import linear_figure
+from designkit.report.figures.nyquist import nyquist_figure
 from designkit.report.figures.pole_zero import pole_zero_figure
 from designkit.report.figures.simulation import simulation_figure
 
 __all__ = ["DESIGN_FIGURES", "design_figures"]
 
 
-DESIGN_FIGURES: tuple[Callable[[Any], Figure | None], ...] = (pole_zero_figure, linear_figure, simulation_figure)
+DESIGN_FIGURES: tuple[Callable[[Any], Figure | None], ...] = (pole_zero_figure, linear_figure, simulation_figure,
+                                                               nyquist_figure)
 """Figures drawn from the design and the simulation, in report order."""
 
 
