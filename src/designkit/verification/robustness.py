@@ -303,6 +303,10 @@ def vertex_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check
     )
 
 
+MAX_MIGRATION_PLANTS = 5000
+"""Up to this many plants of the lattice, their closed-loop poles are kept for the pole-migration figure."""
+
+
 def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
     """Check ``"robust_grid"``: the lattice of the box plus seeded random samples."""
     sweeper = sweeper or Sweeper(design, box.names)
@@ -344,8 +348,13 @@ def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
             "label": "stability margin -max Re(pole) (1/s); > 0 is stable",
         }
     achieved = float(res.abscissa[worst]) if np.isfinite(res.abscissa[worst]) else None
+    data: dict[str, Any] = {}
+    if varying and res.A.ndim == 3 and res.A.shape[0] <= MAX_MIGRATION_PLANTS and np.all(np.isfinite(res.A)):
+        data = {"poles": np.linalg.eigvals(res.A), "values": np.asarray(res.theta, float)[:, varying[0]],
+                "theta": np.asarray(res.theta, float), "names": tuple(box.names),
+                "parameter": box.names[varying[0]], "unit": box.units[varying[0]] if box.units else ""}
     return Check(
-        name="robust_grid", passed=passed,
+        name="robust_grid", passed=passed, data=data,
         target=f"stable on the {box.points_per_axis}-point lattice" + (f" and {box.samples} random samples"
                                                                         if box.samples else ""),
         achieved=achieved, margin=None if achieved is None else -achieved, unit="1/s", detail=detail,

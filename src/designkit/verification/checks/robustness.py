@@ -20,6 +20,12 @@ def _lattice(result: Any, check: Any) -> Any:
     return robustness_figure(result, check)
 
 
+def _migration(result: Any, check: Any) -> Any:
+    from designkit.verification.figures.robustness import pole_migration_figure
+
+    return pole_migration_figure(result, check)
+
+
 RULE = CheckRule(
     name="robustness", order=60, linear=True,
     applies=lambda d, c: c.uncertainty() is not None and d.operating_point != {},
@@ -27,5 +33,5 @@ RULE = CheckRule(
     labels={"robust_vertices": "Stability at the corners of the parameter box",
             "robust_grid": "Stability on the parameter lattice",
             "common_lyapunov": "Common Lyapunov function over the parameter box"},
-    figures=(_lattice,),
+    figures=(_lattice, _migration),
 )
