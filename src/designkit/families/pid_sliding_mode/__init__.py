@@ -49,6 +49,7 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.families.pid_sliding_mode.bound import corners, design_box, perturbation_bound
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.pid_sliding_mode.figures import FIGURES
 from designkit.families.pid_sliding_mode.measure import json_summary
 from designkit.families.pid_sliding_mode.spec import KIND, PidSlidingModeSpec, perturbation_level, validate
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
@@ -247,5 +248,6 @@ FAMILY = Family(
                 "input-equivalent perturbation of the parameter box (§5.4), certified on the box.",
     ),
     validate=validate,
+    figures=FIGURES,
     json=json_summary,
 )

@@ -141,9 +141,9 @@ def relay_set(M: float, bound: PerturbationBound, Km0: float, tau0: float) -> Co
     a0, b0, xe = 1.0 / tau0, Km0 / tau0, bound.external
     conds = []
     for i, (x2, u0) in enumerate(bound.points):
-        for sign, side in ((1.0, "+"), (-1.0, "-")):
+        for sign, side in ((1.0, "−"), (-1.0, "+")):
             conds.append(Condition(
-                f"Km (M - xi_e) {side} Km xi_p > 0 at polygon vertex {i + 1} (x2 = {x2:.4g} rad/s, u0 = {u0:.4g} N*m)",
+                f"Km (M − ξe) {side} Km ξp > 0 at vertex {i + 1} (x2 = {x2:.4g} rad/s, u0 = {u0:.4g} N·m)",
                 lambda p, x2=x2, u0=u0, sign=sign: ((M - xe) * p["Km"]
                                                     - sign * (p["tau"] * (a0 * x2 - b0 * u0) - x2 + p["Km"] * u0)),
                 "rad/s",
