@@ -66,3 +66,25 @@ def test_a_relay_below_the_bound_leaves_the_layer_after_the_plant_change():
     result = _run(1.4, 0.65, 0.0, ", epsilon: 0.002, M: 1.0")
     assert _check(result, "pid_sm_relay").passed is False
     assert _check(result, "pid_sm_in_band").passed is False
+
+
+def test_tracking_form_follows_a_quintic_at_an_interior_plant_within_the_layer():
+    """Figure 3.2: the tracker's gains (K2 = -tau S1/Km, not the servo's), and the run at Km = 1.6, tau = 0.6 stays
+    in the layer with x1 within ||s/N||_1 max|slm| of the trajectory itself (the sliding motion is dx1 = 0)."""
+    text = """\
+name: pid-sm-tracking
+plant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.4, 2.6], tau: [0.35, 0.65]}}
+controller: {kind: pid_sliding_mode, form: tracking, poles: [-10, -12, -15], epsilon: 0.0005, perturbation_bound: 0.5}
+simulation:
+  duration: 2.0
+  trajectory: {kind: quintic, amplitude: 1.0, duration: 1.0}
+  perturbation: {value: 0.5, time: 1.2}
+  plant_change: {time: 0.0, values: {Km: 1.6, tau: 0.6}}
+"""
+    result = run(parse_spec(text))
+    g = result.design.gains
+    assert float(g["K2"]) == pytest.approx(0.5 * 37 / 2.0) and float(g["K1"]) == pytest.approx(0.5 * 450 / 2.0)
+    m = measure(result.design, result.simulation)
+    assert m.reach == 0 and m.worst <= 0.0005
+    ref = np.asarray(result.simulation.reference[:, 0, 0], float)
+    assert np.max(np.abs(m.data["x1"] - ref)) <= m.deviation_bound * (1 + 1e-3) + 1e-12
