@@ -51,7 +51,7 @@ from designkit.families.pid_sliding_mode.bound import corners, design_box, pertu
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.pid_sliding_mode.figures import FIGURES
 from designkit.families.pid_sliding_mode.measure import json_summary
-from designkit.families.pid_sliding_mode.spec import KIND, PidSlidingModeSpec, perturbation_level, validate
+from designkit.families.pid_sliding_mode.spec import EXTRA, KIND, PidSlidingModeSpec, perturbation_level, validate
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
 from designkit.simulation.reference import reference_for
 from designkit.synthesis import pid
@@ -154,7 +154,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     names = ("K1", "K2", "K3", "K4") if form == "servo" else ("K1", "K2", "K3")
     gains = Gains.of(Gain(k, val, *GAIN_INFO[k]) for k, val in
                      [*((k, float(values[k])) for k in names), ("a1", sf.a1), ("a2", sf.a2), ("M", M)])
-    extra = {"pid_sm": {
+    extra = {EXTRA: {
         "form": form, "sliding_variable": ("slm = a1 x1 + a2 x2 + x3" if form == "servo" else
                                            "slm = a1 (x1 - xD) + a2 (x2 - xD') + x3"),
         "pid_gains": list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3, "g_nominal": sf.a2 * Km0 / tau0,
@@ -185,7 +185,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = u0 - M sign(slm)`` (or ``sat``, or the dead zone) with the integral ``x3' = x1 - xD`` (N*m); records
     ``slm`` (rad*s), the switching part ``du`` and the PID part ``u0`` (N*m).  ``anti_windup`` is refused at the
     spec."""
-    info = design.extra["pid_sm"]
+    info = design.extra[EXTRA]
     G = {k: float(design.gains[k]) for k in (*info["pid_gains"], "a1", "a2", "M")}
     a1, a2, M = G["a1"], G["a2"], G["M"]
     Km0, tau0 = info["nominal"]

@@ -23,6 +23,7 @@ from typing import Any
 
 from designkit.families.pid_sliding_mode.bound import PARAMETERS, PerturbationBound, relay_set
 from designkit.families.pid_sliding_mode.measure import measure
+from designkit.families.pid_sliding_mode.spec import CHATTERING, EXTRA, IN_BAND, PRECISION
 from designkit.verification.check import Check
 from designkit.verification.conditions import Condition, ConditionSet, certify
 from designkit.verification.suite import CheckRule, Context
@@ -73,7 +74,7 @@ def shortfall(info: dict) -> str:
 
 
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra["pid_sm"]
+    info = design.extra[EXTRA]
     box = {k: tuple(v) for k, v in info["box"].items()}
     out = []
     for name, set_ in condition_sets(info).items():
@@ -92,7 +93,7 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="pid_sm_conditions", order=55, applies=lambda d, c: "pid_sm" in d.extra, run=_certificates,
+    name="pid_sm_conditions", order=55, applies=lambda d, c: EXTRA in d.extra, run=_certificates,
     label="PID/sliding-mode conditions on the parameter box",
     labels={"pid_sm_dynamics": "Sliding variable and sliding motion stable (whole box)",
             "pid_sm_relay": "Relay dominates the input-equivalent perturbation (whole box)",
@@ -103,25 +104,25 @@ CERTIFICATE_RULE = CheckRule(
 
 
 def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra["pid_sm"]
+    info = design.extra[EXTRA]
     run = measure(design, ctx.simulation)
     cert = {"band": run.band, "hold": run.hold, "reaching_time": run.reaching_time, "max_abs_slm": run.slm_max}
     what = {None: "the band the relay held over a step leaves",
             "saturation": "the boundary layer ε", "dead_zone": "the dead zone ε plus one held step"}[
         None if info["epsilon"] is None else info["layer"]]
     if run.reach is None:
-        band = Check("pid_sm_in_band", False, f"|slm| <= {run.band:.4g} rad*s after reaching", None, None, "rad*s",
+        band = Check(IN_BAND, False, f"|slm| <= {run.band:.4g} rad*s after reaching", None, None, "rad*s",
                      f"|slm| never entered {what} ({run.band:.4g} rad*s): the loop does not slide", cert)
         return (band,)
     ok = run.worst <= run.band * (1 + 1e-9)
     how = ("stays within it" if ok else f"leaves it: |slm| = {run.worst:.4g} rad*s at t = {run.worst_at:.4g} s, "
            f"{run.worst / run.band:.3g} times the band")
-    band = Check("pid_sm_in_band", ok, f"|slm| <= {run.band:.4g} rad*s after reaching", run.worst,
+    band = Check(IN_BAND, ok, f"|slm| <= {run.band:.4g} rad*s after reaching", run.worst,
                  run.band - run.worst, "rad*s", f"|slm| entered {what} ({run.band:.4g} rad*s) after "
                  f"{run.reaching_time:.4g} s and {how}; largest |slm| after reaching {run.worst:.4g} rad*s", cert)
     dev_ok = run.deviation <= run.deviation_bound * (1 + 1e-3) + 1e-12
     precision = Check(
-        "pid_sm_precision", dev_ok, "|x1 − x1 of the sliding motion| <= ||s/N||₁ max|slm|", run.deviation,
+        PRECISION, dev_ok, "|x1 − x1 of the sliding motion| <= ||s/N||₁ max|slm|", run.deviation,
         run.deviation_bound - run.deviation, "rad",
         f"the position stays within {run.deviation:.4g} rad of the plant-independent sliding motion, against the "
         f"bound ||s/N||₁ max|slm| = {info['l1']:.4g} 1/s × {run.slm_max:.4g} rad*s = {run.deviation_bound:.4g} rad "
@@ -130,7 +131,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
          "l1": info["l1"]}, required=False)
     freq = run.switching_frequency
     chatter = Check(
-        "pid_sm_chattering", True if ok else None, "reported", freq, None, "1/s",
+        CHATTERING, True if ok else None, "reported", freq, None, "1/s",
         f"after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
         f"({0.0 if freq is None else freq:.4g} per s, at most {1 / run.hold:.4g} per s with a {run.hold:.3g} s "
         f"hold); total variation of u {run.total_variation:.4g} N*m, of the switching part "
@@ -144,10 +145,10 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 RUN_RULE = CheckRule(
     name="pid_sm_run", order=127,
-    applies=lambda d, c: c.simulation is not None and "pid_sm" in d.extra and "slm" in c.simulation.signals,
+    applies=lambda d, c: c.simulation is not None and EXTRA in d.extra and "slm" in c.simulation.signals,
     run=_run_checks, label="Sliding mode in the simulated run",
-    labels={"pid_sm_in_band": "The run stays in the band around slm = 0",
-            "pid_sm_precision": "Distance from the sliding motion (measured)",
-            "pid_sm_chattering": "Chattering (measured)"},
+    labels={IN_BAND: "The run stays in the band around slm = 0",
+            PRECISION: "Distance from the sliding motion (measured)",
+            CHATTERING: "Chattering (measured)"},
     glossary=(("band", "|slm| ≤ δ: the boundary layer, or how far the relay held over a step can leave slm"),),
 )

@@ -16,6 +16,7 @@ from designkit.display.figure import EVENT_STYLE, REFERENCE_STYLE, Figure, plain
 from designkit.display.numbers import sci
 from designkit.display.svg import BLUE, GREEN, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
 from designkit.families.pid_sliding_mode.measure import Run, measure
+from designkit.families.pid_sliding_mode.spec import CHATTERING, EXTRA, IN_BAND, PRECISION
 
 __all__ = ["FIGURES"]
 
@@ -72,14 +73,14 @@ _SLM = {
 def sliding_variable_figure(result: Any) -> Figure | None:
     """``slm(t)`` on a symmetric-log axis linear within the band."""
     sim = result.simulation
-    if sim is None or "pid_sm" not in result.design.extra:
+    if sim is None or EXTRA not in result.design.extra:
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_slm, run, sim)
     lead = (f"The sliding variable over the run; the axis is linear within ±{sci(run.band)} rad·s, the band, and "
             "logarithmic beyond.")
     return Figure("PID/sliding mode: the sliding variable", _caption(lead, _SLM, keys), svg,
-                  "fig-pid-sm-slm.svg", _present(result, ("pid_sm_in_band",)))
+                  "fig-pid-sm-slm.svg", _present(result, (IN_BAND,)))
 
 
 def _draw_position(run: Run, sim: Any) -> tuple[Any, dict[str, Any]]:
@@ -120,14 +121,14 @@ _POS = {
 def position_figure(result: Any) -> Figure | None:
     """The position against the sliding motion, and their difference against the band's precision."""
     sim = result.simulation
-    if sim is None or "pid_sm" not in result.design.extra:
+    if sim is None or EXTRA not in result.design.extra:
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_position, run, sim)
     lead = ("The position against the motion the sliding mode imposes whatever Km, τ and the perturbation; the "
             "lower panel shows how far the run is from it.")
     return Figure("PID/sliding mode: the sliding motion", _caption(lead, _POS, keys), svg, "fig-pid-sm-position.svg",
-                  _present(result, ("pid_sm_precision",)))
+                  _present(result, (PRECISION,)))
 
 
 def _draw_u(run: Run, sim: Any) -> tuple[Any, dict[str, Any]]:
@@ -157,7 +158,7 @@ _U = {
 def control_figure(result: Any) -> Figure | None:
     """The command and its PID and switching parts."""
     sim = result.simulation
-    if sim is None or "pid_sm" not in result.design.extra:
+    if sim is None or EXTRA not in result.design.extra:
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_u, run, sim)
@@ -165,7 +166,7 @@ def control_figure(result: Any) -> Figure | None:
     lead = ("The command: the PID part and the switching part that keeps slm in its band"
             + ("." if freq is None else f"; slm changes sign {freq:.4g} times per second after reaching."))
     return Figure("PID/sliding mode: the control", _caption(lead, _U, keys), svg, "fig-pid-sm-control.svg",
-                  _present(result, ("pid_sm_chattering",)))
+                  _present(result, (CHATTERING,)))
 
 
 FIGURES = (sliding_variable_figure, position_figure, control_figure)

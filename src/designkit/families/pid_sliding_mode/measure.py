@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.pid_sliding_mode.spec import KIND
+from designkit.families.pid_sliding_mode.spec import EXTRA, KIND
 from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 
 __all__ = ["Run", "json_summary", "measure"]
@@ -65,7 +65,7 @@ def band_of(info: dict, hold: float) -> float:
 
 def measure(design: Any, sim: Any) -> Run:
     """The measurements of ``sim``, a run of ``design`` (module docstring)."""
-    info = design.extra["pid_sm"]
+    info = design.extra[EXTRA]
     sf = surface(design.poles)
     t = np.asarray(sim.time, float)
     ref = np.asarray(sim.reference[:, 0, :], float)
@@ -113,7 +113,7 @@ def json_summary(result: Any) -> dict[str, Any]:
     """The family's object of ``synth --json`` / ``verify --json``: the PID gains, ``M`` with the bound
     it covers, and what the run measured."""
     d = result.design
-    info = d.extra["pid_sm"]
+    info = d.extra[EXTRA]
     out: dict[str, Any] = {
         "form": info["form"], "sliding_variable": info["sliding_variable"],
         "gains": {k: float(d.gains[k]) for k in info["pid_gains"]},

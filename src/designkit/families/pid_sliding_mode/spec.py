@@ -32,6 +32,12 @@ from designkit.spec.fields import Finite, Pole, Section, fmt_pole
 from designkit.spec.ranges import Ranged
 
 KIND = "pid_sliding_mode"
+
+EXTRA = "pid_sm"
+"""The key of the family's design data in ``Design.extra`` (and of its JSON object)."""
+
+IN_BAND, PRECISION, CHATTERING = "pid_sm_in_band", "pid_sm_precision", "pid_sm_chattering"
+"""The names of the run checks the figures are the evidence of."""
 """The controller kind of this family (the spec's ``controller.kind``)."""
 
 __all__ = ["KIND", "PidSlidingModeSpec", "perturbation_level", "validate"]
