@@ -1,0 +1,108 @@
+"""Linear state regulator by pole placement (ROBEL, figure 5.2): the ``state_regulator`` family.
+
+Plant ``x' = A x + B u + D d``: the elastic joint (``x = [R1 theta_m, R1 theta_m', R2 theta_l, R2 theta_l']``,
+spring-side coordinates, the load position ``x3`` controlled) or the link (``[x1, x2]``), linearised at rest by
+CasADi from the plant's own ODE.  Law::
+
+    u = -K x + N xD,      K = e P(A) (Ackermann),      N = -1 / (C (A - B K)^-1 B)
+
+(:mod:`~designkit.families.state_regulator.gains`).  The loop has no controller state, so its closed loop is
+``A - B K`` with exactly the requested poles; the generic checks judge it: ``pole_placement`` (poles, no finite
+zero of ``x3/xD``, unit DC gain), ``lyapunov``, ``loop_margins`` (the loop broken at the plant input:
+``L(s) = K (sI - A)^-1 B``), ``robustness`` over ``plant.uncertainty``, ``designed_loop`` and ``time_domain``.
+Without integral action a constant load ``w`` leaves the offset ``-C (A - B K)^-1 D w`` (in ``--json``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from designkit.families.state_regulator.gains import ackermann, check_controllable, load_offset, reference_gain
+from designkit.families.state_regulator.spec import EXTRA, KIND, StateRegulatorSpec, validate
+from designkit.families.vsc.surface import linear_model
+from designkit.synthesis.closed_loop import with_closed_loop
+from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.family import Display, Family
+from designkit.synthesis.law import Law, dynamic_law
+
+__all__ = ["FAMILY", "KIND", "StateRegulatorSpec", "law", "synthesize"]
+
+
+def _box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
+    unc = spec.plant.uncertainty
+    return {k: (float(lo), float(hi)) for k, (lo, hi) in (unc.intervals.items() if unc is not None else ())
+            if k in model.names}
+
+
+def synthesize(spec: Any, plant: Any) -> Design:
+    """The regulator a spec asks for: ``K`` from ``controller.poles`` on the nominal plant, ``N`` for a unit
+    static gain of the controlled position."""
+    model = linear_model(plant)
+    check_controllable(spec, model, _box(spec, model))
+    A, B, D = model.at()
+    poles = tuple(complex(p) for p in spec.controller.poles)
+    K = ackermann(A, B, poles)
+    position = int(plant.positions[0])
+    N = reference_gain(A, B, K, position)
+    offset = load_offset(A, B, D, K, position) if D.shape[1] else 0.0
+    units = [s.unit for s in plant.states]
+    u_unit = plant.inputs[0].unit
+    gains = [Gain(f"K{i + 1}", float(K[i]), f"{u_unit}/({units[i]})", f"state feedback on {plant.states[i].name}")
+             for i in range(len(K))]
+    gains.append(Gain("N", N, f"{u_unit}/({units[position]})", "reference gain (unit static gain)"))
+    open_loop = np.linalg.eigvals(A)
+    d_unit = plant.disturbances[0].unit if plant.disturbances else ""
+    extra = {EXTRA: {
+        "K": K.tolist(), "N": N, "poles": [[p.real, p.imag] for p in poles],
+        "open_loop_poles": [[complex(p).real, complex(p).imag] for p in open_loop],
+        "position_index": position, "load_offset_per_unit": offset, "load_offset_unit": f"{units[position]} per "
+        f"{d_unit}", "model": [A.tolist(), B.tolist(), D.tolist()],
+    }}
+    formulas = (
+        "u = −K x + N xD; K = e P(A) (Ackermann), e the last row of [B AB … A^(n−1)B]^−1, P(s) = Π (s − p_j)",
+        f"N = −1/(C (A − BK)^−1 B) = {N:.6g} (unit static gain of the controlled position)",
+        f"a constant load w leaves x − xD = −C (A − BK)^−1 D w = {offset:.4g} {units[position]} per {d_unit} "
+        "(no integral action)",
+    )
+    d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=(), reference="step",
+               formulas=formulas, extra=extra)
+    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
+
+
+def law(design: Design, anti_windup: Any = None) -> Law:
+    """``u = -K x + N xD`` (input units); records nothing of its own (no state, no switching)."""
+    info = design.extra[EXTRA]
+    K, N = np.asarray(info["K"], float), float(info["N"])
+    return dynamic_law(KIND, design.plant, command=lambda s: -ca.dot(ca.DM(K), s.y) + N * s.qD[0],
+                       settings={"gains": design.gains.to_json()})
+
+
+def json_summary(result: Any) -> dict[str, Any]:
+    """``K``, ``N``, the requested and open-loop poles and the load offset per unit load."""
+    info = result.design.extra[EXTRA]
+    return {EXTRA: {k: info[k] for k in ("K", "N", "poles", "open_loop_poles", "load_offset_per_unit",
+                                         "load_offset_unit")}}
+
+
+FAMILY = Family(
+    kind=KIND,
+    spec=StateRegulatorSpec,
+    plants=("elastic_joint", "link"),
+    reference="step",
+    synthesize=synthesize,
+    law=law,
+    checks=("pole_placement", "lyapunov", "robustness", "loop_margins", "designed_loop", "time_domain"),
+    display=Display(
+        label="Linear state regulator (pole placement)",
+        law=("u = −K x + N xD", "K = e P(A) places the n requested poles (Ackermann); N gives unit static gain"),
+        loop_transfer="L(s) = K (sI − A)^−1 B",
+        summary="ROBEL figure 5.2: a full state feedback places every closed-loop pole of the elastic joint "
+                "(motor and link positions and speeds); the reference gain makes the link settle on the "
+                "reference without load. No integral action: a load torque leaves an offset.",
+    ),
+    validate=validate,
+    json=json_summary,
+)

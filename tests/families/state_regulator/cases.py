@@ -1,0 +1,16 @@
+"""The test cases the shared suites run for the state_regulator family (found by discovery): its conformance cases
+(tests/problems.py) and its example specs' exit codes (tests/test_cli.py)."""
+
+from __future__ import annotations
+
+CONFORMANCE = {
+    # ROBEL figure 5.2 on the default elastic joint: four poles placed, no load
+    "elastic_joint": ("{kind: state_regulator, poles: [-8, -10, -12, -15]}", "{duration: 2.0}",
+                      "{overshoot: 15, settling_time: 1.5, steady_state_error: 0.01}"),
+}
+"""Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
+
+EXAMPLES = {
+    "state-regulator-elastic-joint": 0,
+}
+"""Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
