@@ -121,6 +121,49 @@ def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, n
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
 
+def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, notes: tuple[str, ...] = (),
+                   extra: dict | None = None) -> Design:
+    """The PID servo of the **load** position ``x3`` (rate feedback on the load speed ``x4``) of the elastic joint
+    ``plant``, its gains placing ``poles`` and ``zero`` on the rigid approximation
+    (:func:`~designkit.models.elastic.rigid_approximation`), verified on the 4-state loop.
+
+    The loop with the transmission has five poles (the integral, the link and the lightly damped elastic mode),
+    not the three requested: the design carries no requested poles (``pole_placement`` and ``routh_hurwitz`` are
+    statements about the rigid link), and the generic checks judge the true loop (``lyapunov``, ``robustness``,
+    ``loop_margins``, ``designed_loop``, ``time_domain``); its poles are in the notes and in
+    ``extra["pid_servo_elastic"]``.
+    """
+    import numpy as np
+
+    from designkit.models.elastic import rigid_approximation
+    from designkit.models.link import LinkPlant
+
+    Km_r, tau_r = rigid_approximation(plant.params)
+    rigid = LinkPlant(Km=Km_r, tau=tau_r)
+    values = pid.servo_gains(rigid, poles, zero)
+    u_unit = plant.inputs[0].unit
+    g = Gains.of(Gain(k, v, GAIN_INFO[k][0].replace("N*m", u_unit), GAIN_INFO[k][1]) for k, v in values.items())
+    z = zero if zero is not None else -float(g["K3"]) / float(g["K1"])
+    d = Design(kind=KIND, plant=plant, gains=g, poles=(), zeros=(), reference="step", formulas=pid.SERVO_FORMULAS,
+               notes=tuple(notes), extra=dict(extra or {}))
+    d = with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
+    true_poles = np.linalg.eigvals(d.closed_loop.A)
+    slowest = max(float(p.real) for p in true_poles)
+    flex = max(true_poles, key=lambda p: abs(p.imag))
+    damping = -flex.real / abs(flex) if abs(flex) > 0 else 1.0
+    fmt = ", ".join(f"{p.real:.4g}{p.imag:+.4g}j" if abs(p.imag) > 1e-9 else f"{p.real:.4g}" for p in true_poles)
+    note = (f"Gains placed on the rigid approximation (Km = {Km_r:.4g} rad/s per {u_unit}, τ = {tau_r:.4g} s): poles "
+            f"{', '.join(f'{complex(p).real:.4g}' for p in poles)} 1/s and zero {z:.4g} 1/s there. With the elastic "
+            f"transmission the loop has the poles {fmt} 1/s (elastic mode damping {damping:.3g}); "
+            + ("it is stable." if slowest < 0 else "it is UNSTABLE: slow the poles down."))
+    info = {"rigid": {"Km": Km_r, "tau": tau_r}, "requested_poles": [[complex(p).real, complex(p).imag] for p in poles],
+            "zero": z, "loop_poles": [[complex(p).real, complex(p).imag] for p in true_poles],
+            "elastic_mode_damping": damping, "controlled": "load position x3 (rate feedback on x4)"}
+    import dataclasses
+
+    return dataclasses.replace(d, notes=(*d.notes, note), extra={**d.extra, "pid_servo_elastic": info})
+
+
 def synthesize(spec: Any, plant: Any) -> Design:
     """The servo a spec asks for: poles given, or derived from the requirements (zero on the third pole)."""
     poles, notes, extra = poles_from_spec(spec.controller, spec.requirements)
@@ -129,13 +172,15 @@ def synthesize(spec: Any, plant: Any) -> Design:
         zero = poles[2].real
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
+    if plant.kind == "elastic_joint":
+        return elastic_design(plant, poles, zero, notes=notes, extra=extra)
     return design(plant, poles, zero, notes=notes, extra=extra)
 
 
 FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
-    plants=("link",),
+    plants=("link", "elastic_joint"),
     reference="step",
     synthesize=synthesize,
     law=law,

@@ -36,7 +36,7 @@ import numpy as np
 from designkit.errors import ModelError
 from designkit.models.plant import Parameter, PlantBase, Signal, ode_function
 
-__all__ = ["ElasticJointPlant", "ElasticLinkParameters", "elastic_ode", "elastic_state_space"]
+__all__ = ["ElasticJointPlant", "ElasticLinkParameters", "elastic_ode", "elastic_state_space", "rigid_approximation"]
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,28 @@ def elastic_state_space(params: ElasticLinkParameters) -> tuple[np.ndarray, np.n
     ])
     B = np.array([[0.0], [params.Km / params.tau1], [0.0], [0.0]])
     return A, B
+
+
+def rigid_approximation(params: ElasticLinkParameters) -> tuple[float, float]:
+    """The rigid link ``x'' = -x'/tau + (Km/tau) u`` the joint becomes with an infinitely stiff transmission.
+
+    With ``x1 = x3 = x`` (``theta_m = x/R1``, ``theta_l = x/R2``) the spring torque ``T = KR (x1 - x3)`` is
+    eliminated between the two equations of motion (the motor's divided by ``R1``, the link's by ``R2``, added)::
+
+        (J1/R1^2 + J2/R2^2) x'' + (B1/R1^2 + B2/R2^2) x' = (Ku/R1) u + w/R2 - (mgl/R2) sin(x/R2)
+
+    so ``tau = Jeq/Beq`` and ``Km = (Ku/R1)/Beq = Km_motor (B1/R1^2)/Beq`` (``Ku/R1 = Km_motor B1/R1^2``), with
+    ``Jeq = J1/R1^2 + J2/R2^2`` (kg*m^2) and ``Beq = B1/R1^2 + B2/R2^2`` (N*m*s/rad).
+
+    Returns
+    -------
+    (float, float)
+        ``Km`` (spring-side rad/s per input unit) and ``tau`` (s) of the rigid link (gravity ignored).
+    """
+    j_eq = params.J1 / params.R1**2 + params.J2 / params.R2**2
+    b_motor = params.B1 / params.R1**2
+    b_eq = b_motor + params.B2 / params.R2**2
+    return params.Km * b_motor / b_eq, j_eq / b_eq
 
 
 _PARAMETER_INFO: dict[str, tuple[str, str]] = {
