@@ -251,3 +251,8 @@ FAMILY = Family(
     figures=FIGURES,
     json=json_summary,
 )
+
+from designkit.families.pid_sliding_mode.elastic import extend as _with_elastic_joint  # noqa: E402
+
+FAMILY = _with_elastic_joint(FAMILY)
+"""The family also designs for ROBEL's elastic joint (motor-side sliding variable; pid_sliding_mode/elastic.py)."""
