@@ -17,7 +17,8 @@ from designkit.report.compliance import achieved_text, limit_of, percent_of, uni
 from designkit.report.labels import check_label
 from designkit.report.rows import MetricRow, WhyFix, WhyRow
 
-__all__ = ["REPEATED_CAUSE_MIN", "diagnose_run", "metric_rows", "share_causes", "share_fixes", "why_section"]
+__all__ = ["REPEATED_CAUSE_MIN", "diagnose_run", "metric_rows", "resimulated_fixes", "share_causes", "share_fixes",
+           "why_section"]
 
 
 def _why_from_check(check: Any) -> WhyRow:
@@ -85,10 +86,81 @@ def why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, t
         note = ("Causes are diagnosed from this run (the simulation, the linear analysis of the design and the "
                 "checks' certificates); the fixes are computed from the same run.")
     rows = share_causes(rows)
+    proposed = tuple(getattr(diagnosis, "proposed", ()) or ())
+    if proposed:
+        shared_rows, fixes = resimulated_fixes(rows, parts, proposed)
+        note += (" Every fix the diagnosis can write as a change of the spec was re-run through the same pipeline "
+                 "(design, checks, simulation on the true plant); only those whose re-run passes every required "
+                 "check are numbered below the table (section Fixes re-simulated).")
+        return shared_rows, note, fixes
     shared_rows, fixes = share_fixes(rows, parts)
     if fixes:
         note += " A fix that applies to several rows is given once, numbered, below the table."
     return shared_rows, note, fixes
+
+
+def _trial_words(trial: Any) -> str:
+    """A re-run in one sentence: the change (YAML), the verdict, the margins."""
+    from designkit.analysis.diagnosis.remedies import snippet
+
+    text = f"{trial.remedy.title} ({snippet(trial.remedy.changes)}): re-run, {trial.verdict}"
+    if trial.margins:
+        text += "; loop margins " + "; ".join(
+            f"{m.input}: {m.gain_margin}, phase margin {m.phase_margin}, modulus margin {m.modulus_margin}"
+            for m in trial.margins)
+    elif trial.margins_note:
+        text += f"; {trial.margins_note}"
+    text = unit(text)
+    return text[0].upper() + text[1:] + "."
+
+
+def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], proposed: Sequence[Any]
+                      ) -> tuple[tuple[WhyRow, ...], tuple[WhyFix, ...]]:
+    """Rows whose fixes are re-run: a sentence stated once (later rows refer to the first row that states it),
+    followed by what its re-runs showed; the numbered fixes are the re-runs that pass every required check.
+
+    Parameters
+    ----------
+    rows : sequence of WhyRow
+    parts : sequence of tuple of str
+        Each row's distinct fix sentences (typeset).
+    proposed : sequence of ProposedFix
+        The diagnosis' sentences with their re-runs (:func:`designkit.analysis.diagnosis.fixes.check_fixes`).
+    """
+    by_sentence = {unit(p.sentence): p for p in proposed}
+    numbers: dict[int, int] = {}  # id(trial) -> fix number
+    fixes: list[WhyFix] = []
+    first: dict[str, str] = {}
+    out = []
+    for row, row_parts in zip(rows, parts, strict=True):
+        texts, refs = [], []
+        for part in row_parts:
+            if part in first:
+                texts.append(f"As under {first[part]} (above).")
+                found = by_sentence.get(part)
+                refs += [numbers[id(t)] for t in (found.trials if found else ()) if id(t) in numbers]
+                continue
+            first[part] = row.label
+            texts.append(part)
+            found = by_sentence.get(part)
+            if found is None:
+                continue
+            for trial in found.trials:
+                if trial.passed:
+                    numbers[id(trial)] = len(numbers) + 1
+                    refs.append(numbers[id(trial)])
+                    fixes.append(WhyFix(numbers[id(trial)], _trial_words(trial), ()))
+                else:
+                    words = _trial_words(trial)
+                    texts.append("Tried, and not a fix: " + words[0].lower() + words[1:])
+            if found.note:
+                texts.append(found.note[0].upper() + found.note[1:] + ".")
+        refs = list(dict.fromkeys(refs))
+        if refs:
+            texts.append(_refs_text(refs).replace("below.", "below (re-simulated, passing)."))
+        out.append(dataclasses.replace(row, fix=" ".join(texts), fix_refs=tuple(refs)))
+    labels = {k: tuple(r.label for r in out if k in r.fix_refs) for k in range(1, len(fixes) + 1)}
+    return tuple(out), tuple(dataclasses.replace(f, checks=labels[f.number]) for f in fixes)
 
 
 REPEATED_CAUSE_MIN = 120

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
 
 from designkit.analysis.diagnosis.comparison import MetricPair
 from designkit.display.numbers import TARGET, fmt_number, quantity
@@ -98,6 +99,9 @@ class Diagnosis:
     root_cause : str
         A cause no controller could remove, stated before everything it explains (``""`` when there is none):
         requirements the actuator cannot meet (the time-optimal settling bound).
+    proposed : tuple of ProposedFix
+        Every distinct fix sentence of the findings with its remedies re-run through the pipeline
+        (:func:`~designkit.analysis.diagnosis.fixes.check_fixes`); empty when not re-simulated.
     """
 
     findings: tuple[Finding, ...]
@@ -106,6 +110,7 @@ class Diagnosis:
     limit_cycle: LimitCycle | None
     linear_vs_nonlinear: tuple[MetricPair, ...]
     root_cause: str = ""
+    proposed: tuple[Any, ...] = ()
 
 
 def shortfall(target: str, margin: float | None, unit: str) -> tuple[str, str]:

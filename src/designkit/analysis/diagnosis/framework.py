@@ -26,6 +26,7 @@ from designkit.analysis.diagnosis.divergence import (
     measure_oscillation,
 )
 from designkit.analysis.diagnosis.findings import Diagnosis, Finding, LimitCycle, shortfall
+from designkit.analysis.diagnosis.fixes import check_fixes
 from designkit.analysis.elements import analysis_of
 from designkit.display.numbers import TARGET, fmt_number, plain_complex, quantity, unit
 
@@ -259,13 +260,16 @@ def _demand(result: Any, peak: float | None) -> dict[str, Any]:
                      f"closed-loop poles (or a smaller {what}) are needed to stay within it")}
 
 
-def diagnose(result: Any) -> Diagnosis:
+def diagnose(result: Any, *, resimulate: bool = True) -> Diagnosis:
     """Diagnose a finished run (see :mod:`designkit.analysis.diagnosis`).
 
     Parameters
     ----------
     result : designkit.pipeline.PipelineResult
         Its ``checks``, ``simulation`` (may be None), ``design`` and ``plant``.
+    resimulate : bool
+        Re-run every proposed fix through the pipeline (:func:`~designkit.analysis.diagnosis.fixes.check_fixes`,
+        at most :data:`~designkit.analysis.diagnosis.resimulate.MAX_FIX_RUNS` runs).
 
     Returns
     -------
@@ -279,6 +283,11 @@ def diagnose(result: Any) -> Diagnosis:
     failing: Sequence[Any] = [c for c in result.checks if c.required and c.passed is not True]
     findings = tuple(_finding(c, ctx, demand, _specific(result, c)) for c in failing)
     div = ctx.divergence
+    root = _root_cause(ctx)
+    proposed: tuple[Any, ...] = ()
+    if resimulate and getattr(result, "loaded", None) is not None and result.simulation is not None:
+        sentences = tuple(dict.fromkeys(s for f in findings for s in f.fixes))
+        proposed = check_fixes(result, sentences, settling_infeasible=bool(root))
     return Diagnosis(findings=findings, diverged=bool(div is not None and div.diverged),
                      divergence=ctx.divergence_text, limit_cycle=ctx.limit_cycle, linear_vs_nonlinear=pairs,
-                     root_cause=_root_cause(ctx))
+                     root_cause=root, proposed=proposed)
