@@ -49,41 +49,136 @@ def breakable(text: object) -> Markup:
 
 def _mathml_token(t: MathToken) -> str:
     if t.kind == "sep":
-        return f'<mo separator="true">{escape(t.text)}</mo><mspace width="1.5em"></mspace>'
+        return f"<mo separator=\"true\">{escape(t.text)}</mo>"
     tag = {"mi": "mi", "mn": "mn", "mo": "mo"}.get(t.kind, "mtext")
     core = f"<{tag}>{escape(t.text)}</{tag}>"
     sub = f"<mrow>{''.join(_mathml_piece(x) for x in t.sub.split(','))}</mrow>" if t.sub else ""
-    sup = f"<mo>{escape(t.sup)}</mo>" if t.sup and set(t.sup) <= {"′"} else (
-        f"<mn>{escape(t.sup)}</mn>" if t.sup else "")
+    primes = t.sup.count("′")
+    sup = t.sup.replace("′", "")
+    sup = f"<mn>{escape(sup)}</mn>" if sup else ""
     if sub and sup:
-        return f"<msubsup>{core}{sub}{sup}</msubsup>"
-    if sub:
-        return f"<msub>{core}{sub}</msub>"
-    if sup:
-        return f"<msup>{core}{sup}</msup>"
-    return core
+        out = f"<msubsup>{core}{sub}{sup}</msubsup>"
+    elif sub:
+        out = f"<msub>{core}{sub}</msub>"
+    elif sup:
+        out = f"<msup>{core}{sup}</msup>"
+    else:
+        out = core
+    # a prime follows its base at the base's size: the glyph ′ is already a raised mark, and a browser
+    # that sets it as a superscript shrinks and lifts it a second time (a speck above the letter)
+    return out + '<mo lspace="0" rspace="0">′</mo>' * primes
 
 
 def _mathml_piece(text: str) -> str:
     return f"<mn>{escape(text)}</mn>" if text.isdigit() else f"<mi>{escape(text)}</mi>"
 
 
+def _is_op(n, *texts: str) -> bool:
+    return isinstance(n, MathToken) and n.kind == "mo" and (not texts or n.text in texts)
+
+
 def _mathml_nodes(nodes) -> str:
-    out = []
+    """MathML of a node row; every ``( ... )`` becomes its own ``<mrow>``, so its parentheses stretch to what
+    they enclose, not to the tallest fraction of the line."""
+    out: list[list[str]] = [[]]
     for n in nodes:
         if isinstance(n, MathFrac):
-            out.append(f"<mfrac><mrow>{_mathml_nodes(n.num)}</mrow><mrow>{_mathml_nodes(n.den)}</mrow></mfrac>")
+            out[-1].append(f"<mfrac><mrow>{_mathml_nodes(n.num)}</mrow><mrow>{_mathml_nodes(n.den)}</mrow></mfrac>")
+        elif _is_op(n, "("):
+            out.append([_mathml_token(n)])
+        elif _is_op(n, ")") and len(out) > 1:
+            inner = "".join(out.pop())
+            if "<mfrac>" not in inner:  # around a row: the parentheses keep the text's size
+                inner = inner.replace("<mo>(</mo>", '<mo stretchy="false">(</mo>', 1)
+                inner += '<mo stretchy="false">)</mo>'
+            else:
+                inner += _mathml_token(n)
+            out[-1].append(f"<mrow>{inner}</mrow>")
         else:
-            out.append(_mathml_token(n))
-    return "".join(out)
+            out[-1].append(_mathml_token(n))
+    while len(out) > 1:  # an unbalanced "(": its tokens stay in line
+        inner = out.pop()
+        out[-1].extend(inner)
+    return "".join(out[0])
+
+
+def _pieces(nodes) -> list[list[list]]:
+    """The line-break units of an equation: its formulas (split after each separator), each split into
+    terms before every binary ``+``/``−`` at parenthesis depth 0 (the first term keeps the left side and
+    ``=``), so that a long formula wraps between terms, the operator opening the next line."""
+    formulas: list[list[list]] = [[[]]]
+    depth = 0
+    for n in nodes:
+        terms = formulas[-1]
+        if isinstance(n, MathToken) and n.kind == "sep":
+            terms[-1].append(n)
+            formulas.append([[]])
+            continue
+        if _is_op(n, "("):
+            depth += 1
+        elif _is_op(n, ")"):
+            depth = max(depth - 1, 0)
+        previous = terms[-1][-1] if terms[-1] else None
+        binary = previous is not None and not _is_op(previous) and not (
+            isinstance(previous, MathToken) and previous.kind == "sep")
+        if depth == 0 and _is_op(n, "+", "−", "-") and binary:
+            terms.append([])
+        terms[-1].append(n)
+    return [[t for t in f if t] for f in formulas if any(f)]
 
 
 def mathml(eq: Equation) -> Markup:
-    """An :class:`~designkit.display.typeset.Equation` as presentation MathML (no script, no web font)."""
+    """An :class:`~designkit.display.typeset.Equation` as presentation MathML (no script, no web font).
+
+    The equation is written as a row of ``<math>`` elements, one per term (:func:`_pieces`), inside a
+    wrapping ``<span class="eq">`` labelled with the whole formula: MathML in browsers does not break lines,
+    so a formula wider than its column wraps between its terms instead of being clipped."""
     if not eq.nodes:
         return Markup("")
     alt = escape(eq.text)
-    return Markup(f'<math display="block" alttext="{alt}"><mrow>{_mathml_nodes(eq.nodes)}</mrow></math>')
+    formulas = []
+    for terms in _pieces(eq.nodes):
+        maths = "".join(_term(t, leading=k > 0) for k, t in enumerate(terms))
+        formulas.append(f'<span class="eq-formula">{maths}</span>')
+    return Markup(f'<span class="eq" role="math" aria-label="{alt}">{"".join(formulas)}</span>')
+
+
+def _term(nodes, *, leading: bool) -> str:
+    """One ``<math>`` of a term; the operator opening a continued term keeps its binary spacing."""
+    body = _mathml_nodes(nodes)
+    if leading and body.startswith("<mo>"):
+        body = '<mo form="infix">' + body[len("<mo>"):]
+    return f'<math display="block" alttext="{escape(_plain(nodes))}"><mrow>{body}</mrow></math>'
+
+
+def _plain(nodes) -> str:
+    parts = []
+    for n in nodes:
+        if isinstance(n, MathFrac):
+            parts.append(f"({_plain(n.num)})/({_plain(n.den)})")
+        else:
+            parts.append(n.text + (f"_{n.sub}" if n.sub else "") + n.sup)
+    return " ".join(parts)
+
+
+CERT_TABLE_WIDTH_PX = 820.0
+"""Width (CSS px) a certificate table may take in appendix A at a 1280 px window: the report column
+(1040 px less its padding) less the status column and the cell padding."""
+_MONO_ADVANCE_PX = 0.602 * 12.8  # DejaVu Sans Mono advance (0.602 em) at the tables' 0.8rem
+_CELL_PADDING_PX = 16.0
+
+
+def fits_as_table(header: tuple[str, ...] | None, rows: tuple[tuple[str, ...], ...] | None) -> bool:
+    """Whether a certificate table can be laid out as a table in :data:`CERT_TABLE_WIDTH_PX`: the sum over
+    its columns of their narrowest width (the longest word of the column, which a browser cannot break, in
+    the monospace cells) with the cell padding.  A table that does not fit is written as one record per
+    row (``column: value`` pairs that wrap), so nothing is clipped or needs a scroll bar."""
+    columns = list(zip(header or (), *(rows or ()), strict=False))
+    width = 0.0
+    for cells in columns:
+        longest = max((len(word) for cell in cells for word in str(cell).split()), default=0)
+        width += longest * _MONO_ADVANCE_PX + _CELL_PADDING_PX
+    return width <= CERT_TABLE_WIDTH_PX
 
 
 def _environment() -> jinja2.Environment:
@@ -100,6 +195,7 @@ def _environment() -> jinja2.Environment:
     )
     env.filters["breakable"] = breakable
     env.filters["mathml"] = mathml
+    env.tests["fitting"] = lambda e: fits_as_table(e.header, e.matrix)
     return env
 
 

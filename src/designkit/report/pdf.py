@@ -18,6 +18,7 @@ must not shadow Typst's).
 
 from __future__ import annotations
 
+import re
 import shutil
 import tempfile
 import unicodedata
@@ -212,4 +213,26 @@ def compile_pdf(model: ReportModel) -> bytes:
             raise RuntimeError(f"typst could not compile the report source: {detail}") from exc
     if not isinstance(pdf, bytes) or not pdf.startswith(b"%PDF"):
         raise RuntimeError("typst did not return a PDF document")
-    return pdf
+    return without_false_suspects(pdf)
+
+
+_FALSE_SUSPECTS = re.compile(rb"(/MarkInfo\s*<<\s*/Marked\s+true\s*)(/Suspects\s+false)(?=\s*>>)")
+
+
+def without_false_suspects(pdf: bytes) -> bytes:
+    """``pdf`` with the catalog's ``/MarkInfo`` entry ``/Suspects false`` blanked out (same length, so every
+    cross-reference offset stays valid).
+
+    Typst writes ``/MarkInfo << /Marked true /Suspects false >>`` in the document catalog of a tagged PDF.
+    That is valid PDF (ISO 32000-1, table 321: ``Suspects`` is a boolean, default false), but poppler up to
+    at least 22.12 reports any ``Suspects`` that is not ``true`` as "Syntax Error: Suspects object is wrong
+    type (boolean)" on stderr for every ``pdfinfo``, ``pdftoppm`` or ``pdftotext`` run.  Dropping the key
+    keeps its meaning (the default is false) and silences the reader; the tags and everything else are
+    untouched.  A PDF without that entry is returned as is.
+
+    Examples
+    --------
+    >>> without_false_suspects(b"<</MarkInfo<</Marked true/Suspects false>>>>")
+    b'<</MarkInfo<</Marked true               >>>>'
+    """
+    return _FALSE_SUSPECTS.sub(lambda m: m.group(1) + b" " * len(m.group(2)), pdf, count=1)
