@@ -35,6 +35,7 @@ EXPECTED_EXIT = {
     "puma560-resolved-acceleration": 1,  # the path passes near the wrist singularity with the exact inverse
     "puma560-resolved-acceleration-dls": 0,
     "mrac-vs-selftune": 0,  # a comparison spec (controllers:): both controllers verified (docs/comparison.md)
+    "robel": 0,  # ROBEL's four controllers on the elastic joint, all verified (docs/comparison.md, lab 3)
 }
 for _examples in discovered("EXAMPLES").values():  # the families' own examples (tests/families/<kind>/cases.py)
     EXPECTED_EXIT.update(_examples)
