@@ -54,6 +54,7 @@ _EXPORTS: dict[str, str] = {
     "Gains": "designkit.synthesis.design",
     "SimulationResult": "designkit.simulation.result",
     "write_report": "designkit.report",
+    "sweep": "designkit.sweep",
     # models
     "LinkPlant": "designkit.models.link",
     "ChainDescription": "designkit.models.description",

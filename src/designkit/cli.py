@@ -251,6 +251,56 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Monte Carlo of the nonlinear closed loop over the spec's uncertainty, on Dask (:mod:`designkit.sweep`)."""
+    from designkit.sweep.api import sweep
+
+    out = Path(args.out)
+    name = _spec_name(args.spec)
+    progress = not args.json and sys.stderr.isatty()
+    result = sweep(args.spec, args.samples, seed=args.seed, scheduler=args.scheduler, workers=args.workers,
+                   out=out / name if name else out, chunk=args.chunk, progress=progress)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2, allow_nan=False))
+    else:
+        lo, hi = result.confidence
+        print(f"{result.name}: {result.n_passed:,} of {result.samples:,} samples met every requirement "
+              f"(pass fraction {result.pass_fraction:.6g}, 95 % Clopper-Pearson interval [{lo:.6g}, {hi:.6g}])")
+        for req, s in result.requirement_summary().items():
+            q = s["margin_quantiles"]
+            print(f"  {req}: met in {s['passed']:,}; worst margin {_fmt(q['q0'])} {s['unit']}, median "
+                  f"{_fmt(q['q0.5'])} {s['unit']}")
+        f = result.falsification
+        if f is not None:
+            print(f"falsification: worst {f.requirement} margin {_fmt(f.margins.get(f.requirement))} at "
+                  + ", ".join(f"{d.name} = {v:.6g}" for d, v in zip(result.dimensions, f.values, strict=True))
+                  + (" (breaks the requirement)" if f.broken else " (still met)"))
+        for key in ("html", "pdf"):
+            if key in result.files:
+                print(f"report: {result.files[key]}")
+        print("VERIFIED" if result.verified else "NOT VERIFIED")
+    return EXIT_OK if result.verified else EXIT_CHECK_FAILED
+
+
+def _spec_name(path: str) -> str | None:
+    """The spec's ``name`` (the sweep's folder under ``--out``), None when it cannot be read (the sweep says why)."""
+    try:
+        import yaml
+
+        doc = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+        name = doc.get("name") if isinstance(doc, dict) else None
+        return name if isinstance(name, str) and name and "/" not in name and not name.startswith(".") else None
+    except (OSError, UnicodeDecodeError, ValueError, Exception):  # noqa: BLE001 - the sweep reports the error
+        return None
+
+
+def _samples(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
 def _jobs(text: str) -> int:
     if text not in ("1", "2"):
         raise argparse.ArgumentTypeError(f"must be 1 or 2, got {text!r}")
@@ -310,6 +360,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--name", help="C prefix of the generated symbols and base name of the files (default: "
                    "the spec name with - and . replaced by _)")
     p.set_defaults(func=cmd_codegen)
+
+    p = sub.add_parser("sweep", help="Monte Carlo of the nonlinear closed loop over the spec's uncertainty, "
+                       "on Dask: pass fraction, margins, worst cases, falsification, HTML + PDF report")
+    p.add_argument("spec", help="path of the YAML spec (with an optional sweep: section)")
+    p.add_argument("--samples", type=_samples, required=True, help="number of samples (1 to 10,000,000)")
+    p.add_argument("--seed", type=_samples, default=0, help="seed of the samples (default 0)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786); default: a "
+                   "LocalCluster on this machine")
+    p.add_argument("--workers", type=_samples, help="workers of the LocalCluster (default one per core)")
+    p.add_argument("--chunk", type=_samples, help="samples per chunk (default 1000); the results do not depend on it")
+    p.add_argument("--out", default="sweeps", help="output directory (default: sweeps/); the sweep goes to "
+                   "OUT/<spec name>/ (chunks/, samples.csv, worst/, sweep.json, report.html, report.pdf); an "
+                   "interrupted sweep re-run with the same arguments resumes from its chunks")
+    p.add_argument("--json", action="store_true", help="print one JSON object (samples, passed, pass_fraction, "
+                   "confidence, requirements, worst)")
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")
     p.add_argument("robot", help="zoo robot name, e.g. planar2r or puma560")
