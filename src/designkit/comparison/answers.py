@@ -43,7 +43,14 @@ def _lab2() -> ComparisonContribution:
     return ComparisonContribution("lab experiment 2: MRAC against SELFTUNE", lab2.applies, lab2.section)
 
 
-CONTRIBUTIONS: tuple[Callable[[], ComparisonContribution], ...] = (_lab2,)
+def _lab3() -> ComparisonContribution:
+    from designkit.comparison import lab3
+
+    return ComparisonContribution("lab experiment 3: sliding mode on ROBEL's elastic joint", lab3.applies,
+                                  lab3.section)
+
+
+CONTRIBUTIONS: tuple[Callable[[], ComparisonContribution], ...] = (_lab2, _lab3)
 """Factories of the contributed sections, in report order (imported when a report is built)."""
 
 

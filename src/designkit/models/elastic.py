@@ -149,7 +149,7 @@ def rigid_approximation(params: ElasticLinkParameters) -> tuple[float, float]:
 _PARAMETER_INFO: dict[str, tuple[str, str]] = {
     "J1": ("kg*m^2", "motor (rotor) inertia"),
     "tau1": ("s", "motor time constant J1/B1"),
-    "Km": ("(rad/s)/input", "motor static gain R1 Ku/B1"),
+    "Km": ("(rad/s)/V", "motor static gain R1 Ku/B1"),
     "KR": ("N*m/rad", "transmission stiffness"),
     "R1": ("1", "motor-side transmission ratio"),
     "R2": ("1", "link-side transmission ratio"),
@@ -218,7 +218,7 @@ class ElasticJointPlant(PlantBase):
         Signal("x1", "rad", "motor angle R1 theta_m"), Signal("x2", "rad/s", "motor speed"),
         Signal("x3", "rad", "link angle R2 theta_l"), Signal("x4", "rad/s", "link speed"),
     )
-    inputs: ClassVar[tuple[Signal, ...]] = (Signal("u", "input", "drive input (motor torque Ku u, N*m)"),)
+    inputs: ClassVar[tuple[Signal, ...]] = (Signal("u", "V", "drive input voltage (motor torque Ku u, N*m)"),)
     disturbances: ClassVar[tuple[Signal, ...]] = (Signal("w", "N*m", "disturbance torque on the link"),)
     positions: ClassVar[tuple[int, ...]] = (2,)
     velocities: ClassVar[tuple[int, ...]] = (3,)
