@@ -230,6 +230,11 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     fam = family(design.kind)
     sections = tuple(s for s in (lab_section(result), *(make(result) for make in fam.sections)) if s is not None)
     figures = design_figures(result, processes=processes)
+    if any(s.anchor == "lab" for s in sections):  # the gain study's root locus, beside the other figures
+        from designkit.report.figures.root_locus import root_locus_figure
+
+        locus = root_locus_figure(result, sections)
+        figures = (*figures, locus) if locus is not None else figures
     diagnosis = diagnose_run(result) if checks else None
     why, why_note, why_fixes = why_section(result, diagnosis)
     if isinstance(diagnosis, Exception):

@@ -18,6 +18,18 @@ from designkit.display.section import Table as LabTable
 __all__ = ["lab_section"]
 
 
+def _root_locus_sentences(result: Any) -> tuple[str, ...]:
+    """What the root locus over the gain study shows (:mod:`designkit.analysis.lab.root_locus`), in words."""
+    from designkit.analysis.lab.root_locus import POINTS, root_locus
+
+    rl = root_locus(result)
+    if rl is None:
+        return ()
+    return (f"Between those ends, the root locus (figure Root locus over the gain study) follows the closed-loop "
+            f"poles of the loop linearized at the design's operating point over {POINTS} log-spaced factors from "
+            f"× 0.5 to × 2 of each gain:", *rl.sentences)
+
+
 def lab_section(result: Any) -> ReportSection | None:
     """The lab questions' section of a run (None when the run has none: not a robot, or no simulation)."""
     from designkit.analysis.lab import lab_answers
@@ -61,8 +73,9 @@ def lab_section(result: Any) -> ReportSection | None:
                              *((f(r.overshoot), f(r.settling_time)) if step else ())))
         gain_tables.append(LabTable("Each gain scaled on every joint, everything else equal, on the true plant "
                                     "(the × 1 rows are the run above)", header, tuple(rows)))
+    locus = _root_locus_sentences(result) if st.effects else ()
     sections.append(LabSection("What is the function of each gain? How do gain variations influence performance?",
-                               (*st.sentences, *(e.sentence for e in st.effects)), tuple(gain_tables)))
+                               (*st.sentences, *(e.sentence for e in st.effects), *locus), tuple(gain_tables)))
 
     cf = answers.configuration
     loops = any(j.design_value is not None for j in cf.joints)
