@@ -107,27 +107,40 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     sim = ready.simulator
     batch = _batch_size(sim.time.size, len(ready.plant.positions), len(ready.plant.inputs), chunk)
     key = hashlib.sha256(f"{text}\0{seed}\0{chunk}".encode()).hexdigest()
-    folder = None
-    if out is not None:
-        folder = Path(out)
-        try:
-            (folder / "chunks").mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError("--out", f"cannot create {folder}: {exc.strerror or exc}") from None
-    job = Job(text=text, path=sw.path, seed=int(seed), samples=int(samples), chunk=chunk, batch=batch,
-              out=str(folder) if folder is not None else None, key=key)
-    from designkit.sweep.chunk import read_chunk
+    if workers is not None and (isinstance(workers, bool) or not 1 <= int(workers) <= 1024):
+        raise SpecError("--workers", f"must be 1 to 1024, got {workers!r}")
+    own = engine == "dask" and client is None
+    cluster = None
+    if own:  # connect before anything is written: an unreachable scheduler leaves no folder behind
+        client, cluster = eng.connect(scheduler, workers)
+    try:
+        folder = None
+        if out is not None:
+            folder = Path(out)
+            try:
+                (folder / "chunks").mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise OutputError("--out", f"cannot create {folder}: {exc.strerror or exc}") from None
+        job = Job(text=text, path=sw.path, seed=int(seed), samples=int(samples), chunk=chunk, batch=batch,
+                  out=str(folder) if folder is not None else None, key=key)
+        from designkit.sweep.chunk import read_chunk
 
-    resumed = sum(read_chunk(job, k) is not None for k in range(job.n_chunks)) if folder is not None else 0
-    start = time.monotonic()
-    if engine == "process":
-        chunks = eng.in_process(job, progress=progress)
-        where = {"engine": "this process"}
-    else:
-        chunks = eng.execute(job, client=client, scheduler=scheduler, workers=workers, progress=progress)
-        where = {"engine": "dask.distributed", "scheduler": scheduler or ("given client" if client is not None
-                                                                           else "LocalCluster"),
-                 "workers": workers}
+        resumed = sum(read_chunk(job, k) is not None for k in range(job.n_chunks)) if folder is not None else 0
+        start = time.monotonic()
+        if engine == "process":
+            chunks = eng.in_process(job, progress=progress)
+            where: dict[str, Any] = {"engine": "this process"}
+        else:
+            chunks = eng.execute(job, client=client, progress=progress)
+            n_workers = len(client.scheduler_info().get("workers", {}))
+            where = {"engine": "dask.distributed", "scheduler": scheduler or ("given client" if not own
+                                                                               else "LocalCluster"),
+                     "workers": n_workers}
+    finally:
+        if own:
+            client.close()
+            if cluster is not None:
+                cluster.close()
     seconds = time.monotonic() - start
     cat = {f: np.concatenate([getattr(c, f) for c in chunks]) for f in
            ("index", "values", "noise_seed", "achieved", "margin", "passed", "failed_runs")}

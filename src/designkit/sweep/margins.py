@@ -123,7 +123,8 @@ def margins(records, kind: str, requirements) -> Margins:
     finite = np.all(np.isfinite(y_all), axis=1) & np.all(np.isfinite(xd_all), axis=1)  # (B, n)
     err = np.abs(y_all - xd_all)
     window = t >= t[-1] - STEADY_STATE_WINDOW * float(t[-1] - t[0])
-    sse = np.where(finite, np.mean(err[:, window, :], axis=1), np.nan)
+    # each run's mean over its own contiguous row: the same sum whatever the batch (bitwise across splits)
+    sse = np.where(finite, np.mean(np.ascontiguousarray(err[:, window, :].transpose(0, 2, 1)), axis=2), np.nan)
     max_err = np.where(finite, np.max(err, axis=1), np.nan)
     sb = requirements.settling_band if requirements is not None else 0.02
     several = n > 1
