@@ -243,6 +243,8 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "controller.damped_least_squares.damping": [(TASK, "controller.damped_least_squares.damping",
                                                  "controller.damped_least_squares.damping")],
     "controller.max_condition": [(TASK, "controller.max_condition", "controller.max_condition")],
+    "controller.friction_layer": [(ROBOT, "controller.friction_layer", "controller.friction_layer"),
+                                  (TASK, "controller.friction_layer", "controller.friction_layer")],
     **{f"requirements.{k}": [(SERVO, f"requirements.{k}", f"requirements.{k}")] for k in (
         "overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control",
         "settling_band", "gain_margin", "phase_margin", "modulus_margin")},

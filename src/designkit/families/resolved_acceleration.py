@@ -37,6 +37,13 @@ from pydantic import Field
 
 from designkit.errors import ModelError, SpecError
 from designkit.families import computed_torque
+from designkit.families.computed_torque.friction_layer import (
+    DEFAULT_LAYER,
+    coulomb_levels,
+    layer_formulas,
+    layer_words,
+    smoothed,
+)
 from designkit.models.task import TaskSpace, check_path, joint_path, task_functions, task_space
 from designkit.spec.fields import PositiveFinite, Section
 from designkit.spec.ranges import Ranged
@@ -72,6 +79,7 @@ class ResolvedAccelerationSpec(computed_torque.ComputedTorqueSpec):
     damped_least_squares: DampedLeastSquares | None = None
     max_condition: Ranged(1, 1e12, "", low_open=True) = Field(default=100.0, description="Condition number of J "
                                                               "counted as near-singular.")
+    friction_layer: computed_torque.FRICTION_LAYER = DEFAULT_LAYER
 
 
 def _q0(spec: Any, n: int) -> np.ndarray:
@@ -95,6 +103,8 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     fns = task_functions(plant.robot, p, _space(design))
     inverse_dynamics = plant.robot.functions["inverse_dynamics"]
     damping = design.extra.get("damping")
+    layer = computed_torque.friction_layer_of(design)
+    fc = coulomb_levels(plant.robot, p)
 
     def output(y: ca.SX, r: ca.SX) -> ca.SX:
         q, qd = ca.vertcat(*[y[i] for i in pos]), ca.vertcat(*[y[i] for i in vel])
@@ -102,9 +112,11 @@ def law(design: Design, anti_windup: Any = None) -> Law:
         e, e_dot = r[0:n] - fns.tracked(q), r[n:2 * n] - J @ qd
         b = r[2 * n:3 * n] + K1 * e + K2 * e_dot - fns.bias(q, qd)
         qdd = ca.solve(J.T @ J + damping**2 * ca.SX.eye(n), J.T @ b) if damping else ca.solve(J, b)
-        return inverse_dynamics(q, qd, qdd, ca.DM(p)) if p is not None else inverse_dynamics(q, qd, qdd)
+        tau = inverse_dynamics(q, qd, qdd, ca.DM(p)) if p is not None else inverse_dynamics(q, qd, qdd)
+        return smoothed(tau, qd, fc, layer)
 
-    return stateless_law(KIND, plant, output, {"gains": design.gains.to_json(), "damping": damping})
+    return stateless_law(KIND, plant, output, {"gains": design.gains.to_json(), "damping": damping,
+                                               "friction_layer": layer, "coulomb": fc.tolist()})
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
@@ -134,17 +146,22 @@ def synthesize(spec: Any, plant: Any) -> Design:
     if ctrl.model is not None:
         notes.append("The controller's model differs from the true plant; the simulation and the robustness "
                      "checks run on the true plant.")
+    layer = float(ctrl.friction_layer)
+    fc = coulomb_levels(model.robot, model.model_parameters())
+    if layer_words(fc, layer):
+        notes.append(layer_words(fc, layer))
     design = Design(
         kind=KIND, plant=model, gains=gains, poles=tuple(p for pair in pairs for p in pair), reference="trajectory",
         formulas=("a* = ẍD + K1 (xD − x) + K2 (ẋD − J q̇)",
                   ("q̈* = (Jᵀ J + λ² I)⁻¹ Jᵀ (a* − J̇ q̇)  (damped least squares, λ = " + f"{damping:g})"
                    if damping else "q̈* = J⁻¹ (a* − J̇ q̇)"),
                   "u = M̂(q) q̈* + ĥ(q, q̇)  (the model's Newton–Euler at q̈*)",
-                  "ë + K2 ė + K1 e = 0 per task coordinate on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)"),
+                  "ë + K2 ė + K1 e = 0 per task coordinate on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)",
+                  *layer_formulas(fc, layer)),
         notes=tuple(notes),
         extra={"task": {**space.to_json(), "rows": list(space.rows),
                         "orientation_target": list(space.orientation_target)},
-               "damping": damping, "max_condition": float(ctrl.max_condition),
+               "damping": damping, "max_condition": float(ctrl.max_condition), "friction_layer": layer,
                "model_differs": ctrl.model is not None, "codegen_terms": ["D_hat", "h_hat", "J", "Jdot_qd"]},
     )
     fns = task_functions(model.robot, model.model_parameters(), space)

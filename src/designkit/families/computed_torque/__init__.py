@@ -26,9 +26,16 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
+from designkit.families.computed_torque.friction_layer import (
+    DEFAULT_LAYER,
+    coulomb_levels,
+    layer_formulas,
+    layer_words,
+    smoothed,
+)
 from designkit.spec.controllers import ControllerModel
-from designkit.spec.fields import Section, check_conjugates, parse_pole, per_joint
-from designkit.spec.ranges import RangedPerJoint, check_poles
+from designkit.spec.fields import NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
+from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -126,6 +133,19 @@ class ComputedTorqueSpec(Section):
         return self
 
 
+FRICTION_LAYER = Ranged(1e-6, 1e3, "rad/s or m/s", zero=True, base=NonNegativeFinite)
+"""``controller.friction_layer``: the boundary layer of the Coulomb compensation (0 = the exact ``sign``)."""
+
+
+class ComputedTorqueLawSpec(ComputedTorqueSpec):
+    """Computed torque as the ``computed_torque`` family reads it: :class:`ComputedTorqueSpec` and
+    ``friction_layer`` (rad/s or m/s; 0, or 1e-6 to 1e3; default 0): the model's Coulomb compensation
+    ``Fc sign(q')`` is written ``Fc s(q'/friction_layer)`` (:mod:`~designkit.families.computed_torque.friction_layer`),
+    0 keeps the exact ``sign``."""
+
+    friction_layer: FRICTION_LAYER = DEFAULT_LAYER
+
+
 def _damped_pair(zeta: float, wn: float) -> tuple[complex, complex]:
     """The error poles ``wn (-zeta +- sqrt(zeta^2 - 1))`` (1/s) of a damping ratio and natural frequency (rad/s),
     as :func:`error_poles` computes them (for the spec's check of their range)."""
@@ -160,21 +180,31 @@ def error_poles(spec: Any, n: int, what: str = "joint") -> list[tuple[complex, c
     return out
 
 
+def friction_layer_of(design: Design) -> float:
+    """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``)."""
+    return float(design.extra.get("friction_layer", 0.0))
+
+
 def law(design: Design, anti_windup: Any = None) -> Law:
-    """``u = ID^(q, qd, qD'' + K1 (qD - q) + K2 (qD' - qd))``: the model's inverse dynamics (N*m per joint)."""
+    """``u = ID^(q, qd, qD'' + K1 (qD - q) + K2 (qD' - qd))``: the model's inverse dynamics (N*m per joint), its
+    Coulomb term ``Fc sign(qd)`` smoothed in the design's boundary layer (:func:`friction_layer_of`)."""
     plant = design.plant  # the controller's model
     K1, K2 = (np.asarray(design.gains[k], dtype=float) for k in ("K1", "K2"))
     n = plant.n_joints
     pos, vel = list(plant.positions), list(plant.velocities)
     inverse_dynamics = plant.robot.functions["inverse_dynamics"]
     p = plant.model_parameters()
+    layer = friction_layer_of(design)
+    fc = coulomb_levels(plant.robot, p)
 
     def output(y: ca.SX, r: ca.SX) -> ca.SX:
         q, qd = ca.vertcat(*[y[i] for i in pos]), ca.vertcat(*[y[i] for i in vel])
         a = r[2 * n:3 * n] + K1 * (r[0:n] - q) + K2 * (r[n:2 * n] - qd)
-        return inverse_dynamics(q, qd, a, ca.DM(p)) if p is not None else inverse_dynamics(q, qd, a)
+        tau = inverse_dynamics(q, qd, a, ca.DM(p)) if p is not None else inverse_dynamics(q, qd, a)
+        return smoothed(tau, qd, fc, layer)
 
-    return stateless_law(KIND, plant, output, {"gains": design.gains.to_json()})
+    return stateless_law(KIND, plant, output, {"gains": design.gains.to_json(), "friction_layer": layer,
+                                               "coulomb": fc.tolist()})
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
@@ -194,6 +224,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
                      + (f"; friction {'included' if model.robot.friction else 'left out'}"
                         if model.robot.friction != plant.robot.friction else "")
                      + ". The simulation and the robustness checks run on the true plant.")
+    layer = float(spec.controller.friction_layer)
+    fc = coulomb_levels(model.robot, model.model_parameters())
+    friction_note = layer_words(fc, layer)
+    if friction_note:
+        notes.append(friction_note)
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
         q0 = np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
@@ -201,9 +236,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
         kind=KIND, plant=model, gains=gains, poles=tuple(p for pair in pairs for p in pair), reference="trajectory",
         formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
                   "u = M̂(q) a* + ĥ(q, q̇)  (the model's Newton–Euler at a*)",
-                  "ë + K2 ė + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)"),
+                  "ë + K2 ė + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)",
+                  *layer_formulas(fc, layer)),
         notes=tuple(notes),
-        extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"]},
+        extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"],
+               "friction_layer": layer},
     )
     return with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
                             field="simulation.initial_position")
@@ -211,7 +248,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
 
 FAMILY = Family(
     kind=KIND,
-    spec=ComputedTorqueSpec,
+    spec=ComputedTorqueLawSpec,
     plants=("robot",),
     reference="trajectory",
     synthesize=synthesize,
