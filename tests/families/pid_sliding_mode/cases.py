@@ -16,6 +16,14 @@ LAYER = BASE.replace("switching_band: 0.0002", "epsilon: 0.002")
 RANGES = {f"controller.{k}": [(BASE, f"controller.{k}", f"controller.{k}")]
           for k in ("perturbation_bound", "margin", "M", "switching_band")}
 RANGES["controller.epsilon"] = [(LAYER, "controller.epsilon", "controller.epsilon")]
+ROBOT = """\
+name: ranges-pid-sm-robot
+plant: {kind: robot, robot: planar2r, limits: {velocity: 2.0, acceleration: 12.0}}
+controller: {kind: pid_sliding_mode, poles: [-4, -5, -20], workspace: {low: [-0.2, -0.8], high: [0.8, 0.3]},
+             epsilon: 0.002, work_limit: 300}
+simulation: {duration: 0.5}
+"""
+RANGES["controller.work_limit"] = [(ROBOT, "controller.work_limit", "controller.work_limit")]
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
 CONFORMANCE = {
@@ -31,5 +39,8 @@ EXAMPLES = {
     "pid-sm-link-boundary-layer": 0,
     "pid-sm-link-parameter-step": 0,
     "pid-sm-link-weak-relay": 1,  # M below the section 5.4 bound: the certificate says by how much
+    "hierarchy-simnog": 0,  # the hierarchy of control on the SIMNOG arm (robot.py)
+    "hierarchy-puma560": 0,  # ... on the PUMA 560, six joints
+    "hierarchy-simnog-small-M": 1,  # M below the proven sup|xi_i|: the certificate says by how much
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -256,3 +256,9 @@ from designkit.families.pid_sliding_mode.elastic import extend as _with_elastic_
 
 FAMILY = _with_elastic_joint(FAMILY)
 """The family also designs for ROBEL's elastic joint (motor-side sliding variable; pid_sliding_mode/elastic.py)."""
+
+from designkit.families.pid_sliding_mode.robot_family import extend as _with_robots  # noqa: E402
+
+FAMILY = _with_robots(FAMILY)
+"""The family also designs for robots, one loop per joint with the hierarchy of control's relays
+(pid_sliding_mode/robot.py)."""

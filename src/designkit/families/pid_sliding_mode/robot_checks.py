@@ -1,0 +1,231 @@
+"""The checks of PID/sliding mode on a robot: the hierarchy's relays certified, and what the run shows per joint.
+
+* ``pid_sm_hierarchy`` (order 55, required): every joint's ``M_i`` above the proven ``sup|xi_i|`` over its box
+  (:func:`designkit.models.bounds.perturbation_enclosure`), the bound re-checked by sampling: ``|xi_i|`` evaluated
+  with the robot's Newton--Euler inverse dynamics (the enclosure used the inertia matrix and the Christoffel
+  symbols) at :data:`RECHECK` random points of each joint's box, none above the bound.
+* ``pid_sm_robot_xi`` (order 127, required): wherever the run is inside joint ``i``'s box, ``|xi_i(t)|`` is at most
+  the proven bound (and so below ``M_i``), ``xi_i(t) = D^_i q_i'' + f_i q_i' - (u_i - g^_i(q))`` from the run's
+  states, commands and accelerations (the robot's forward dynamics at the held command).  How much of the run is
+  inside each box, and the ``|xi_i|`` met outside it (e.g. the instant a step reference jumps, when the
+  acceleration leaves its box), are reported: the certificate does not speak there.
+* ``pid_sm_robot_in_band`` (order 127, required): after reaching, ``|slm_i|`` stays in its band (the layer
+  ``epsilon``, or what the relay held over a step leaves).
+* ``pid_sm_robot_precision`` (informational): ``|q_i - q_i of the sliding motion|`` against ``||s/N||_1 max|slm_i|``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from designkit.families.pid_sliding_mode.measure import hold_of
+from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA
+from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
+from designkit.verification.check import Check
+from designkit.verification.suite import CheckRule, Context
+
+__all__ = ["CERTIFICATE_RULE", "RECHECK", "RUN_RULE", "recheck", "run_perturbation", "xi_at"]
+
+RECHECK = 4000
+"""Random points per joint of the NumPy re-check of the proven bound."""
+HIERARCHY, XI, IN_BAND, PRECISION = ("pid_sm_hierarchy", "pid_sm_robot_xi", "pid_sm_robot_in_band",
+                                     "pid_sm_robot_precision")
+
+
+def _vec(values: Any, fmt: str = "{:.3g}") -> str:
+    return "(" + ", ".join(fmt.format(float(v)) for v in values) + ")"
+
+
+def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """``xi`` (N*m, shape (N, n)) at the points ``(q, qd, qdd)`` by Newton--Euler: ``D^_i q_i'' + f_i q_i' - (tau_i
+    - g^_i)`` with ``tau`` the inverse dynamics (friction included) and ``g^`` the fed-forward gravity (or 0)."""
+    robot, p = plant.robot, plant.model_parameters()
+    q, qd, qdd = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd))
+    tau = robot.inverse_dynamics(q, qd, qdd, p=p).reshape(q.shape)
+    if info["gravity_feedforward"] == "measured":
+        tau = tau - robot.gravity_torque(q, p=p).reshape(q.shape)
+    Dh = np.array([lk["inertia"] for lk in info["links"]])
+    f = np.array([lk["damping"] for lk in info["links"]])
+    return Dh * qdd + f * qd - tau
+
+
+def recheck(plant: Any, info: dict, points: int = RECHECK, seed: int = 1) -> tuple[np.ndarray, list[dict]]:
+    """Per joint the largest ``|xi_i|`` at ``points`` random points of its box (half of them on the velocity and
+    acceleration vertices), and where: a NumPy re-check of the proven bound."""
+    ws = info["workspace"]
+    lo, hi = np.array(ws["low"]), np.array(ws["high"])
+    V = np.array(ws["velocity"])
+    rows = np.array(info["acceleration_rows"])
+    n = lo.size
+    rng = np.random.default_rng(seed)
+    best, where = np.zeros(n), []
+    for i in range(n):
+        q = lo + (hi - lo) * rng.random((points, n))
+        qd = V * rng.uniform(-1.0, 1.0, (points, n))
+        qdd = rows[i] * rng.uniform(-1.0, 1.0, (points, n))
+        half = points // 2
+        qd[:half] = V * np.sign(qd[:half])
+        qdd[:half] = rows[i] * np.sign(qdd[:half])
+        xi = np.abs(xi_at(plant, info, q, qd, qdd)[:, i])
+        k = int(np.argmax(xi))
+        best[i] = xi[k]
+        where.append({"q": q[k].tolist(), "qd": qd[k].tolist(), "qdd": qdd[k].tolist()})
+    return best, where
+
+
+def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
+    info = design.extra[ROBOT_EXTRA]
+    M, bound, sampled = (np.array(info[k]) for k in ("M", "bound", "sampled"))
+    re, re_at = recheck(design.plant, info)
+    covered = re <= bound * (1 + 1e-12) + 1e-12
+    dominates = bound < M
+    ok = bool(np.all(covered) and np.all(dominates))
+    parts = []
+    for i in range(M.size):
+        at = info["argmax"][i]
+        s = (f"joint {i + 1}: M = {M[i]:.4g} N·m against the proven sup|ξ| = {bound[i]:.4g} N·m (attained "
+             f"{sampled[i]:.4g} N·m at q = {_vec(at['q'])} rad, q̇ = {_vec(at['qd'])} rad/s, q̈ = "
+             f"{_vec(at['qdd'])} rad/s²; re-check by Newton–Euler at {RECHECK} random points: largest "
+             f"{re[i]:.4g} N·m)")
+        if not dominates[i]:
+            s += (f" — M is below the bound by {bound[i] - M[i]:.4g} N·m ({100 * (bound[i] - M[i]) / bound[i]:.3g} %)"
+                  + (", and below the attained value: the relay certainly does not dominate ξ there"
+                     if M[i] < sampled[i] else "")
+                  + f"; M ≥ {bound[i]:.4g} N·m meets the condition, {(1 + info['margin']) * bound[i]:.4g} N·m keeps "
+                    f"the {100 * info['margin']:g} % margin")
+        if not covered[i]:
+            s += f" — the re-check found {re[i]:.4g} N·m above the proven bound: the enclosure is wrong"
+        parts.append(s)
+    work = (f"{info['boxes']} configuration boxes in {info['seconds']:.3g} s (tolerance {info['tolerance']:g}, work "
+            f"limit {info['work_limit']} boxes per joint; converged: "
+            + ", ".join("yes" if c else "no" for c in info["converged"]) + ")")
+    cert = {"M": info["M"], "bound": info["bound"], "sampled": info["sampled"], "argmax": info["argmax"],
+            "terms": info["terms"], "recheck_max": re.tolist(), "recheck_at": re_at, "recheck_points": RECHECK,
+            "boxes": info["boxes"], "seconds": info["seconds"], "converged": info["converged"],
+            "acceleration_rows": info["acceleration_rows"], "workspace": info["workspace"]}
+    return (Check(HIERARCHY, ok, "M_i > proven sup|ξ_i| over joint i's box, every joint", float(np.min(M - bound)),
+                  float(np.min(M - bound)), "N*m", "; ".join(parts) + ". Bound: " + work + ".", cert),)
+
+
+CERTIFICATE_RULE = CheckRule(
+    name="pid_sm_hierarchy", order=55, applies=lambda d, c: ROBOT_EXTRA in d.extra, run=_hierarchy,
+    label="Hierarchy of control: each relay above its joint's proven perturbation bound",
+    labels={HIERARCHY: "Every joint's relay dominates its proven sup|ξ| (workspace, velocity and acceleration box)"},
+    glossary=(("ξ_i", "the torque joint i's simplified link leaves out: inertia variation, coupling, Coriolis and "
+                      "centrifugal torques, gravity not fed forward, Coulomb friction, N·m"),),
+)
+
+
+def run_perturbation(design: Any, sim: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(xi, inside, qdd)`` along the run: ``xi[k, i]`` (N*m, module docstring), ``inside[k, i]`` whether sample
+    ``k`` is inside joint ``i``'s box, ``qdd`` the accelerations (rad/s^2) from the forward dynamics."""
+    info = design.extra[ROBOT_EXTRA]
+    plant = design.plant
+    n = plant.n_joints
+    x = np.asarray(sim.state, dtype=float)
+    q, qd = x[:, list(plant.positions)], x[:, list(plant.velocities)]
+    u = np.asarray(sim.u_command, dtype=float)[:, :n]
+    robot, p = plant.robot, plant.model_parameters()
+    qdd = robot.forward_dynamics(q, qd, u, p=p).reshape(q.shape)
+    ghat = robot.gravity_torque(q, p=p).reshape(q.shape) if info["gravity_feedforward"] == "measured" else 0.0
+    Dh = np.array([lk["inertia"] for lk in info["links"]])
+    f = np.array([lk["damping"] for lk in info["links"]])
+    xi = Dh * qdd + f * qd - (u - ghat)
+    ws = info["workspace"]
+    rows = np.array(info["acceleration_rows"])
+    tol = 1e-9
+    state_in = (np.all((q >= np.array(ws["low"]) - tol) & (q <= np.array(ws["high"]) + tol), axis=1)
+                & np.all(np.abs(qd) <= np.array(ws["velocity"]) + tol, axis=1))
+    inside = np.column_stack([state_in & np.all(np.abs(qdd) <= rows[i] + tol, axis=1) for i in range(n)])
+    return xi, inside, qdd
+
+
+def bands(info: dict, hold: float) -> np.ndarray:
+    """Per joint the band ``|slm_i| <= band_i`` (rad*s) the run's hold leaves."""
+    n = len(info["M"])
+    if info["epsilon"] is None:
+        return hold * np.array(info["sdot_max"])
+    if info["layer"] == "saturation":
+        return np.full(n, float(info["epsilon"]))
+    return float(info["epsilon"]) + hold * np.array(info["sdot_max"])
+
+
+def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
+    info = design.extra[ROBOT_EXTRA]
+    sim = ctx.simulation
+    n = len(info["M"])
+    M, bound = np.array(info["M"]), np.array(info["bound"])
+    xi, inside, qdd = run_perturbation(design, sim)
+    peak = np.max(np.abs(xi), axis=0)
+    peak_in = np.array([np.max(np.abs(xi[inside[:, i], i]), initial=0.0) for i in range(n)])
+    frac = inside.mean(axis=0)
+    t = np.asarray(sim.time, dtype=float)
+    ok_xi = bool(np.all(peak_in <= bound * (1 + 1e-9)) and np.all(peak_in < M))
+    parts = []
+    for i in range(n):
+        out = ~inside[:, i]
+        s = (f"joint {i + 1}: inside its box for {100 * frac[i]:.4g} % of the samples, largest |ξ| there "
+             f"{peak_in[i]:.4g} N·m against the proven bound {bound[i]:.4g} N·m and M = {M[i]:.4g} N·m")
+        if out.any():
+            k = np.flatnonzero(out)
+            s += (f"; outside it ({k.size} samples, {t[k[0]]:.4g} to {t[k[-1]]:.4g} s) |ξ| reaches {peak[i]:.4g} N·m, "
+                  "where the certificate does not speak")
+        parts.append(s)
+    qdd_peak = np.max(np.abs(qdd), axis=0)
+    xi_check = Check(XI, ok_xi, "|ξ_i(t)| ≤ proven bound < M_i wherever the run is inside joint i's box",
+                     float(np.min(bound - peak_in)), float(np.min(bound - peak_in)), "N*m", "; ".join(parts)
+                     + f". Largest accelerations of the run {_vec(qdd_peak)} rad/s² (limits "
+                     f"{_vec(info['workspace']['acceleration'])} rad/s²).",
+                     {"peak_xi": peak.tolist(), "peak_xi_inside": peak_in.tolist(), "inside_fraction": frac.tolist(),
+                      "peak_acceleration": qdd_peak.tolist()})
+    hold = hold_of(sim)
+    band = bands(info, hold)
+    sf = surface(design.poles)
+    ref = np.asarray(sim.reference, dtype=float)
+    x = np.asarray(sim.state, dtype=float)
+    ok_band, b_parts, worst_all, dev_parts, dev_ok = True, [], [], [], True
+    for i in range(n):
+        slm = np.asarray(sim.signals[f"slm{i + 1}"], dtype=float)
+        idx = np.flatnonzero(np.abs(slm) <= band[i] * (1 + 1e-9))
+        if idx.size == 0:
+            ok_band = False
+            b_parts.append(f"joint {i + 1}: |slm| never entered its band {band[i]:.4g} rad·s")
+            worst_all.append(float(np.max(np.abs(slm))))
+            continue
+        r = int(idx[0])
+        worst = float(np.max(np.abs(slm[r:])))
+        worst_all.append(worst)
+        inside_band = worst <= band[i] * (1 + 1e-9)
+        ok_band &= inside_band
+        b_parts.append(f"joint {i + 1}: band {band[i]:.4g} rad·s entered after {t[r] - t[0]:.4g} s, largest |slm| "
+                       f"after it {worst:.4g} rad·s" + ("" if inside_band else f" ({worst / band[i]:.3g} times the "
+                                                                                "band)"))
+        qi = x[:, design.plant.positions[i]]
+        ideal = ideal_motion(sf, t, ref[:, i, :], info["form"], start=float(qi[0]))[0]
+        dev = float(np.max(np.abs(qi[r:] - ideal[r:])))
+        lim = float(info["l1"]) * float(np.max(np.abs(slm)))
+        dev_ok &= dev <= lim * (1 + 1e-3) + 1e-12
+        dev_parts.append(f"joint {i + 1}: {dev:.4g} rad from its sliding motion (bound ‖s/N‖₁ max|slm| = {lim:.4g} "
+                         f"rad, ‖s/N‖₁ × band = {float(info['l1']) * band[i]:.4g} rad)")
+    what = {None: "the band the relays held over a step leave", "saturation": "the boundary layer ε",
+            "dead_zone": "the dead zone ε plus one held step"}[None if info["epsilon"] is None else info["layer"]]
+    margin = float(np.min(band - np.array(worst_all)))
+    band_check = Check(IN_BAND, bool(ok_band), f"|slm_i| within {what} after reaching, every joint",
+                       float(np.max(np.array(worst_all) / band)), margin, "rad*s", "; ".join(b_parts) + ".",
+                       {"band": band.tolist(), "worst": worst_all, "hold": hold})
+    precision = Check(PRECISION, bool(dev_ok), "|q_i − q_i of the sliding motion| ≤ ‖s/N‖₁ max|slm_i|", None, None,
+                      "rad", "; ".join(dev_parts) + " [informational]", {"l1": info["l1"]}, required=False)
+    return xi_check, band_check, precision
+
+
+RUN_RULE = CheckRule(
+    name="pid_sm_robot_run", order=127,
+    applies=lambda d, c: c.simulation is not None and ROBOT_EXTRA in d.extra and "slm1" in c.simulation.signals,
+    run=_run, label="Sliding mode on every joint of the simulated arm",
+    labels={XI: "The perturbation the run meets inside the box stays below the proven bound (every joint)",
+            IN_BAND: "Every joint stays in its band around slm_i = 0",
+            PRECISION: "Distance of each joint from its sliding motion (measured)"},
+    glossary=(("slm_i", "joint i's sliding variable a1 q_i + a2 q̇_i + x3_i, rad·s"),),
+)

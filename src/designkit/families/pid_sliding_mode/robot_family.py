@@ -1,0 +1,113 @@
+"""The PID/sliding-mode family extended to robots: dispatch on the plant kind, the JSON object, the report section.
+
+``--json`` (``pid_sliding_mode``): per joint the PID gains, ``M`` and the proven ``bound`` it covers, with the
+sampled lower bound and the configuration attaining it.  The report section "Hierarchy of control" has one row
+per joint: the acceleration box it was bounded over, the bound and its parts, the attained value and where.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from designkit.display.section import Question, ReportSection, Table
+from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA, law, synthesize
+from designkit.families.pid_sliding_mode.robot_checks import CERTIFICATE_RULE, RUN_RULE, run_perturbation
+from designkit.families.pid_sliding_mode.spec import KIND
+
+__all__ = ["extend", "json_summary", "section"]
+
+
+def json_summary(result: Any) -> dict[str, Any]:
+    """The family's ``--json`` object for a robot design (module docstring)."""
+    info = result.design.extra[ROBOT_EXTRA]
+    joints = []
+    for i, M in enumerate(info["M"]):
+        joints.append({
+            "joint": i + 1, "gains": info["gains"][i], "M": M, "bound": info["bound"][i],
+            "sampled_lower_bound": info["sampled"][i], "attained_at": info["argmax"][i], "terms": info["terms"][i],
+            "converged": info["converged"][i], "acceleration_box": info["acceleration_rows"][i],
+            "sliding_acceleration": info["sliding_acceleration"][i], "link": info["links"][i],
+            "inertia_range": info["inertia_range"][i]})
+    out = {"form": info["form"], "a1": info["a1"], "a2": info["a2"], "p3": info["p3"], "zero": info["p3"],
+           "M": list(info["M"]), "M_given": info["M_given"], "margin": info["margin"],
+           "bound": {"per_joint": list(info["bound"]), "sampled": list(info["sampled"]), "boxes": info["boxes"],
+                     "seconds": info["seconds"], "tolerance": info["tolerance"], "work_limit": info["work_limit"],
+                     "workspace": info["workspace"], "gravity_feedforward": info["gravity_feedforward"]},
+           "joints": joints, "epsilon": info["epsilon"], "layer": info["layer"] if info["epsilon"] is not None
+           else None, "max_step": info["max_step"]}
+    sim = result.simulation
+    if sim is not None and "slm1" in sim.signals:
+        xi, inside, _ = run_perturbation(result.design, sim)
+        out["run"] = {"peak_xi": [float(v) for v in abs(xi).max(axis=0)],
+                      "inside_fraction": [float(v) for v in inside.mean(axis=0)]}
+    return {KIND: out}
+
+
+def _fmt(values: Any) -> str:
+    return "(" + ", ".join(f"{float(v):.3g}" for v in values) + ")"
+
+
+def section(result: Any) -> ReportSection | None:
+    """"Hierarchy of control": per joint the box, the proven bound and its parts, the attained value and where."""
+    if ROBOT_EXTRA not in result.design.extra:
+        return None
+    info = result.design.extra[ROBOT_EXTRA]
+    n = len(info["M"])
+    rows = []
+    for i in range(n):
+        t, at = info["terms"][i], info["argmax"][i]
+        rows.append((f"joint {i + 1}", _fmt(info["acceleration_rows"][i]) + " rad/s²",
+                     f"{info['bound'][i]:.4g} N·m", f"{info['sampled'][i]:.4g} N·m",
+                     f"q = {_fmt(at['q'])} rad, q̇ = {_fmt(at['qd'])} rad/s, q̈ = {_fmt(at['qdd'])} rad/s²",
+                     f"{t['own_inertia']:.3g} / {t['coupling']:.3g} / {t['coriolis']:.3g} / {t['gravity']:.3g} / "
+                     f"{t['friction']:.3g} N·m", f"{info['M'][i]:.4g} N·m"))
+    table = Table("Per joint, from the last to the first: the acceleration box the bound covers (the later joints at "
+                  "their sliding motion's largest acceleration), the proven sup|ξ_i|, the largest |ξ_i| attained and "
+                  "where, the proven parts on the box that sets the bound (own inertia variation / coupling / "
+                  "Coriolis and centrifugal / gravity / Coulomb friction) and the relay amplitude.",
+                  ("joint", "|q̈_j| ≤", "proven sup|ξ_i|", "attained", "attained at", "parts", "M_i"),
+                  tuple(reversed(rows)))
+    ws = info["workspace"]
+    sentences = [
+        f"The box: q from {_fmt(ws['low'])} to {_fmt(ws['high'])} rad, |q̇| ≤ {_fmt(ws['velocity'])} rad/s, "
+        f"|q̈| ≤ {_fmt(ws['acceleration'])} rad/s² (the plant's limits); the sliding motions' largest accelerations "
+        f"are {_fmt(info['sliding_acceleration'])} rad/s².",
+        f"The bound is proven by ball arithmetic on the inertia matrix, the Christoffel symbols and the gravity "
+        f"torque over {info['boxes']} configuration boxes ({info['seconds']:.3g} s), combined with the velocity and "
+        "acceleration boxes by interval arithmetic; the attained value is the model's inverse dynamics at a point "
+        "of the box, so sup|ξ_i| lies between the two.",
+    ]
+    sim = result.simulation
+    if sim is not None and "slm1" in sim.signals:
+        xi, inside, _ = run_perturbation(result.design, sim)
+        sentences.append("Along the run the largest |ξ_i| were " + _fmt(abs(xi).max(axis=0)) + " N·m, the run "
+                         "inside each joint's box for " + ", ".join(f"{100 * v:.3g} %" for v in inside.mean(axis=0))
+                         + " of its samples.")
+    q = Question("How large must each joint's relay be (the hierarchy of control, notes section 5.4)?",
+                 tuple(sentences), (table,))
+    intro = ("Each joint's relay M_i must exceed sup|ξ_i|, the torque its simplified link leaves out. Designing "
+             "from the last link to the first, the later links are assumed in sliding mode, so their accelerations "
+             "are those of their sliding motion.")
+    return ReportSection("pid-sm-hierarchy", "Hierarchy of control: the relay amplitudes per joint", intro, (q,))
+
+
+def extend(family: Any) -> Any:
+    """``family`` also designing for robots (dispatched on the plant kind; the design's data under
+    :data:`~designkit.families.pid_sliding_mode.robot.ROBOT_EXTRA`)."""
+    base_synth, base_law, base_json = family.synthesize, family.law, family.json
+
+    def synth(spec: Any, plant: Any) -> Any:
+        return synthesize(spec, plant) if plant.kind == "robot" else base_synth(spec, plant)
+
+    def law_of(design: Any, anti_windup: Any = None) -> Any:
+        return law(design, anti_windup) if ROBOT_EXTRA in design.extra else base_law(design, anti_windup)
+
+    def json_of(result: Any) -> Any:
+        if ROBOT_EXTRA in result.design.extra:
+            return json_summary(result)
+        return base_json(result) if base_json is not None else {}
+
+    return dataclasses.replace(family, plants=(*family.plants, "robot"), synthesize=synth, law=law_of,
+                               checks=(*family.checks, CERTIFICATE_RULE, RUN_RULE), json=json_of,
+                               sections=(*family.sections, section))
