@@ -126,3 +126,18 @@ def test_load_effect_against_closed_form_offsets(comparison):
     assert effects["pid-sliding-mode"].final == pytest.approx(W / p.KR, abs=2e-4)
     # the PID's integral removes the offset (still decaying at the end of the run)
     assert effects["pid"].final < 0.2 * effects["pid"].peak
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("sliding_poles: [-8, -10, -12]", "sliding_poles: [-8, 1, -12]", "controllers[3].sliding_poles[1]"),
+    ("sliding_poles: [-8, -10, -12]", "sliding_poles: [-8, 0, -12]", "controllers[3].sliding_poles[1]"),
+    ("poles: [-8, -10, -12, -15]", "poles: [-8, -10, 2, -15]", "controllers[2].poles[2]"),
+    ("poles: [-3, -4, -12]", "poles: [-3, 4, -12]", "controllers[1].poles[1]"),
+    ("kind: elastic_joint\n", "kind: elastic_joint\n  KR: 1.0e-6\n", "plant.KR: makes the plant uncontrollable"),
+])
+def test_robel_bad_input_exits_2_with_the_key_path(old, new, message, tmp_path, capsys):
+    from tests.cli_input import assert_bad_input
+
+    text = ROBEL.read_text()
+    assert old in text
+    assert_bad_input(tmp_path, capsys, text.replace(old, new, 1), message)

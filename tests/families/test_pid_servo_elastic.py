@@ -57,3 +57,15 @@ def test_fast_load_pid_destabilises_the_elastic_mode():
     assert "UNSTABLE" in d.notes[-1]
     A = d.closed_loop.A
     assert max(np.linalg.eigvals(A).real) > 0
+
+
+def test_uncontrollable_elastic_joint_is_refused_at_the_parameter(tmp_path, capsys):
+    from tests.cli_input import assert_bad_input
+
+    text = """\
+name: pid-elastic-kr
+plant: {kind: elastic_joint, KR: 1.0e-6}
+controller: {kind: pid_servo, poles: [-4, -5, -6], zero: -5.5}
+simulation: {duration: 2.0}
+"""
+    assert_bad_input(tmp_path, capsys, text, "plant.KR: makes the plant uncontrollable")

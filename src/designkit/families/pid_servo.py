@@ -173,6 +173,13 @@ def synthesize(spec: Any, plant: Any) -> Design:
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
     if plant.kind == "elastic_joint":
+        from designkit.families.state_regulator.gains import check_controllable
+        from designkit.families.vsc.surface import linear_model
+
+        model = linear_model(plant)
+        unc = spec.plant.uncertainty
+        box = {k: tuple(v) for k, v in (unc.intervals.items() if unc is not None else ()) if k in model.names}
+        check_controllable(spec, model, box, "no controller on the motor moves the link")
         return elastic_design(plant, poles, zero, notes=notes, extra=extra)
     return design(plant, poles, zero, notes=notes, extra=extra)
 

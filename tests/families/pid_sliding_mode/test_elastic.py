@@ -88,3 +88,12 @@ def test_fast_sliding_poles_ring_the_load():
     checks = {c.name: c for c in res.checks}
     assert checks["pid_sm_elastic_band"].passed  # the motor still slides ...
     assert checks["settling_time"].passed is False  # ... but the lightly damped load does not settle
+
+
+def test_uncontrollable_elastic_joint_is_refused_at_the_parameter(tmp_path, capsys):
+    from tests.cli_input import assert_bad_input
+
+    text = SPEC.replace("kind: elastic_joint,", "kind: elastic_joint, KR: 1.0e-6,")
+    assert_bad_input(tmp_path, capsys, text, "plant.KR: makes the plant uncontrollable")
+    bad_pole = SPEC.replace("[-3, -4, -12]", "[-3, -4, 0.5]")
+    assert_bad_input(tmp_path, capsys, bad_pole, "controller.poles[2]")

@@ -131,6 +131,12 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("controller.layer", "the elastic joint's controller takes a saturation layer or none")
     if (spec.plant.mgl or 0.0) > 0:
         raise SpecError("plant.mgl", "designed on the joint without gravity (mgl = 0)")
+    from designkit.families.state_regulator.gains import check_controllable
+    from designkit.families.vsc.surface import linear_model
+
+    unc = spec.plant.uncertainty
+    box = {k: (float(lo), float(hi)) for k, (lo, hi) in (unc.intervals.items() if unc is not None else ())}
+    check_controllable(spec, linear_model(plant), box, "the motor's sliding mode cannot move the link")
     poles = tuple(complex(p) for p in ctl.poles)
     sf = surface(poles)
     Km_r, tau_r = rigid_approximation(plant.params)
@@ -138,8 +144,6 @@ def synthesize(spec: Any, plant: Any) -> Design:
     T = float(sim.duration) if sim.duration is not None else 10.0 / min(abs(p.real) for p in poles)
     t = np.linspace(0.0, T, int(min(40001, max(4001, 200 * T))))
     r, w, q0 = _scenario(spec, t)
-    unc = spec.plant.uncertainty
-    box = {k: (float(lo), float(hi)) for k, (lo, hi) in (unc.intervals.items() if unc is not None else ())}
     corners = [dict(zip(box, v, strict=True)) for v in itertools.product(*box.values())] or [{}]
     worst, at, g = 0.0, {}, []
     for corner in [{}, *corners]:

@@ -73,8 +73,10 @@ def load_offset(A: np.ndarray, B: np.ndarray, D: np.ndarray, K: np.ndarray, posi
     return float(-np.linalg.solve(Acl, np.asarray(D, float)[:, 0])[position])
 
 
-def check_controllable(spec: object, model: object, box: dict[str, tuple[float, float]]) -> None:
-    """Refuse a plant (nominal, or a vertex of the box) whose ``(A, B)`` is not controllable.
+def check_controllable(spec: object, model: object, box: dict[str, tuple[float, float]],
+                       consequence: str = "no state feedback places the poles") -> None:
+    """Refuse a plant (nominal, or a vertex of the box) whose ``(A, B)`` is not controllable (``consequence``: what
+    that means for the controller, ending the message).
 
     Raises
     ------
@@ -92,7 +94,7 @@ def check_controllable(spec: object, model: object, box: dict[str, tuple[float, 
         raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "
                         f"through the coupling k2 = KR R2²/J2 = {-A[3, 2]:.3g} 1/s², and the controllability "
                         f"matrix [B, AB, A²B, A³B] is singular to {ratio:.3g} (Hadamard ratio, below "
-                        f"{CONTROLLABILITY_TOL:g}): no state feedback places the poles")
+                        f"{CONTROLLABILITY_TOL:g}): {consequence}")
     for name, (lo, hi) in box.items():
         for v in (lo, hi):
             Ab, Bb, _ = model.at({name: v})  # type: ignore[attr-defined]
