@@ -141,3 +141,19 @@ def test_robel_bad_input_exits_2_with_the_key_path(old, new, message, tmp_path, 
     text = ROBEL.read_text()
     assert old in text
     assert_bad_input(tmp_path, capsys, text.replace(old, new, 1), message)
+
+
+def test_printed_c4_is_figure_5_3_as_printed(comparison):
+    run = comparison["sliding-regulator"]
+    p = elastic_link()
+    p1, p2, p3 = -8.0, -10.0, -12.0
+    c1 = -(p1 + p2 + p3) - 1.0 / p.tau2
+    c2 = 1.0
+    # figure 5.3 as printed: c4 = (J2/(KR R2^2))(p3 p1 + p3 p2 + p1 p2) - 1 - c1 J2/(c2 KR R2^2)
+    printed = (p.J2 / (p.KR * p.R2**2)) * (p3 * p1 + p3 * p2 + p1 * p2) - 1 - c1 * p.J2 / (c2 * p.KR * p.R2**2)
+    c = run.design.extra["vsc"]["c"]
+    assert lab3.printed_c4(c, p.tau2, p.KR * p.R2**2 / p.J2) == pytest.approx(printed, rel=1e-12)
+    # ... and the designed c4 is the derivation's (tau2 in the last term), which places -8, -10, -12
+    assert c[3] == pytest.approx(printed + c1 / (c2 * 400.0) - c1 / (p.tau2 * 400.0), rel=1e-12)
+    text = " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
+    assert "printed c4 = -0.33375" in text

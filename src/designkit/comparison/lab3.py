@@ -31,7 +31,7 @@ from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
 
 __all__ = ["BOX_RUNS_MAX", "VARIANTS", "Chatter", "CornerRun", "OatRun", "PerturbationEffect", "applies", "chattering",
-           "corner_runs", "oat_runs", "perturbation_effect", "predicted_offset", "section"]
+           "corner_runs", "oat_runs", "perturbation_effect", "predicted_offset", "printed_c4", "section"]
 
 VSC, STATE_REGULATOR, PID, PID_SM = "vsc", "state_regulator", "pid_servo", "pid_sliding_mode"
 BOX_RUNS_MAX = 16
@@ -375,7 +375,34 @@ def _structure(result: Any) -> Question:
                              VSC: "c from the sliding poles (Ackermann for surfaces), the l_i ranges over the box "
                                   "and the gain certificate",
                          }.get(d.kind, "its family's synthesis") + ".")
+    found = _by_kind(result, VSC)
+    if found is not None:
+        sentences.append(_surface_sentence(*found))
     return Question("What is the basic structure, and which algorithms does each need?", tuple(sentences))
+
+
+def printed_c4(c: Any, tau2: float, k2: float) -> float:
+    """Figure 5.3's ``c4`` as printed: its last term ``c1 J2/(c2 KR R2^2) = c1/(c2 k2)`` where the derivation gives
+    ``c1/(tau2 k2)`` (docs/families/vsc.md); ``c`` the designed surface (``c2 = 1``)."""
+    return float(c[3] + c[0] / (tau2 * k2) - c[0] / (c[1] * k2))
+
+
+def _surface_sentence(label: str, run: Any) -> str:
+    from designkit.families.vsc.surface import reduced_poles
+
+    info = run.design.extra[VSC]
+    c = np.asarray(info["c"], float)
+    A, B, _ = (np.asarray(m, float) for m in info["nominal_model"])
+    p = run.design.plant.params
+    k2 = p.KR * p.R2**2 / p.J2
+    wrong = c.copy()
+    wrong[3] = printed_c4(c, p.tau2, k2)
+    poles = ", ".join(_f(z.real, digits=4) if abs(z.imag) < 1e-9 else f"{_f(z.real, digits=4)} ± "
+                      f"{_f(abs(z.imag), digits=4)}j" for z in reduced_poles(A, B, wrong) if z.imag >= -1e-9)
+    return (f"{label}'s surface c = (" + ", ".join(_f(v, digits=5) for v in c) + ") is computed from the sliding "
+            f"poles by Ackermann's formula for surfaces, which equals figure 5.3's closed form once its c4 is read "
+            f"with τ2 where c2 is printed; the printed c4 = {_f(wrong[3], digits=5)} would put the sliding motion at "
+            f"{poles} 1/s instead.")
 
 
 def _compare(result: Any, chat: dict[str, Chatter], effects: dict[str, PerturbationEffect | None]) -> Question:
