@@ -159,17 +159,21 @@ def test_compiled_step_gives_the_interpreted_numbers(tmp_path, monkeypatch):
     if find_compiler() is None:
         pytest.skip("no C compiler on PATH: the compiled path cannot be exercised here")
     monkeypatch.setenv("DESIGNKIT_CACHE_DIR", str(tmp_path))
-    # long enough (20,000 steps) for auto to look the library up
+    # long enough (20,000 steps) for auto to look the library up; the rolled RK4 step (the default for a
+    # smooth loop, the Dormand-Prince pair, always runs compiled: tests/simulation/test_dopri5.py)
     base = {"duration": 20.0, "dt": 0.001, "nonlinearity": {"kind": "saturation", "limit": 20.0}}
-    never = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "never"}})
-    always = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "always"}})
+    never = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "never",
+                                                                              "integrator": "rk4"}})
+    always = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "always",
+                                                                               "integrator": "rk4"}})
     design = design_of(never)
     a, b = build(never, design), build(always, design)
     assert a.compiled["compiled"] is False and b.compiled["compiled"] is True
     np.testing.assert_array_equal(a.run().state, b.run().state)  # -O1, no FMA: bit for bit
-    auto = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "auto"}})
+    auto = Spec.model_validate({**make_spec(**base).model_dump(), "numerics": {"compile": "auto", "integrator": "rk4"}})
     assert build(auto, design).compiled["why"] == "cached library"  # the library is reused
-    short = Spec.model_validate({**make_spec(duration=0.5).model_dump(), "numerics": {"compile": "auto"}})
+    short = Spec.model_validate({**make_spec(duration=0.5).model_dump(), "numerics": {"compile": "auto",
+                                                                                     "integrator": "rk4"}})
     assert build(short, design).compiled["compiled"] is False  # nothing to gain on a short run
 
 

@@ -69,7 +69,10 @@ def test_a_plant_change_acts_from_its_time_and_is_validated():
     changed = parse_spec(base + ", plant_change: {time: 2.0, values: {Km: 4.0}}}\n").spec
     a, b = simulate(same, synthesize(same)), simulate(changed, synthesize(changed))
     k = int(np.searchsorted(a.time, 2.0))
-    assert np.array_equal(a.state[: k + 1], b.state[: k + 1])
+    # the changed run's adaptive steps end on t = 2 s (a breakpoint), the unchanged run's cross it, so the grid
+    # points of the last step before it are interpolated from different steps: equal within the error control
+    # (rtol 1e-10, atol 1e-12; RK4 on the grid gave bit-equal runs)
+    np.testing.assert_allclose(a.state[: k + 1], b.state[: k + 1], rtol=0, atol=1e-9)
     assert np.max(np.abs(a.state[k + 600:] - b.state[k + 600:])) > 1e-3
     assert b.settings["plant_change"]["time_applied"] == pytest.approx(2.0)
     bad = parse_spec(base + ", plant_change: {time: 2.0, values: {Kx: 4.0}}}\n").spec

@@ -8,6 +8,7 @@ import control
 import numpy as np
 import pytest
 
+from designkit.schema.spec import Spec
 from designkit.simulation.linear import linear_response
 from designkit.simulation.reference import quintic, step_reference
 from designkit.simulation.run import simulate
@@ -28,7 +29,7 @@ QUINTIC = {"kind": "quintic", "amplitude": 1.0, "duration": 1.0}
 
 
 def _servo_error(dt: float) -> tuple[float, float]:
-    spec = make_spec(duration=3.0, dt=dt)
+    spec = Spec.model_validate({**make_spec(duration=3.0, dt=dt).model_dump(), "numerics": {"integrator": "rk4"}})
     design = design_of(spec)
     res = simulate(spec, design)
     x1, u = linear_response(design, res.time, res.reference)  # exact for a constant input

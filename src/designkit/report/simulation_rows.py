@@ -18,6 +18,7 @@ __all__ = ["simulation_rows"]
 # simulation settings: label and unit of each key (values are formatted by fmt_compact, in words)
 _SETTINGS: dict[str, tuple[str, str]] = {
     "integrator": ("Integrator", ""), "integrator_choice": ("Integrator choice", ""),
+    "integrator_work": ("Integrator work", ""),
     "dt": ("Time step", "s"), "dt_source": ("Time step chosen by", ""), "duration": ("Duration", "s"),
     "duration_requested": ("Duration requested", "s"), "duration_source": ("Duration taken from", ""),
     "n_steps": ("Steps", ""), "fastest_rate": ("Fastest closed-loop rate |p|max", "1/s"),

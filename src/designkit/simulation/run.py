@@ -47,9 +47,14 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
+from designkit.simulation.dopri5 import ATOL as DOPRI5_ATOL
+from designkit.simulation.dopri5 import FLAGS as DOPRI5_FLAGS
+from designkit.simulation.dopri5 import RTOL as DOPRI5_RTOL
+from designkit.simulation.dopri5 import build_dopri5
 from designkit.simulation.integrate import run_steps
 from designkit.simulation.nonlinear import element_for
 from designkit.simulation.reference import Reference, reference_of
+from designkit.simulation.regime import regime_of
 from designkit.simulation.result import SimulationResult
 from designkit.simulation.step import layout, step_function
 from designkit.simulation.timing import grid, rates_of, resolve, sampling_of
@@ -168,6 +173,7 @@ class Simulator:
     compiled: Mapping[str, Any] = field(default_factory=dict)
     motion: Any = None
     change: Any = None
+    dopri5: Any = None
 
     @property
     def n_inputs(self) -> int:
@@ -199,8 +205,12 @@ class Simulator:
             if npar:
                 inputs[-npar:] = _parameter_rows(plant, self.time.size, self.change)
         failure: dict[str, Any] = {}
-        rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
         settings = self.settings
+        if self.dopri5 is not None:  # a feedforward changing at a step is a breakpoint the pair ends a step on
+            rec = self.dopri5.run(self.z0, inputs, failure)
+            settings = freeze({**settings, "integrator_work": _work_words(self.dopri5.stats, self.time.size - 1)})
+        else:
+            rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
         if parameters:
             settings = freeze({**settings, "plant": {q.name: q.value for q in plant.parameters}})
         if failure:
@@ -253,6 +263,15 @@ def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tup
         return None, {**info, "compiled": False, "why": compiled.reason}
     return compiled.function, {**info, "compiled": True, "why": "cached library" if cached else "compiled now",
                                "flags": " ".join(COMPILE_FLAGS)}
+
+
+RK4_WORDS = "rk4 (classical, fixed step)"
+
+
+def _work_words(stats: Mapping[str, float], n_steps: int) -> str:
+    """The adaptive integrator's work, in words."""
+    return (f"{stats.get('evaluations', 0):,} evaluations of the right-hand side over the {n_steps:,} output steps "
+            f"({stats.get('accepted', 0):,} steps accepted, {stats.get('rejected', 0):,} rejected)")
 
 
 class _NoElement:
@@ -340,7 +359,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
     sampling = sampling_of(spec, law)
-    held_per_step = sampling[0] == 0 and (sim.delay > 0 or not element.continuous or law.discontinuous)
+    noisy = sim.noise is not None and bool(np.any(np.asarray(sim.noise.std, dtype=float) > 0))
+    regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy, plant=true_plant)
+    held_per_step = sampling[0] == 0 and regime.per_step
     timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
                      max_dt_reason=law.max_step_reason, sampling=sampling)
 
@@ -366,7 +387,14 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = step_function(true_plant, law, element, timing, spec.numerics)
-    accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
+    dopri5, integrator, choice = _pair(spec, timing, regime, true_plant, law, element)
+    if dopri5 is None:
+        accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
+    else:
+        accumulated = None
+        compile_info = {"mode": spec.numerics.compile, "compiled": True, "integrator": "dopri5",
+                        "why": "compiled now" if dopri5.compiled_now else "cached library", "flags": " ".join(
+                            DOPRI5_FLAGS)}
 
     if kind == "trajectory":
         ignored = (["simulation.step (a tracking controller is driven by simulation.trajectory)"]
@@ -374,9 +402,6 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     else:  # a servo follows simulation.trajectory when given (a square wave, a PRBS), else simulation.step
         ignored = (["simulation.step (the reference is simulation.trajectory)"]
                    if sim.trajectory is not None and "step" in sim.model_fields_set else [])
-    numerics = spec.numerics
-    integrator = ("rk4 (classical, fixed step)" if timing.integrator == "rk4" else
-                  f"cvodes (variable-step BDF inside each step, rtol {numerics.rtol:g}, atol {numerics.atol:g})")
     evaluation = ("chain inside every integration step" if not held_per_step and timing.steps_per_sample == 0
                   else "controller output, nonlinear element and delay once per step, held over the step")
     if law.discontinuous and timing.steps_per_sample == 0:
@@ -385,6 +410,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     settings = {
         "integrator": integrator,
         **timing.settings,
+        "integrator_choice": choice,
         "evaluation": evaluation,
         "plant": {q.name: q.value for q in true_plant.parameters},
         "nominal_plant": {q.name: q.value for q in design.plant.parameters},
@@ -404,7 +430,47 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     }
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info), motion=motion, change=change)
+                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5)
+
+
+def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: Any) -> tuple[Any, str, str]:
+    """``(runner, integrator words, choice words)``: the compiled Dormand--Prince pair for a smooth loop (the
+    default, or ``numerics.integrator: dopri5``), else None and the fixed-step or CVODES words.
+
+    Raises
+    ------
+    SpecError
+        ``numerics.integrator: dopri5`` on a loop that is not smooth (held per step, sampled, noisy).
+    """
+    numerics = spec.numerics
+    given = numerics.model_fields_set
+    choice = str(timing.settings.get("integrator_choice", ""))
+    if timing.integrator == "cvodes":
+        return None, f"cvodes (variable-step BDF inside each step, rtol {numerics.rtol:g}, atol {numerics.atol:g})", \
+            choice
+    explicit = "integrator" in given
+    if timing.integrator == "dopri5" and not regime.smooth:
+        raise SpecError("numerics.integrator", f"dopri5 integrates smooth continuous loops only, and here "
+                        f"{regime.why}; use rk4 or leave numerics.integrator out")
+    if explicit and timing.integrator == "rk4":
+        return None, RK4_WORDS, choice
+    if not regime.smooth:
+        return None, RK4_WORDS, f"default: rk4 on the output grid, because {regime.why}"
+    if numerics.compile == "never":
+        return None, RK4_WORDS, ("default: rk4, because numerics.compile: never (the Dormand-Prince pair runs "
+                                 "compiled only)")
+    rtol = float(numerics.rtol) if "rtol" in given else DOPRI5_RTOL
+    atol = float(numerics.atol) if "atol" in given else DOPRI5_ATOL
+    runner = build_dopri5(plant, law, element, timing.dt, rtol=rtol, atol=atol)
+    if isinstance(runner, str):
+        return None, RK4_WORDS, f"rk4: the Dormand-Prince pair could not be compiled ({runner})"
+    source = "numerics.rtol and numerics.atol" if {"rtol", "atol"} & given else "defaults"
+    words = (f"dopri5 (Dormand-Prince 5(4), adaptive step with error control: rtol {rtol:g}, atol {atol:g}, "
+             f"{source}; PI step-size control; the output grid written from its 4th-order continuous extension; "
+             "compiled C)")
+    why = "numerics.integrator" if explicit else ("default for a smooth continuous loop (no sampling, switching, "
+                                                  "delay, memory, anti-windup or noise)")
+    return runner, words, why
 
 
 def _plant_change(section: Any, plant: Any, t: np.ndarray, dt: float) -> tuple[Any, dict[str, Any] | None]:

@@ -39,6 +39,7 @@ import casadi as ca
 import numpy as np
 
 from designkit.simulation.integrate import rk4, variable_step
+from designkit.simulation.regime import regime_of
 from designkit.synthesis.law import Law
 
 __all__ = ["Layout", "step_function"]
@@ -103,8 +104,8 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
         ``rtol`` and ``atol`` of CVODES.
     """
     L = layout(plant, law, element, timing.delay_steps)
-    held_law = timing.steps_per_sample > 0 or law.discontinuous
-    per_step = held_law or L.delay_steps > 0 or not element.continuous
+    regime = regime_of(law, element, sampled=timing.steps_per_sample > 0, delayed=L.delay_steps > 0)
+    held_law, per_step = regime.held_law, regime.per_step
     ode = plant.ode()
 
     # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values

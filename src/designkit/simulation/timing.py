@@ -58,6 +58,10 @@ CAPPED_STEPS = 20_000
 STIFF_RATIO = 100.0
 """A pole faster than ``STIFF_RATIO * |p|med`` is stiff: left to the BDF inside each CVODES output step."""
 SETTLE_FACTOR, POLE_HORIZON = 3.0, 10.0
+ROUNDING = 1e-6
+"""Relative slack of the step rule: a rate within this of a round value is that value.  Poles are roots of
+polynomials; a double root is computed to about ``sqrt(eps)`` (1.5e-8) relative -- the PUMA's double pole at
+-20 comes out as 20.0000004 -- so a slack at the last bit would halve the intended step."""
 
 
 @dataclass(frozen=True)
@@ -163,10 +167,10 @@ def rates_of(requested: Any, *pole_sets: Any, reference_rate: float = 0.0) -> Ra
 
 
 def _nice_floor(value: float) -> float:
-    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (1e-9 relative slack)."""
-    exp = math.floor(math.log10(value * (1 + 1e-9)))
+    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (:data:`ROUNDING` relative slack)."""
+    exp = math.floor(math.log10(value * (1 + ROUNDING)))
     for mantissa in (5.0, 2.5, 2.0, 1.0):
-        if mantissa * 10.0**exp <= value * (1 + 1e-9):
+        if mantissa * 10.0**exp <= value * (1 + ROUNDING):
             return mantissa * 10.0**exp
     return 10.0**exp
 
@@ -190,7 +194,7 @@ def _rational_gcd(values: list[float]) -> float | None:
 def _default_dt(rate: float, duration: float, g: float | None) -> float:
     """Default step (s) for the fastest resolved ``rate`` (1/s): see the module docstring."""
     target = _nice_floor(min(DT_FACTOR / rate, duration / MIN_SAMPLES))
-    return target if g is None else g / math.ceil(g / target - 1e-9)
+    return target if g is None else g / math.ceil(g / target - ROUNDING)
 
 
 def _count(n: float) -> str:

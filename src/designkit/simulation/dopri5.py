@@ -1,0 +1,237 @@
+"""Dormand--Prince 5(4) with error control and dense output, compiled, over the whole output grid.
+
+For a smooth loop (:mod:`designkit.simulation.regime`) the closed loop's right-hand side
+``s' = f(s, r(t), q)`` (``s = (x, xc)``, ``r`` the reference, ``q`` the held inputs: noise, disturbance,
+feedforward, true-plant parameters) and its record at a grid point are generated to C by CasADi, and a C
+driver (:mod:`designkit.simulation.dopri5_c`) integrates the whole run in one call: adaptive steps that cross
+grid points freely, the grid written from the pair's continuous extension, every breakpoint (an instant where
+a held input changes: a perturbation, a plant change, a jump of the reference; found from the per-step inputs
+by :func:`breakpoints`) ended on exactly.  No Python per step, and no fixed step: the number of evaluations is
+set by the tolerances, not by the grid.
+
+Tolerances: ``numerics.rtol`` and ``numerics.atol`` when the spec gives them, else :data:`RTOL` and
+:data:`ATOL` (about what RK4 on the default grid, ``dt |p|max = 0.02``, reaches).  The library is built by the
+system C compiler (:data:`FLAGS`) and cached under a hash of its source (:func:`designkit.cache.cache_dir`
+``("codegen")``); without a compiler :func:`build_dopri5` returns None and the loop is integrated by RK4.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from designkit.simulation.dopri5_c import DRIVER
+from designkit.simulation.step import _feedforward, layout
+
+__all__ = ["ATOL", "FLAGS", "RTOL", "Dopri5", "breakpoints", "build_dopri5"]
+
+RTOL = 1e-10
+"""Default relative tolerance of the pair (``numerics.rtol`` not given)."""
+ATOL = 1e-12
+"""Default absolute tolerance (state units: rad, rad/s, and the controller's states)."""
+FLAGS = ("-O1", "-fPIC", "-shared")
+"""Compiler flags: ``-O1`` compiles a six-joint right-hand side in about a second; higher levels cost more to
+compile than they save on a run of a few thousand evaluations."""
+MAX_STEPS_PER_SAMPLE = 50
+"""Step budget: at most this many attempted steps per output step (plus 10,000), then the run stops."""
+
+
+@dataclass(frozen=True, eq=False)
+class Dopri5:
+    """A compiled Dormand--Prince run over a grid.
+
+    Parameters
+    ----------
+    library : pathlib.Path
+        The shared library.
+    ns, nw, nrec : int
+        Sizes of the integrated state ``(x, xc)``, of a per-step input column and of a record.
+    n_ref : int
+        Rows of the reference in each of the three stage blocks of ``w`` (``3 n``).
+    dt : float
+        Output step (s).
+    rtol, atol : float
+        Tolerances.
+    compiled_now : bool
+        True when this build ran the compiler (False: the library was cached).
+    """
+
+    library: Path
+    ns: int
+    nw: int
+    nrec: int
+    n_ref: int
+    dt: float
+    rtol: float
+    atol: float
+    compiled_now: bool = False
+    stats: dict[str, float] = field(default_factory=dict)
+    _lib: list = field(default_factory=list, repr=False)
+
+    def _entry(self) -> Any:
+        if not self._lib:
+            lib = ctypes.CDLL(str(self.library))
+            fn = lib.dk_dopri5
+            vec = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
+            fn.argtypes = [vec, vec, vec, ctypes.c_long, ctypes.c_double, ctypes.c_double, ctypes.c_double,
+                           ctypes.c_long, vec, vec]
+            fn.restype = ctypes.c_int
+            self._lib.extend([lib, fn])
+        return self._lib[1]
+
+    def run(self, z0: np.ndarray, inputs: np.ndarray, failure: dict[str, Any] | None = None) -> np.ndarray:
+        """Records ``(nrec, N)`` of the run from ``z0`` (its first ``ns`` entries) over the columns of ``inputs``.
+
+        ``failure`` (when given) receives ``step`` and ``error`` if the integration stopped early (step size
+        underflow, step budget, a state beyond 1e150): the records are NaN from there.
+        """
+        nw, n = inputs.shape
+        W = np.ascontiguousarray(inputs.T, dtype=float)
+        s0 = np.ascontiguousarray(np.asarray(z0, dtype=float)[: self.ns])
+        brk = breakpoints(inputs, self.n_ref)
+        R = np.empty((n, self.nrec))
+        stats = np.zeros(4)
+        budget = MAX_STEPS_PER_SAMPLE * n + 10_000
+        status = self._entry()(s0, W, brk, n, self.dt, self.rtol, self.atol, budget, R, stats)
+        self.stats.update(evaluations=int(stats[0]), accepted=int(stats[1]), rejected=int(stats[2]))
+        if status and failure is not None:
+            failure.update(step=int(stats[3]) - 1, error="the Dormand-Prince step size fell below 1e-14 s or its "
+                           f"budget of {budget} steps ran out (a diverging or stiff loop)")
+        return R.T
+
+
+def breakpoints(inputs: np.ndarray, n_ref: int) -> np.ndarray:
+    """``1.0`` at every grid index where a held input changes (the integration must stop there), else 0.
+
+    A held input is any row of ``w`` after the reference (noise, disturbance, sample flag, feedforward,
+    parameters); the reference jumps where a step's start differs from the previous step's end.
+    """
+    n = inputs.shape[1]
+    brk = np.zeros(n)
+    if n < 2:
+        return brk
+    held = inputs[3 * n_ref:]
+    changed = np.any(held[:, 1:] != held[:, :-1], axis=0)
+    r0, r1 = inputs[:n_ref, 1:], inputs[2 * n_ref:3 * n_ref, :-1]
+    scale = 1.0 + np.abs(r0)
+    jump = np.any(np.abs(r0 - r1) > 1e-12 * scale, axis=0)
+    brk[1:] = (changed | jump).astype(float)
+    return brk
+
+
+def _functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.Function, int, int]:
+    """``(rhs, rec, nw, n_ref)``: ``dk_rhs(s, a, q) -> s_dot`` and ``dk_rec(s, a, q) -> record`` of the loop."""
+    L = layout(plant, law, element, 0)
+    n_ref = 3 * L.n
+    nq = L.nx + L.nd + 1 + L.nu + L.np_
+    s, a, q = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", n_ref), ca.SX.sym("q", nq)
+    noise, dist, _flag, uff, p = ca.vertsplit(q, np.cumsum([0, L.nx, L.nd, 1, L.nu, L.np_]).tolist())
+    x, xc = s[:L.nx], s[L.nx:]
+    m, e = ca.SX(0, 1), ca.SX(0, 1)
+    y = x + noise
+    command = law.command(y, xc, m, a) + _feedforward(law, y, xc, m, a, uff)
+    u = element.function(command, e)[0]
+    gate = law.gate(y, xc, m, a)
+    s_dot = ca.vertcat(plant.ode()(x, u, dist, p), law.derivative(y, xc, m, a, gate))
+    signals = law.signals(y, xc, m, a) if law.signals is not None else ca.SX(0, 1)
+    record = ca.vertcat(x, xc, command, u, y, dist, signals)
+    rhs = ca.Function("dk_rhs", [s, a, q], [s_dot], ["s", "a", "q"], ["s_dot"])
+    rec = ca.Function("dk_rec", [s, a, q], [record], ["s", "a", "q"], ["record"])
+    return rhs, rec, n_ref + n_ref + n_ref + nq, n_ref
+
+
+def source(rhs: ca.Function, rec: ca.Function, nw: int, n_ref: int) -> str:
+    """The C source of the library: CasADi's code of ``rhs`` and ``rec``, then the driver."""
+    gen = ca.CodeGenerator("dk_loop.c", {"with_header": False, "verbose": False})
+    gen.add(rhs)
+    gen.add(rec)
+    sizes = {"ns": rhs.size1_in(0), "na": n_ref, "nw": nw, "nrec": rec.size1_out(0)}
+    for tag, f in (("rhs", rhs), ("rec", rec)):
+        sizes.update({f"{tag}_arg": f.sz_arg(), f"{tag}_res": f.sz_res(), f"{tag}_iw": f.sz_iw(),
+                      f"{tag}_w": f.sz_w()})
+    return gen.dump() + DRIVER.format(**sizes)
+
+
+def _compiler() -> str | None:
+    for name in ("cc", "gcc", "clang"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def _library(text: str, cc: str) -> tuple[Path, bool] | str:
+    """The cached library of ``text`` (built now if needed) and whether it was built now, or why not."""
+    from designkit.cache import cache_dir
+
+    digest = hashlib.sha256("\0".join([text, cc, *FLAGS, ca.__version__]).encode()).hexdigest()[:16]
+    folder = cache_dir("codegen")
+    library = folder / f"dk_dopri5_{digest}.so"
+    if library.exists():
+        return library, False
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        c_file = library.with_suffix(".c")
+        c_file.write_text(text)
+        fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
+        os.close(fd)
+        proc = subprocess.run([cc, *FLAGS, str(c_file), "-o", tmp, "-lm"], capture_output=True, text=True)
+        if proc.returncode != 0:
+            os.unlink(tmp)
+            return f"compilation failed ({cc}): {(proc.stderr.strip().splitlines() or ['unknown error'])[0]}"
+        os.replace(tmp, library)  # atomic: safe with concurrent builders
+    except OSError as exc:
+        return f"cannot write to the cache directory {folder}: {exc}"
+    return library, True
+
+
+def cached(plant: Any, law: Any, element: Any) -> bool:
+    """True when the library of this loop is already built (generates the C source once, to hash it)."""
+    cc = _compiler()
+    if cc is None:
+        return False
+    text = source(*_functions(plant, law, element))
+    digest = hashlib.sha256("\0".join([text, cc, *FLAGS, ca.__version__]).encode()).hexdigest()[:16]
+    from designkit.cache import cache_dir
+
+    return (cache_dir("codegen") / f"dk_dopri5_{digest}.so").exists()
+
+
+def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL
+                 ) -> Dopri5 | str:
+    """The compiled :class:`Dopri5` of the smooth loop ``plant`` under ``law`` with ``element``, or why not.
+
+    Parameters
+    ----------
+    plant, law, element
+        The true plant, the law and the nonlinear element (a continuous memoryless one).
+    dt : float
+        Output step (s).
+    rtol, atol : float
+        Tolerances of the error control (atol in state units).
+
+    Returns
+    -------
+    Dopri5 or str
+        The runner, or the reason it cannot be built (no C compiler, compilation failed).
+    """
+    cc = _compiler()
+    if cc is None:
+        return "no C compiler on PATH"
+    rhs, rec, nw, n_ref = _functions(plant, law, element)
+    built = _library(source(rhs, rec, nw, n_ref), cc)
+    if isinstance(built, str):
+        return built
+    library, now = built
+    return Dopri5(library=library, ns=rhs.size1_in(0), nw=nw, nrec=rec.size1_out(0), n_ref=n_ref, dt=float(dt),
+                  rtol=float(rtol), atol=float(atol), compiled_now=now)
