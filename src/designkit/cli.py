@@ -142,7 +142,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
     from designkit.schema.loader import load_spec
 
     loaded = load_spec(args.spec)
-    result = run(loaded)
+    result = run(loaded, budget=args.budget)
     comparison = _is_comparison(result)
     files = None
     if not args.no_report:
@@ -172,7 +172,7 @@ def cmd_verify(args: argparse.Namespace) -> int:
     from designkit.pipeline import run
     from designkit.schema.loader import load_spec
 
-    result = run(load_spec(args.spec))
+    result = run(load_spec(args.spec), budget=args.budget)
     summary = _comparison_summary if _is_comparison(result) else _summary
     print(json.dumps(result.to_json(), indent=2) if args.json else summary(result))
     return _exit_for(result)
@@ -258,8 +258,15 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out = Path(args.out)
     name = _spec_name(args.spec)
     progress = not args.json and sys.stderr.isatty()
-    result = sweep(args.spec, args.samples, seed=args.seed, scheduler=args.scheduler, workers=args.workers,
-                   out=out / name if name else out, chunk=args.chunk, progress=progress)
+    folder = out / name if name else out
+    try:
+        result = sweep(args.spec, args.samples, seed=args.seed, scheduler=args.scheduler, workers=args.workers,
+                       out=folder, chunk=args.chunk, progress=progress)
+    except KeyboardInterrupt:
+        done = len(list((folder / "chunks").glob("chunk-*.npz"))) if (folder / "chunks").is_dir() else 0
+        print(f"designkit: interrupted: {done} chunks are written in {folder / 'chunks'}; run the same command "
+              "again to resume", file=sys.stderr)
+        return 130
     if args.json:
         print(json.dumps(result.to_json(), indent=2, allow_nan=False))
     else:
@@ -307,6 +314,25 @@ def _jobs(text: str) -> int:
     return int(text)
 
 
+def _seconds(text: str) -> float:
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text[:40]!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text[:40]!r}")
+    return value
+
+
+def _budget_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--budget", type=_seconds, default=None, metavar="SECONDS",
+                   help="seconds of estimated work the spec may ask for (default 60): the work is estimated before "
+                   "any model is built and a spec beyond the budget is refused (exit 2) naming the field that drives "
+                   "the cost; see docs/budget.md")
+
+
 def _jobs_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=_jobs, default=2, metavar="{1,2}",
                    help="processes to use (default 2 on a machine with two cores or more: a solver process "
@@ -334,12 +360,14 @@ def build_parser() -> argparse.ArgumentParser:
                    "comparison spec: a comparison list, one object per controller, and passed)")
     p.add_argument("--no-report", action="store_true", help="do not write the report")
     _jobs_option(p)
+    _budget_option(p)
     p.set_defaults(func=cmd_synth)
 
     p = sub.add_parser("verify", help="synthesise and run every check; write nothing")
     p.add_argument("spec")
     p.add_argument("--json", action="store_true")
     _jobs_option(p)
+    _budget_option(p)
     p.set_defaults(func=cmd_verify)
 
     p = sub.add_parser("simulate", help="simulate the designed closed loop on the nonlinear model")

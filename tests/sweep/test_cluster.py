@@ -62,14 +62,14 @@ def cluster(tmp_path):
 
 def test_a_cluster_with_a_worker_killed_mid_sweep_gives_the_in_process_result(cluster, tmp_path):
     address, procs = cluster
-    spec = write(tmp_path, link(km=(0.1, 1.0), tau=(0.5, 4.0), duration=60.0))
+    spec = write(tmp_path, link(km=(0.1, 1.0), tau=(0.5, 4.0), duration=30.0))
     out = tmp_path / "out"
     import threading
 
     box: dict = {}
 
     def run():
-        box["result"] = sweep(spec, 600, seed=5, scheduler=address, chunk=10, out=out, falsification=False,
+        box["result"] = sweep(spec, 400, seed=5, scheduler=address, chunk=10, out=out, falsification=False,
                               report=False)
 
     thread = threading.Thread(target=run)
@@ -82,9 +82,9 @@ def test_a_cluster_with_a_worker_killed_mid_sweep_gives_the_in_process_result(cl
     os.killpg(procs[1].pid, signal.SIGKILL)  # one worker lost mid-sweep
     thread.join(timeout=120)
     assert not thread.is_alive()
-    assert 6 <= written_at_kill < 60, written_at_kill
+    assert 6 <= written_at_kill < 40, written_at_kill
     got = box["result"]
-    ref = sweep(spec, 600, seed=5, engine="process", chunk=600, falsification=False)
+    ref = sweep(spec, 400, seed=5, engine="process", chunk=400, falsification=False)
     for f in ("index", "values", "achieved", "margin", "passed", "failed_runs"):
         assert np.array_equal(getattr(got, f), getattr(ref, f), equal_nan=True), f
-    assert len(list(Path(chunks).glob("chunk-*.npz"))) == 60
+    assert len(list(Path(chunks).glob("chunk-*.npz"))) == 40

@@ -79,3 +79,42 @@ def _counting(func, log):
         return func(*args)
 
     return wrapped
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_cli_and_the_same_command_resumes(tmp_path):
+    """A real SIGINT to ``designkit sweep`` (a LocalCluster of two workers): exit 130 with the chunks written so
+    far; the same command then reads them back and runs only the rest, giving the uninterrupted result."""
+    import json
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    spec = write(tmp_path, link(km=(0.1, 1.0), tau=(0.5, 4.0), duration=20.0))
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "designkit.cli", "sweep", str(spec), "--samples", "300", "--chunk", "10",
+           "--workers", "2", "--seed", "3", "--out", str(out), "--json"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    chunks = out / "link-sweep" / "chunks"
+    try:
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline and len(list(chunks.glob("chunk-*.npz"))) < 3:
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 130 and "run the same command again to resume" in err
+    written = len(list(chunks.glob("chunk-*.npz")))
+    assert 3 <= written < 30
+    again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    payload = json.loads(again.stdout)
+    assert payload["engine"]["resumed_chunks"] == written
+    ref = sweep(spec, 300, seed=3, engine="process", chunk=300, falsification=False)
+    assert payload["passed"] == ref.n_passed and payload["samples"] == 300
+    table = (out / "link-sweep" / "samples.csv").read_text().splitlines()
+    assert len(table) == 301

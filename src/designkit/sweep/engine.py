@@ -124,8 +124,8 @@ def execute(job: Job, *, client: Any = None, scheduler: str | None = None, worke
     current = client.as_current()
     current.__enter__()
     try:
-        futures = [client.submit(run_chunk, job, k, key=f"designkit-sweep-{job.key[:16]}-{k}", pure=False,
-                                 retries=RETRIES) for k in todo]
+        futures = [client.submit(run_chunk, job, k, key=f"designkit-sweep-{job.key[:16]}-{job.samples}-{k}",
+                                 pure=False, retries=RETRIES) for k in todo]
         for fut in as_completed(futures):
             res = fut.result()
             results[res.chunk] = res
