@@ -261,7 +261,8 @@ def _check_per_input(spec: Spec, true_plant: Any) -> None:
                         f"needs one value per input ({true_plant.n_inputs}), got {len(limit)}")
 
 
-def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) -> PipelineResult | ComparisonResult:
+def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True,
+        budget: float | None = None) -> PipelineResult | ComparisonResult:
     """Synthesise, simulate and verify a spec.
 
     Parameters
@@ -273,6 +274,11 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) ->
         sorted), and model files such as a URDF are resolved against the working directory.
     simulate : bool
         Run the closed-loop simulation and the time-domain checks that need it.
+    budget : float, optional
+        Seconds of estimated work the spec may ask for (default
+        :data:`~designkit.schema.budget.DEFAULT_BUDGET`, 60 s): the estimate is made before any model is built
+        (:func:`designkit.schema.budget.check_budget`) and a spec beyond it is refused naming the field that
+        drives the cost.
 
     Returns
     -------
@@ -287,6 +293,7 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) ->
         designed as given (a :class:`~designkit.errors.DesignkitError` names the key path).
     """
     from designkit.families import check_rules
+    from designkit.schema.budget import check_budget
     from designkit.simulation.run import build
     from designkit.simulation.trials import run_trials
     from designkit.verification.suite import run_checks
@@ -297,8 +304,9 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) ->
         hint = "; read a file with load_spec or YAML text with parse_spec" if isinstance(loaded, str | Path) else ""
         raise SpecError("loaded", f"expected a LoadedSpec or a Spec, got {type(loaded).__name__}{hint}")
     if isinstance(loaded.spec, ComparisonSpec):
-        return run_comparison(loaded, simulate=simulate)
+        return run_comparison(loaded, simulate=simulate, budget=budget)
     spec = loaded.spec
+    check_budget(spec, base_dir(loaded), budget)
     true_plant = plant(loaded)
     _check_per_input(spec, true_plant)
     dsn = design(loaded, true_plant)
@@ -316,7 +324,7 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True) ->
                           plant=true_plant, trials=trials)
 
 
-def run_comparison(loaded: LoadedSpec, *, simulate: bool = True) -> ComparisonResult:
+def run_comparison(loaded: LoadedSpec, *, simulate: bool = True, budget: float | None = None) -> ComparisonResult:
     """Run every controller of a comparison spec as its own single-controller spec (:func:`run`) and tabulate.
 
     Raises
@@ -326,12 +334,14 @@ def run_comparison(loaded: LoadedSpec, *, simulate: bool = True) -> ComparisonRe
         rewritten from ``controller`` to ``controllers[<i>]``).
     """
     from designkit.comparison.table import baselines, comparison_table
+    from designkit.schema.budget import check_comparison_budget
 
     members = loaded.members()
+    share = check_comparison_budget([m.spec for _, m in members], base_dir(loaded), budget)
     results = []
     for k, (_, member) in enumerate(members):
         try:
-            results.append(run(member, simulate=simulate))
+            results.append(run(member, simulate=simulate, budget=share[k]))
         except SpecError as exc:
             path = exc.path
             if path == "controller" or path.startswith(("controller.", "controller[")):
