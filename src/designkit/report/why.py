@@ -131,6 +131,7 @@ def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], 
     numbers: dict[int, int] = {}  # id(trial) -> fix number
     fixes: list[WhyFix] = []
     first: dict[str, str] = {}
+    tried: dict[int, str] = {}  # id(trial) -> the row that states it
     out = []
     for row, row_parts in zip(rows, parts, strict=True):
         texts, refs = [], []
@@ -147,10 +148,14 @@ def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], 
                 continue
             for trial in found.trials:
                 if trial.passed:
-                    numbers[id(trial)] = len(numbers) + 1
+                    if id(trial) not in numbers:  # the same change proposed under several sentences is one fix
+                        numbers[id(trial)] = len(numbers) + 1
+                        fixes.append(WhyFix(numbers[id(trial)], _trial_words(trial), ()))
                     refs.append(numbers[id(trial)])
-                    fixes.append(WhyFix(numbers[id(trial)], _trial_words(trial), ()))
+                elif id(trial) in tried:
+                    texts.append(f"Tried, and not a fix: as under {tried[id(trial)]} (above).")
                 else:
+                    tried[id(trial)] = row.label
                     words = _trial_words(trial)
                     texts.append("Tried, and not a fix: " + words[0].lower() + words[1:])
             if found.note:
