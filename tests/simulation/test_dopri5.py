@@ -135,3 +135,18 @@ def test_explicit_rk4_stays_selectable():
     spec = _with_numerics(make_spec(duration=1.0), integrator="rk4")
     res = simulate(spec, design_of(spec))
     assert res.settings["integrator"].startswith("rk4") and "integrator_work" not in res.settings
+
+
+@needs_cc
+def test_the_interpreted_driver_gives_the_compiled_run():
+    """numerics.compile: never runs the same algorithm in Python on CasADi's interpreted functions (the C driver
+    and the Python one are two writings of one algorithm: they agree to rounding, amplified only by the error
+    control's choice of steps)."""
+    spec = load_spec(SPECS / "simnog-computed-torque.yaml").spec
+    design = synthesize(spec)
+    compiled = build(spec, design)
+    interpreted = build(_with_numerics(spec, compile="never"), design)
+    assert compiled.dopri5.library is not None and interpreted.dopri5.library is None
+    a, b = compiled.run(), interpreted.run()
+    assert "interpreted: numerics.compile: never" in b.settings["integrator"]
+    np.testing.assert_allclose(b.state, a.state, rtol=0, atol=1e-8)

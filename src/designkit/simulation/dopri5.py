@@ -12,7 +12,9 @@ set by the tolerances, not by the grid.
 Tolerances: ``numerics.rtol`` and ``numerics.atol`` when the spec gives them, else :data:`RTOL` and
 :data:`ATOL` (about what RK4 on the default grid, ``dt |p|max = 0.02``, reaches).  The library is built by the
 system C compiler (:data:`FLAGS`) and cached under a hash of its source (:func:`designkit.cache.cache_dir`
-``("codegen")``); without a compiler :func:`build_dopri5` returns None and the loop is integrated by RK4.
+``("codegen")``); with ``numerics.compile: never`` or without a compiler the same algorithm runs interpreted
+(:mod:`designkit.simulation.dopri5_py`: CasADi's virtual machine for the right-hand side, a Python loop per
+step).
 """
 
 from __future__ import annotations
@@ -39,9 +41,10 @@ RTOL = 1e-10
 """Default relative tolerance of the pair (``numerics.rtol`` not given)."""
 ATOL = 1e-12
 """Default absolute tolerance (state units: rad, rad/s, and the controller's states)."""
-FLAGS = ("-O1", "-fPIC", "-shared")
-"""Compiler flags: ``-O1`` compiles a six-joint right-hand side in about a second; higher levels cost more to
-compile than they save on a run of a few thousand evaluations."""
+FLAGS = ("-O1", "-ffp-contract=off", "-fPIC", "-shared")
+"""Compiler flags: ``-O1`` compiles a two-link right-hand side in a few tenths of a second (higher levels cost
+more to compile than they save on a run of a few thousand evaluations); no fused multiply-add, so the compiled
+run gives the interpreted driver's numbers (:mod:`designkit.simulation.dopri5_py`)."""
 MAX_STEPS_PER_SAMPLE = 50
 """Step budget: at most this many attempted steps per output step (plus 10,000), then the run stops."""
 
@@ -52,8 +55,10 @@ class Dopri5:
 
     Parameters
     ----------
-    library : pathlib.Path
-        The shared library.
+    library : pathlib.Path or None
+        The shared library; None: the interpreted driver (:mod:`designkit.simulation.dopri5_py`) runs.
+    rhs, rec : casadi.Function
+        ``dk_rhs(s, a, q) -> s_dot`` and ``dk_rec(s, a, q) -> record`` (interpreted).
     ns, nw, nrec : int
         Sizes of the integrated state ``(x, xc)``, of a per-step input column and of a record.
     n_ref : int
@@ -66,7 +71,9 @@ class Dopri5:
         True when this build ran the compiler (False: the library was cached).
     """
 
-    library: Path
+    library: Path | None
+    rhs: ca.Function
+    rec: ca.Function
     ns: int
     nw: int
     nrec: int
@@ -102,10 +109,18 @@ class Dopri5:
         R = np.empty((n, self.nrec))
         stats = np.zeros(4)
         budget = MAX_STEPS_PER_SAMPLE * n + 10_000
-        status = self._entry()(s0, W, brk, n, self.dt, self.rtol, self.atol, budget, R, stats)
-        self.stats.update(evaluations=int(stats[0]), accepted=int(stats[1]), rejected=int(stats[2]))
+        if self.library is None:
+            from designkit.simulation.dopri5_py import run_interpreted
+
+            R, count, stop = run_interpreted(self.rhs, self.rec, s0, W, brk, self.dt, self.rtol, self.atol, budget)
+            self.stats.update(count)
+            status = int(stop < n)
+        else:
+            status = self._entry()(s0, W, brk, n, self.dt, self.rtol, self.atol, budget, R, stats)
+            self.stats.update(evaluations=int(stats[0]), accepted=int(stats[1]), rejected=int(stats[2]))
+            stop = int(stats[3])
         if status and failure is not None:
-            failure.update(step=int(stats[3]) - 1, error="the Dormand-Prince step size fell below 1e-14 s or its "
+            failure.update(step=stop - 1, error="the Dormand-Prince step size fell below 1e-14 s or its "
                            f"budget of {budget} steps ran out (a diverging or stiff loop)")
         return R.T
 
@@ -195,21 +210,9 @@ def _library(text: str, cc: str) -> tuple[Path, bool] | str:
     return library, True
 
 
-def cached(plant: Any, law: Any, element: Any) -> bool:
-    """True when the library of this loop is already built (generates the C source once, to hash it)."""
-    cc = _compiler()
-    if cc is None:
-        return False
-    text = source(*_functions(plant, law, element))
-    digest = hashlib.sha256("\0".join([text, cc, *FLAGS, ca.__version__]).encode()).hexdigest()[:16]
-    from designkit.cache import cache_dir
-
-    return (cache_dir("codegen") / f"dk_dopri5_{digest}.so").exists()
-
-
-def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL
-                 ) -> Dopri5 | str:
-    """The compiled :class:`Dopri5` of the smooth loop ``plant`` under ``law`` with ``element``, or why not.
+def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL,
+                 compile: bool = True) -> tuple[Dopri5, str]:
+    """The :class:`Dopri5` of the smooth loop ``plant`` under ``law`` with ``element``, compiled when it can be.
 
     Parameters
     ----------
@@ -219,19 +222,23 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
         Output step (s).
     rtol, atol : float
         Tolerances of the error control (atol in state units).
+    compile : bool
+        Build (or load) the C library; False: the interpreted driver.
 
     Returns
     -------
-    Dopri5 or str
-        The runner, or the reason it cannot be built (no C compiler, compilation failed).
+    (Dopri5, str)
+        The runner, and how it runs: ``"compiled now"``, ``"cached library"``, or why it is interpreted
+        (``numerics.compile: never``, no C compiler, compilation failed).
     """
-    cc = _compiler()
-    if cc is None:
-        return "no C compiler on PATH"
     rhs, rec, nw, n_ref = _functions(plant, law, element)
-    built = _library(source(rhs, rec, nw, n_ref), cc)
+    sizes = {"ns": rhs.size1_in(0), "nw": nw, "nrec": rec.size1_out(0), "n_ref": n_ref, "dt": float(dt),
+             "rtol": float(rtol), "atol": float(atol)}
+    cc = _compiler()
+    why = "numerics.compile: never" if not compile else "no C compiler on PATH" if cc is None else ""
+    built = _library(source(rhs, rec, nw, n_ref), cc) if not why and cc is not None else why
     if isinstance(built, str):
-        return built
+        return Dopri5(library=None, rhs=rhs, rec=rec, **sizes), built
     library, now = built
-    return Dopri5(library=library, ns=rhs.size1_in(0), nw=nw, nrec=rec.size1_out(0), n_ref=n_ref, dt=float(dt),
-                  rtol=float(rtol), atol=float(atol), compiled_now=now)
+    return (Dopri5(library=library, rhs=rhs, rec=rec, compiled_now=now, **sizes),
+            "compiled now" if now else "cached library")

@@ -18,12 +18,15 @@ one built simulator runs on any parameter values (``Simulator.run(parameters=...
 an uncertainty box and model-mismatch studies never rebuild the step, and the compiled step is
 shared by every parameter value.
 
-Integrators (``numerics.integrator``): ``rk4`` (classical, fixed step) or ``cvodes`` (CasADi's
-variable-step BDF inside every step, for stiff plants).  Without ``numerics.integrator`` the
-integrator is chosen from the poles (:func:`~designkit.simulation.timing.resolve`): RK4, or
-CVODES with an output step set by the non-stiff poles when RK4 would need more steps than the
-bound (``settings["integrator_choice"]`` says why).  Either way the steps are rolled by
-``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
+Integrators (``numerics.integrator``): ``dopri5`` (compiled Dormand--Prince 5(4) with error control and
+dense output over the whole grid, :mod:`designkit.simulation.dopri5`), ``rk4`` (classical, fixed step) or
+``cvodes`` (CasADi's variable-step BDF inside every step, for stiff plants).  Without ``numerics.integrator``
+the integrator is chosen from the poles (:func:`~designkit.simulation.timing.resolve`): CVODES with an output
+step set by the non-stiff poles when RK4 would need more steps than the bound, else the pair for a smooth loop
+and RK4 for one held per step, sampled, noisy or on a non-smooth plant (:mod:`designkit.simulation.regime`;
+``settings["integrator_choice"]`` says why).  The output grid is the same whichever integrator runs.  RK4 and
+CVODES steps are rolled by ``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no
+Python loop per step.
 A discontinuous law is held over each step (:mod:`designkit.simulation.step`), so CVODES integrates
 a smooth right-hand side inside each step and never meets the switch.
 
@@ -32,7 +35,11 @@ code generator and the system C compiler (:func:`designkit.models.codegen.compil
 cached by content hash, ``-O1 -ffp-contract=off`` so the compiled run equals the interpreted one
 to the last bit).  ``auto`` (default) uses the compiled library when it is already cached, and
 compiles when the interpreted run is estimated to cost more than compiling
-(:data:`COMPILE_BREAK_EVEN`); ``always`` and ``never`` force the choice.  Without a compiler, or
+(:data:`COMPILE_BREAK_EVEN`) or when the loop will run more than once (``build(expected_runs > 1)``: trials,
+parameter corners, a sweep) and its interpreted run is above :data:`CACHE_LOOKUP_FLOOR`; ``always`` and
+``never`` force the choice.  The Dormand--Prince pair of a smooth loop is compiled under ``auto`` and
+``always`` whatever the estimate (one library per loop, cached; it is the default integrator), and runs the
+same algorithm interpreted under ``never``.  Without a compiler, or
 for a CVODES step, the interpreted CasADi virtual machine runs (the settings say which and why).
 """
 
@@ -254,7 +261,7 @@ def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tup
                       "why": f"interpreted run estimated at {estimate:.3g} s: nothing to gain"}
     acc = step.mapaccum(f"{step.name()}_acc", CHUNK)
     cached = cached_library(acc, flags=COMPILE_FLAGS) is not None
-    if mode == "auto" and not cached and estimate < COMPILE_BREAK_EVEN:
+    if mode == "auto" and not cached and estimate < COMPILE_BREAK_EVEN and runs <= 1:
         return None, {**info, "compiled": False,
                       "why": f"interpreted run estimated at {estimate:.3g} s, below the {COMPILE_BREAK_EVEN:g} s "
                              "it costs to compile"}
@@ -392,9 +399,11 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
     else:
         accumulated = None
-        compile_info = {"mode": spec.numerics.compile, "compiled": True, "integrator": "dopri5",
-                        "why": "compiled now" if dopri5.compiled_now else "cached library", "flags": " ".join(
-                            DOPRI5_FLAGS)}
+        estimate = expected_runs * N * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
+        compile_info = {"mode": spec.numerics.compile, "compiled": dopri5.library is not None,
+                        "integrator": "dopri5", "interpreted_estimate_s": round(estimate, 4),
+                        "why": ("compiled now" if dopri5.compiled_now else "cached library") if dopri5.library
+                        else integrator.rsplit("interpreted: ", 1)[-1].rstrip(")"), "flags": " ".join(DOPRI5_FLAGS)}
 
     if kind == "trajectory":
         ignored = (["simulation.step (a tracking controller is driven by simulation.trajectory)"]
@@ -456,18 +465,15 @@ def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: An
         return None, RK4_WORDS, choice
     if not regime.smooth:
         return None, RK4_WORDS, f"default: rk4 on the output grid, because {regime.why}"
-    if numerics.compile == "never":
-        return None, RK4_WORDS, ("default: rk4, because numerics.compile: never (the Dormand-Prince pair runs "
-                                 "compiled only)")
     rtol = float(numerics.rtol) if "rtol" in given else DOPRI5_RTOL
     atol = float(numerics.atol) if "atol" in given else DOPRI5_ATOL
-    runner = build_dopri5(plant, law, element, timing.dt, rtol=rtol, atol=atol)
-    if isinstance(runner, str):
-        return None, RK4_WORDS, f"rk4: the Dormand-Prince pair could not be compiled ({runner})"
+    runner, how = build_dopri5(plant, law, element, timing.dt, rtol=rtol, atol=atol,
+                               compile=numerics.compile != "never")
     source = "numerics.rtol and numerics.atol" if {"rtol", "atol"} & given else "defaults"
+    ran = "compiled C" if runner.library is not None else f"interpreted: {how}"
     words = (f"dopri5 (Dormand-Prince 5(4), adaptive step with error control: rtol {rtol:g}, atol {atol:g}, "
              f"{source}; PI step-size control; the output grid written from its 4th-order continuous extension; "
-             "compiled C)")
+             f"{ran})")
     why = "numerics.integrator" if explicit else ("default for a smooth continuous loop (no sampling, switching, "
                                                   "delay, memory, anti-windup or noise)")
     return runner, words, why
