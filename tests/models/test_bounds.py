@@ -110,3 +110,74 @@ def test_inertia_enclosures_of_zoo_robots_contain_random_samples(name, data):
     for arg, value in ((e.argmin["q"], e.min_value), (e.argmax["q"], e.max_value)):
         assert np.all(arg >= low - 1e-15) and np.all(arg <= high + 1e-15)
         assert arm.mass_matrix(arg, p=p)[i, i] == pytest.approx(value, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["planar2r", "puma560", "scara"])
+def test_christoffel_symbols_do_not_depend_on_the_joints_before_their_smallest_index(name):
+    """Gamma_ijk is unchanged when joints 1..min(i, j, k) move (what perturbation_enclosure holds fixed)."""
+    plant = zoo_plant(name)
+    arm, p = plant.robot, plant.model_parameters()
+    rng = np.random.default_rng(6)
+    q = rng.uniform(-2, 2, size=(20, arm.n))
+    G = arm.christoffel(q, p=p)
+    for m in range(arm.n):
+        moved = q.copy()
+        moved[:, :m + 1] = rng.uniform(-3, 3, size=(20, m + 1))
+        G2 = arm.christoffel(moved, p=p)
+        block = np.s_[:, m:, m:, m:]
+        assert np.allclose(G2[block], G[block], rtol=1e-11, atol=1e-11 * np.abs(G).max())
+
+
+def _xi_samples(plant, lo, hi, V, A, Dh, f, gravity, count, seed):
+    """|xi_i| by Newton-Euler at random points, half of them on the velocity and acceleration vertices."""
+    arm, p, n = plant.robot, plant.model_parameters(), plant.n_joints
+    rng = np.random.default_rng(seed)
+    q = lo + (hi - lo) * rng.random((count, n))
+    qd = V * rng.uniform(-1, 1, (count, n))
+    qdd = A * rng.uniform(-1, 1, (count, n))
+    qd[: count // 2] = V * np.sign(qd[: count // 2])
+    qdd[: count // 2] = A * np.sign(qdd[: count // 2])
+    tau = arm.inverse_dynamics(q, qd, qdd, p=p).reshape(count, n)
+    if not gravity:
+        tau = tau - arm.gravity_torque(q, p=p).reshape(count, n)
+    return np.abs(Dh * qdd + f * qd - tau).max(axis=0)
+
+
+@pytest.mark.parametrize(("name", "gravity"), [("planar2r", True), ("scara", False), ("planar2r", False)])
+def test_perturbation_enclosure_contains_newton_euler_samples(name, gravity):
+    from designkit.models.bounds import perturbation_enclosure
+
+    plant = zoo_plant(name)
+    n = plant.n_joints
+    lim = [lk.qlim for lk in plant.robot.description.links]
+    lo = np.array([max(-1.0, lk[0]) if lk else -1.0 for lk in lim])
+    hi = np.array([min(1.0, lk[1]) if lk else 1.0 for lk in lim])
+    lo, hi = lo + 0.25 * (hi - lo), hi - 0.25 * (hi - lo)
+    V, A = np.full(n, 1.5), np.full(n, 4.0)
+    Dh = np.diag(plant.robot.mass_matrix(0.5 * (lo + hi), p=plant.model_parameters()))
+    f = np.full(n, 0.5)
+    # the friction residual: the model's friction minus f q', at most |viscous - f| V + |Fc|
+    visc = np.array([float(lk.viscous) if lk.viscous is not None else 0.0 for lk in plant.robot.description.links]) \
+        if name == "scara" else np.array([plant.parameter(f"f{i + 1}").value for i in range(n)])
+    coul = np.abs(visc - f) * V + np.array([abs(float(lk.coulomb or 0.0)) for lk in plant.robot.description.links])
+    e = perturbation_enclosure(plant.robot, q=(lo, hi), qd_limit=V, qdd_limits=np.tile(A, (n, 1)), inertia=Dh,
+                               damping=f, coulomb=coul, gravity=gravity, p=plant.model_parameters(),
+                               rel_tol=0.02, max_boxes=200, samples=300)
+    worst = _xi_samples(plant, lo, hi, V, A, Dh, f, gravity, 5000, 2)
+    assert np.all(worst <= np.array(e.upper)), (worst, e.upper)
+    assert np.all(np.array(e.sampled) <= np.array(e.upper))
+    for i in range(n):  # the attained point is in the box, and |xi| there is what it says
+        at = e.argmax[i]
+        assert np.all(np.asarray(at["q"]) >= lo - 1e-12) and np.all(np.asarray(at["q"]) <= hi + 1e-12)
+        assert np.all(np.abs(at["qd"]) <= V + 1e-12) and np.all(np.abs(at["qdd"]) <= A + 1e-12)
+
+
+def test_perturbation_enclosure_refuses_an_inverted_box():
+    from designkit.models.bounds import perturbation_enclosure
+
+    plant = zoo_plant("planar2r")
+    with pytest.raises(ModelError) as exc:
+        perturbation_enclosure(plant.robot, q=([0.5, 0.0], [0.2, 1.0]), qd_limit=[1, 1], qdd_limits=np.ones((2, 2)),
+                               inertia=[1, 1], damping=[1, 1], coulomb=[0, 0], gravity=False,
+                               p=plant.model_parameters())
+    assert exc.value.field == "q[0]"

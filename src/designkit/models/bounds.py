@@ -176,17 +176,53 @@ class PerturbationEnclosure:
     max_boxes: int
 
 
-def _terms_functions(robot: Any, p: Any, gravity: bool) -> tuple[ca.Function, ca.Function]:
-    """``q -> [vec D, vec Gamma, (g)]`` and ``q -> [the same, vec of its Jacobian]``."""
-    q = ca.SX.sym("q", robot.n)
+@dataclass(frozen=True)
+class _Level:
+    """The entries of ``D``, ``Gamma`` (``j <= k``) or ``g`` that depend only on joints ``free`` (0-based), as a ball
+    tape of ``[entries, vec of their Jacobian in the free joints]`` and one of the entries alone."""
+
+    names: tuple[tuple, ...]
+    free: tuple[int, ...]
+    tape: Any
+    tape_jac: Any
+
+
+def _levels(robot: Any, p: Any, gravity: bool, centre: np.ndarray) -> list[_Level]:
+    """One :class:`_Level` per leading joint held: ``D_ij`` and ``Gamma_ijk`` depend only on ``q_(m+1), ..., q_n``
+    with ``m`` the smallest of their (1-based) indices (module docstring; for ``Gamma``, a sum of derivatives of
+    ``D_ab`` that depend on ``q_(min(a, b)+1), ...``), so those joints are replaced by constants (``centre``)
+    before the tape is written: the enclosure no longer widens over joints the entry does not depend on."""
+    from designkit.bounds.tape import compile_tape
+
+    n = robot.n
+    q = ca.SX.sym("q", n)
     args = [q] + ([ca.DM(np.asarray(p, dtype=float))] if p is not None else [])
-    outs = [ca.vec(robot.functions["mass_matrix"](*args)), ca.vec(robot.functions["christoffel"](*args))]
+    D = robot.functions["mass_matrix"](*args)
+    G = robot.functions["christoffel"](*args)
+    groups: dict[int, list[tuple[tuple, ca.SX]]] = {}
+    for i in range(n):
+        for j in range(n):
+            groups.setdefault(min(i, j), []).append((("D", i, j), D[i, j]))
+            for k in range(j, n):
+                groups.setdefault(min(i, j, k), []).append((("G", i, j, k), G[i, j + n * k]))
     if gravity:
-        outs.append(robot.functions["gravity_torque"](*args))
-    F = ca.densify(ca.vertcat(*outs))
-    return (ca.Function("xi_terms", [q], [F], ["q"], ["terms"]),
-            ca.Function("xi_terms_jac", [q], [ca.densify(ca.vertcat(F, ca.vec(ca.jacobian(F, q))))], ["q"],
-                        ["terms_jac"]))
+        g = robot.functions["gravity_torque"](*args)
+        groups[-1] = [(("g", i), g[i]) for i in range(n)]
+    out = []
+    for m in sorted(groups):
+        names = tuple(name for name, _ in groups[m])
+        expr = ca.vertcat(*[e for _, e in groups[m]])
+        free = tuple(range(m + 1, n))
+        held = list(range(0, m + 1))
+        if held:
+            expr = ca.substitute(expr, q[held], ca.DM(centre[held]))
+        qf = q[list(free)] if free else ca.SX(0, 1)
+        F = ca.densify(expr)
+        J = ca.densify(ca.vec(ca.jacobian(F, qf))) if free else ca.SX(0, 1)
+        tape = compile_tape(ca.Function(f"xi_level{m + 1}", [qf], [F]))
+        tape_jac = compile_tape(ca.Function(f"xi_level{m + 1}_jac", [qf], [ca.vertcat(F, J)]))
+        out.append(_Level(names, free, tape, tape_jac))
+    return out
 
 
 def perturbation_enclosure(robot: Any, *, q: Any, qd_limit: Any, qdd_limits: Any, inertia: Any, damping: Any,
@@ -243,7 +279,7 @@ def perturbation_enclosure(robot: Any, *, q: Any, qd_limit: Any, qdd_limits: Any
     import heapq
     import time
 
-    from designkit.bounds.tape import compile_tape, evaluate, point_ball, span_ball, upper_float
+    from designkit.bounds.tape import evaluate, point_ball, span_ball, upper_float
 
     t0 = time.perf_counter()
     n = robot.n
@@ -260,9 +296,7 @@ def perturbation_enclosure(robot: Any, *, q: Any, qd_limit: Any, qdd_limits: Any
         lo = lo.copy()
         hi = hi.copy()
         lo[0] = hi[0] = 0.5 * (lo[0] + hi[0])
-    f_terms, f_jac = _terms_functions(robot, p, gravity)
-    tape, tape_jac = compile_tape(f_terms), compile_tape(f_jac)
-    n_terms = f_terms.nnz_out(0)
+    levels = _levels(robot, p, gravity, 0.5 * (lo + hi))
     arb = span_ball(0.0, 0.0).__class__
     acc = [[span_ball(-A[i, j], A[i, j]) for j in range(n)] for i in range(n)]
     vel2 = [[span_ball(-V[j] * V[k], V[j] * V[k]) for k in range(n)] for j in range(n)]
@@ -280,31 +314,43 @@ def perturbation_enclosure(robot: Any, *, q: Any, qd_limit: Any, qdd_limits: Any
             return cache[key]
         blo, bhi = np.array(key[0]), np.array(key[1])
         c = 0.5 * (blo + bhi)
-        both = evaluate(tape_jac, [span_ball(float(a), float(b)) for a, b in zip(blo, bhi, strict=True)])
-        at_c = evaluate(tape, [point_ball(float(v)) for v in c])
-        steps = [span_ball(float(a - m), float(b - m)) for a, b, m in zip(blo, bhi, c, strict=True)]
-        out = []
-        for r in range(n_terms):  # the natural extension intersected with the mean-value form
-            mv = at_c[r]
-            for k in range(n):
-                if bhi[k] > blo[k]:
-                    mv = mv + both[n_terms + r + n_terms * k] * steps[k]
-            out.append(both[r].intersection(mv))
-        Dm = out[: n * n]
-        Gm = out[n * n: n * n + n ** 3]
+        ball: dict[tuple, Any] = {}
+        for lev in levels:  # the natural extension intersected with the mean-value form
+            fr = list(lev.free)
+            m = len(lev.names)
+            if not fr:
+                for name, b in zip(lev.names, evaluate(lev.tape, []), strict=True):
+                    ball[name] = b
+                continue
+            both = evaluate(lev.tape_jac, [span_ball(float(blo[k]), float(bhi[k])) for k in fr])
+            at_c = evaluate(lev.tape, [point_ball(float(c[k])) for k in fr])
+            steps = [span_ball(float(blo[k] - c[k]), float(bhi[k] - c[k])) for k in fr]
+            for r, name in enumerate(lev.names):
+                mv = at_c[r]
+                for col, k in enumerate(fr):
+                    if bhi[k] > blo[k]:
+                        mv = mv + both[m + r + m * col] * steps[col]
+                ball[name] = both[r].intersection(mv)
+
+        def Dm(i: int, j: int) -> Any:
+            return ball[("D", i, j)]
+
+        def Gm(i: int, j: int, k: int) -> Any:
+            return ball[("G", i, min(j, k), max(j, k))]
+
         bounds, parts = np.empty(n), []
         for i in range(n):
-            own = (Dm[i + n * i] - arb(Dh[i])) * acc[i][i]
+            own = (Dm(i, i) - arb(Dh[i])) * acc[i][i]
             coup = arb(0)
             for j in range(n):
                 if j != i:
-                    coup = coup + Dm[i + n * j] * acc[i][j]
+                    coup = coup + Dm(i, j) * acc[i][j]
             cor = arb(0)
             for j in range(n):
-                cor = cor + square(Gm[i + n * (j + n * j)], j)
+                cor = cor + square(Gm(i, j, j), j)
                 for k in range(j + 1, n):
-                    cor = cor + 2 * Gm[i + n * (j + n * k)] * vel2[j][k]
-            grav = out[n * n + n ** 3 + i] if gravity else arb(0)
+                    cor = cor + 2 * Gm(i, j, k) * vel2[j][k]
+            grav = ball[("g", i)] if gravity else arb(0)
             total = own + coup + cor + grav + fric[i]
             bounds[i] = upper_float(abs(total))
             parts.append({"own_inertia": upper_float(abs(own)), "coupling": upper_float(abs(coup)),
