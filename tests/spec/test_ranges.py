@@ -356,8 +356,9 @@ def _parse(text: str) -> SpecError | None:
 def _accepted(text: str, key: str) -> None:
     error = _parse(text)
     if "elastic_joint" in text:
-        # no registered family controls an elastic joint yet: the spec is refused there, after the plant
-        assert error is not None and error.path == "controller.kind", error
+        # a base whose controller does not take an elastic joint is refused there, after the plant (pid_servo takes
+        # it since issue 17: the link-position PID from the rigid approximation)
+        assert error is None or error.path == "controller.kind", error
         return
     assert error is None, f"{key}: {error}"
 
