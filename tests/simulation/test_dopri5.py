@@ -125,9 +125,25 @@ def test_a_held_or_rough_loop_stays_on_rk4_and_an_explicit_pair_there_is_refused
     with pytest.raises(SpecError) as info:
         simulate(_with_numerics(relay, integrator="dopri5"), design_of(relay))
     assert info.value.path == "numerics.integrator" and "relay" in info.value.message
-    puma = load_spec(SPECS / "puma560-computed-torque.yaml").spec
-    pumas = build(puma, synthesize(puma))
-    assert pumas.dopri5 is None and "Coulomb" in pumas.settings["integrator_choice"]
+
+
+@needs_cc
+@pytest.mark.parametrize(("layer", "smooth"), [(0.0, True), (0.05, False)])
+def test_coulomb_friction_is_smooth_only_when_the_law_cancels_it(layer, smooth):
+    """The PUMA's Fc sign(q̇) is a jump at rest; computed torque on the exact model compensates it with the same
+    sign (controller.friction_layer 0), so the loop is continuous there and runs the pair; a smoothed
+    compensation (a 0.05 rad/s layer) leaves the jump in the loop (a stick at rest), which stays on RK4."""
+    base = load_spec(SPECS / "puma560-computed-torque.yaml").spec
+    data = base.model_dump(exclude={"numerics"}, exclude_unset=True)
+    data["controller"] = {**data["controller"], "friction_layer": layer}
+    data["simulation"] = {**data["simulation"], "duration": 0.5}
+    spec = Spec.model_validate(data)
+    sim = build(spec, synthesize(spec))
+    assert (sim.dopri5 is not None) is smooth
+    assert "Coulomb" in sim.settings["integrator_choice"]
+    if smooth:
+        res = sim.run()
+        assert np.abs(res.state[:, list(res.positions)] - res.reference[:, :, 0]).max() < 1e-8  # q = qD exactly
 
 
 @needs_cc

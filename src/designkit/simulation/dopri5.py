@@ -144,7 +144,7 @@ def breakpoints(inputs: np.ndarray, n_ref: int) -> np.ndarray:
     return brk
 
 
-def _functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.Function, int, int]:
+def loop_functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.Function, int, int]:
     """``(rhs, rec, nw, n_ref)``: ``dk_rhs(s, a, q) -> s_dot`` and ``dk_rec(s, a, q) -> record`` of the loop."""
     L = layout(plant, law, element, 0)
     n_ref = 3 * L.n
@@ -231,7 +231,7 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
         The runner, and how it runs: ``"compiled now"``, ``"cached library"``, or why it is interpreted
         (``numerics.compile: never``, no C compiler, compilation failed).
     """
-    rhs, rec, nw, n_ref = _functions(plant, law, element)
+    rhs, rec, nw, n_ref = loop_functions(plant, law, element)
     sizes = {"ns": rhs.size1_in(0), "nw": nw, "nrec": rec.size1_out(0), "n_ref": n_ref, "dt": float(dt),
              "rtol": float(rtol), "atol": float(atol)}
     cc = _compiler()

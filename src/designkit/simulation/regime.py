@@ -13,7 +13,7 @@ The one place that decides, from the law, the nonlinear element and the scenario
   its continuous extension (:mod:`designkit.simulation.dopri5`).  It is not when the chain is held per step,
   when the law has discrete memory (updated at every step), an anti-windup gate or clamp (a switch decided
   at each step's start), when measurement noise changes the input at every step, or when the plant itself is
-  not smooth (Coulomb friction: ``plant.nonsmooth()``).
+  not smooth (Coulomb friction: ``plant.nonsmooth()``) and the law does not cancel its jump (:func:`cancelled`).
 
 A trial's feedforward (:mod:`designkit.simulation.trials`) is a per-step sequence held over each step: every
 step where it changes is a breakpoint, so a smooth loop stays smooth between grid points with one.
@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 __all__ = ["Regime", "regime_of"]
 
@@ -66,7 +67,7 @@ def _identity_projection(law: Any) -> bool:
 
 
 def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bool = False,
-              plant: Any = None) -> Regime:
+              plant: Any = None, probe: Any = None) -> Regime:
     """The :class:`Regime` of ``law`` with ``element``.
 
     Parameters
@@ -83,7 +84,10 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
     plant : Plant, optional
         The simulated plant: one with terms that are not differentiable (``plant.nonsmooth()``, e.g. Coulomb
         friction ``Fc sign(q̇)``, which sticks a joint at rest: a sliding motion on ``q̇ = 0`` that no error
-        control can follow with steps above ``atol / Fc``) is not smooth.
+        control can follow with steps above ``atol / Fc``) is not smooth, unless ``probe`` shows the law
+        cancels those terms.
+    probe : (callable, ndarray), optional
+        The closed loop's right-hand side ``f(s) -> s_dot`` and the start ``s0``, for :func:`cancelled`.
     """
     held_law = sampled or bool(law.discontinuous)
     per_step = held_law or delayed or not element.continuous
@@ -103,6 +107,35 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
     if noisy:
         reasons.append("the measurement noise changes at every step")
     rough = plant.nonsmooth() if plant is not None and hasattr(plant, "nonsmooth") else ()
+    if rough and probe is not None and cancelled(probe[0], probe[1], getattr(plant, "velocities", ())):
+        rough = ()
     if rough:
-        reasons.append(f"the plant is not smooth ({'; '.join(rough)})")
+        reasons.append(f"the plant is not smooth ({'; '.join(rough)}) and the law does not cancel it")
     return Regime(held_law=held_law, per_step=per_step, smooth=not reasons, why="; ".join(reasons))
+
+
+PROBE = 1e-12
+"""Velocity offset (rad/s) on either side of rest at which :func:`cancelled` compares the loop's derivative."""
+JUMP = 1e-6
+"""A derivative that changes by more than this (relative to ``1 + |f|``) across ``q̇ = ±PROBE`` jumps there."""
+
+
+def cancelled(f: Any, s0: np.ndarray, velocities: Any) -> bool:
+    """True when the closed loop ``f(s) -> s_dot`` is continuous across ``q̇_j = 0`` at ``s0``, every joint ``j``.
+
+    A plant's Coulomb friction ``Fc sign(q̇)`` is a jump of ``Fc`` in the torque at ``q̇ = 0``; a law that
+    compensates it with the same ``Fc sign(q̇)`` of the measured velocity (computed torque on an exact model)
+    cancels the jump, and the closed loop is smooth there.  The jump is structural (the same coefficients at
+    every configuration), so one probe at the start (at rest) tells; a partial compensation (another ``Fc``, a
+    smoothed sign) leaves a jump of the difference, seen here.
+    """
+    base = np.asarray(f(s0), dtype=float).ravel()
+    scale = 1.0 + np.abs(base)
+    for j in velocities:
+        up, down = s0.copy(), s0.copy()
+        up[j] += PROBE
+        down[j] -= PROBE
+        jump = np.abs(np.asarray(f(up), dtype=float).ravel() - np.asarray(f(down), dtype=float).ravel())
+        if np.any(jump > JUMP * scale) or not np.all(np.isfinite(jump)):
+            return False
+    return True

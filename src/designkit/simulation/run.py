@@ -367,7 +367,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
     sampling = sampling_of(spec, law)
     noisy = sim.noise is not None and bool(np.any(np.asarray(sim.noise.std, dtype=float) > 0))
-    regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy, plant=true_plant)
+    regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy)
     held_per_step = sampling[0] == 0 and regime.per_step
     timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
                      max_dt_reason=law.max_step_reason, sampling=sampling)
@@ -394,6 +394,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = step_function(true_plant, law, element, timing, spec.numerics)
+    if regime.smooth and true_plant.nonsmooth():  # smooth unless the law leaves the plant's jump in the loop
+        regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy,
+                           plant=true_plant, probe=_probe(true_plant, law, element, z0, inputs))
     dopri5, integrator, choice = _pair(spec, timing, regime, true_plant, law, element)
     if dopri5 is None:
         accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
@@ -442,6 +445,15 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
                      compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5)
 
 
+def _probe(plant: Any, law: Law, element: Any, z0: np.ndarray, inputs: np.ndarray) -> tuple[Any, np.ndarray]:
+    """The closed loop's ``s -> s_dot`` at the first step's reference and held inputs, and the start ``s``."""
+    from designkit.simulation.dopri5 import loop_functions
+
+    rhs, _, _, n_ref = loop_functions(plant, law, element)
+    a, q = inputs[:n_ref, 0], inputs[3 * n_ref:, 0]
+    return (lambda s: rhs(s, a, q)), np.asarray(z0[:rhs.size1_in(0)], dtype=float)
+
+
 def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: Any) -> tuple[Any, str, str]:
     """``(runner, integrator words, choice words)``: the compiled Dormand--Prince pair for a smooth loop (the
     default, or ``numerics.integrator: dopri5``), else None and the fixed-step or CVODES words.
@@ -476,6 +488,9 @@ def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: An
              f"{ran})")
     why = "numerics.integrator" if explicit else ("default for a smooth continuous loop (no sampling, switching, "
                                                   "delay, memory, anti-windup or noise)")
+    if plant.nonsmooth():
+        why += (f"; the plant's {'; '.join(plant.nonsmooth())} is cancelled by the law's compensation (the closed "
+                "loop is continuous across zero velocity)")
     return runner, words, why
 
 
