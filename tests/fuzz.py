@@ -150,16 +150,35 @@ def _get(doc: Any, path: tuple[Any, ...]) -> Any:
 
 @dataclass(frozen=True)
 class Outcome:
-    """What ``designkit <command> FILE`` did: exit code, stdout, stderr and the files it wrote."""
+    """What ``designkit <command> FILE`` did: exit code, stdout, stderr, the files it wrote and the CPU seconds it
+    took (``code`` is :data:`STOPPED` when the case was stopped at its CPU bound)."""
 
     code: int
     out: str
     err: str
     written: tuple[str, ...]
+    cpu: float = 0.0
 
 
-def outcome(text: str, folder: Path, command: str = "verify") -> Outcome:
-    """Run ``designkit verify FILE --json`` or ``designkit synth FILE --out DIR`` in process on ``text``."""
+STOPPED = -1
+"""The exit code recorded for a case stopped at its CPU-time bound."""
+
+
+class _CaseTimeout(BaseException):
+    """Raised by the CPU-time alarm (a BaseException: the CLI's catch-all of internal errors lets it through)."""
+
+
+def _alarm(signum: int, frame: Any) -> None:
+    raise _CaseTimeout
+
+
+def outcome(text: str, folder: Path, command: str = "verify", extra: tuple[str, ...] = (),
+            cpu: float | None = None) -> Outcome:
+    """Run ``designkit verify FILE --json`` or ``designkit synth FILE --out DIR`` in process on ``text``, with the
+    further options ``extra`` (e.g. ``--budget 4``); with ``cpu``, stopped after that many CPU seconds (SIGPROF)."""
+    import signal
+    import time
+
     from designkit.cli import main
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -167,20 +186,34 @@ def outcome(text: str, folder: Path, command: str = "verify") -> Outcome:
     spec.write_text(text)
     out_dir = folder / "out"
     argv = ["verify", str(spec), "--json"] if command == "verify" else ["synth", str(spec), "--out", str(out_dir)]
+    argv += list(extra)
     stdout, stderr = io.StringIO(), io.StringIO()
+    previous = signal.signal(signal.SIGPROF, _alarm) if cpu else None
+    start = time.process_time()
     with redirect_stdout(stdout), redirect_stderr(stderr):
         try:
+            if cpu:
+                signal.setitimer(signal.ITIMER_PROF, cpu)
             code = main(argv)
         except SystemExit as exc:  # argparse
             code = int(exc.code or 0)
+        except _CaseTimeout:
+            code = STOPPED
+        finally:
+            if cpu:
+                signal.setitimer(signal.ITIMER_PROF, 0)
+                signal.signal(signal.SIGPROF, previous)
+    used = time.process_time() - start
     written = tuple(sorted(str(p.relative_to(out_dir)) for p in out_dir.rglob("*"))) if out_dir.exists() else ()
-    return Outcome(code, stdout.getvalue(), stderr.getvalue(), written)
+    return Outcome(code, stdout.getvalue(), stderr.getvalue(), written, used)
 
 
 def violations(result: Outcome) -> list[str]:
     """How ``result`` breaks the bad-input contract (empty: it holds)."""
     bad = []
-    if result.code not in (0, 1, 2):
+    if result.code == STOPPED:
+        bad.append(f"still running after {result.cpu:.1f} s of CPU time (stopped)")
+    elif result.code not in (0, 1, 2):
         bad.append(f"exit {result.code}")
     if result.code == 2:
         lines = result.err.splitlines()
@@ -193,15 +226,23 @@ def violations(result: Outcome) -> list[str]:
     return bad
 
 
-if __name__ == "__main__":  # python -m tests.fuzz [N] [SEED]
+if __name__ == "__main__":  # python -m tests.fuzz [N] [SEED] [fields]
     import tempfile
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 200
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    fields = len(sys.argv) > 3 and sys.argv[3] == "fields"
     with tempfile.TemporaryDirectory() as tmp:
-        for k, m in enumerate(mutants(seed, n)):
-            res = outcome(m.text, Path(tmp) / str(k))
+        if fields:
+            from tests.fuzz_fields import CASE_BUDGET, CASE_CPU, field_mutants
+
+            corpus = field_mutants(seed, n, Path(tmp) / "files")
+            options: tuple[str, ...] = ("--jobs", "1", "--budget", f"{CASE_BUDGET:g}")
+        else:
+            corpus, options, CASE_CPU = mutants(seed, n), (), None
+        for k, m in enumerate(corpus):
+            res = outcome(m.text, Path(tmp) / str(k), extra=options, cpu=CASE_CPU)
             bad = violations(res)
-            if bad or res.code != 2:
-                print(f"{k:4d} {m.source:36s} {m.operator:9s} {m.path:40s} exit {res.code} {'; '.join(bad)} "
-                      f"{res.err.strip()[:160]}", flush=True)
+            if bad or res.code != 2 or fields:
+                print(f"{k:4d} {m.source:36s} {m.operator:9s} {m.path:40s} exit {res.code} {res.cpu:5.1f} s "
+                      f"{'; '.join(bad)} {res.err.strip()[:160]}", flush=True)

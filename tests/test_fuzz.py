@@ -9,9 +9,12 @@ larger campaign over every spec.
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from tests.fuzz import ROOT, mutants, outcome, violations
+from tests.fuzz_fields import CASE_BUDGET, CASE_CPU, GENERATORS, field_mutants
 
 FAST_SPECS = [ROOT / "specs" / f"{name}.yaml" for name in ("posspeed-link", "tracking-pid", "requirements-driven",
                                                             "posspeed-saturation")]
@@ -19,6 +22,10 @@ N_MUTANTS = 48
 """Mutants per seed in the suite (about 20 s on one core: most are refused at load time)."""
 N_SYNTH = 2
 """Accepted mutants also run through ``synth`` with reports."""
+N_FIELDS = int(os.environ.get("DESIGNKIT_FUZZ_CASES", "42"))
+"""Field-targeted mutants in the suite (``tests/fuzz_fields.py``): three per field group by default, about 15 s of
+CPU time in all.  A larger campaign: ``DESIGNKIT_FUZZ_CASES=1000 python -m pytest tests/test_fuzz.py -k field``, or
+``python -m tests.fuzz 1000 SEED fields``, which prints every case with its exit code and CPU time."""
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -41,3 +48,27 @@ def test_mutated_specs_keep_the_bad_input_contract(seed, tmp_path):
 def test_the_corpus_reaches_every_operator():
     ops = {m.operator for seed in (0, 1) for m in mutants(seed, N_MUTANTS, FAST_SPECS)}
     assert ops == {"value", "delete", "extra", "tag", "alias", "duplicate", "nest", "bomb"}
+
+
+def test_field_mutants_keep_the_contract_within_their_bounds(tmp_path):
+    """Robot names and overrides, DH tables, URDF paths and hostile files, payloads, limits, uncertainty boxes, the
+    workspace, the computed-torque and resolved-acceleration options, line, circle and via-point references,
+    numerics and per-joint lists: every mutant exits 0, 1 or 2 within its CPU bound under ``--budget``; a refused
+    one says so on one line and writes nothing (checked again through ``synth``)."""
+    options = ("--jobs", "1", "--budget", f"{CASE_BUDGET:g}")
+    problems = []
+    for k, mutant in enumerate(field_mutants(0, N_FIELDS, tmp_path / "files")):
+        label = f"#{k} {mutant.operator} {mutant.path}"
+        result = outcome(mutant.text, tmp_path / f"f{k}", "verify", options, cpu=CASE_CPU)
+        problems += [f"{label}: {bad}: {result.err.strip()[:200]}" for bad in violations(result)]
+        if result.code == 2:
+            synth = outcome(mutant.text, tmp_path / f"fs{k}", "synth", options, cpu=CASE_CPU)
+            problems += [f"{label} (synth): {bad}" for bad in violations(synth)]
+            if synth.code != 2:
+                problems.append(f"{label}: verify refused it, synth exit {synth.code}")
+    assert not problems, "\n".join(problems)
+
+
+def test_the_field_corpus_reaches_every_field_group(tmp_path):
+    reached = {m.operator for m in field_mutants(0, N_FIELDS, tmp_path)}
+    assert reached == {g.__name__[1:] for g in GENERATORS}
