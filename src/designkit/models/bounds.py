@@ -263,8 +263,9 @@ def perturbation_enclosure(robot: Any, *, q: Any, qd_limit: Any, qdd_limits: Any
     qdd_limits : array_like, shape (n, n)
         Row ``i``: the acceleration limits (rad/s^2) of every joint as joint ``i``'s bound sees them.
     inertia, damping, coulomb : array_like
-        Per joint ``D_ii^`` (kg*m^2), ``f_i`` (N*m*s/rad) of the simplified model, and ``|Fc_i|`` (N*m)
-        bounding ``friction_i(q_i') - f_i q_i'``.
+        Per joint ``D_ii^`` (kg*m^2), ``f_i`` (N*m*s/rad) of the simplified model, and a bound (N*m) of
+        ``|friction_i(q_i') - f_i q_i'|`` over the velocity box: ``|Fc_i|`` when ``f_i`` is the joint's viscous
+        friction (the caller's responsibility: the robot's friction is not read here).
     gravity : bool
         Whether ``g(q)`` is part of ``xi`` (no gravity feed-forward).
     p : array_like, optional
