@@ -27,6 +27,8 @@ The terms (each a :class:`Term` with the key path that drives it):
   Runs: the nominal run, the small-signal run of ``designed_loop``, the trials of a learning law, the
   corners (``2^k`` for ``k`` uncertain parameters) and samples of ``tracking_bounds``, the corners the lab
   answers re-simulate, and the gain study (bounded by its own budget);
+* **task path** -- a line or circle of the end effector is solved by inverse kinematics at 401 instants
+  (:data:`IK_EVALUATIONS` each);
 * **lattice** -- the robustness checks linearize the loop at every plant of the uncertainty lattice
   (``grid^k`` capped at 100,000, plus the samples): :data:`LINEARIZATION` ``x size(n)`` each.
 
@@ -70,6 +72,10 @@ LINEARIZATION = 250.0
 """Evaluations per lattice plant of a robustness check (a Jacobian and the eigenvalues of the closed loop)."""
 LATTICE_CAP = 100_000
 """Most lattice plants (:data:`designkit.spec.plants.MAX_GRID_POINTS`)."""
+PATH_SAMPLES, IK_EVALUATIONS = 401, 100.0
+"""A task-space path is solved by inverse kinematics at 401 instants
+(:data:`designkit.families.resolved_acceleration.PATH_SAMPLES`), a few Newton iterations with the Jacobian
+each: about 100 evaluations per instant."""
 GAIN_STUDY_SECONDS = 6.0
 """The gain study's own time bound (:data:`designkit.analysis.lab.gains.STUDY_BUDGET_S`)."""
 OVERHEAD = 1.2e7
@@ -380,6 +386,10 @@ def estimate(spec: Any, base_dir: Path | None = None, *, joints: int | None = No
                       + (f" of the {n}-joint model" if n and n > 1 else "")))
     terms.append(Term("gain study", min(8 * per_run, GAIN_STUDY_SECONDS / SECONDS_PER_EVALUATION), sim_key,
                       "the gain study's re-simulations (bounded by its own 6 s)"))
+    traj = spec.simulation.trajectory
+    if traj is not None and traj.kind in ("line", "circle"):
+        terms.append(Term("task path", PATH_SAMPLES * IK_EVALUATIONS * size(n), "simulation.trajectory",
+                          f"the joint path solved by inverse kinematics at {PATH_SAMPLES} instants"))
     k, samples, lattice = _uncertainty(spec)
     if lattice:
         plants = min(lattice, LATTICE_CAP) + samples

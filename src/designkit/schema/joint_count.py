@@ -17,7 +17,10 @@ from typing import Any
 
 from designkit.errors import SpecError
 
-__all__ = ["check_joint_lists", "joint_count"]
+__all__ = ["PER_JOINT_GAINS", "check_joint_lists", "joint_count"]
+
+PER_JOINT_GAINS = ("computed_torque", "resolved_acceleration", "ilc")
+"""Families whose ``damping`` and ``natural_frequency`` are per joint (or per task coordinate, as many)."""
 
 
 def joint_count(plant: Any, base_dir: Path | None = None) -> int | None:
@@ -61,11 +64,14 @@ def _refuse(path: str, value: Any, n: int, what: str = "joint") -> None:
 def check_joint_lists(spec: Any, n: int) -> None:
     """Refuse a per-joint list of ``spec`` whose length is not ``n`` (:class:`SpecError` naming its key path).
 
-    Checked: ``simulation.step``, ``simulation.initial_position``, the joint trajectories' ``amplitude``,
-    ``max_velocity``, ``max_acceleration`` and ``points[k]``, the piecewise-constant references' ``amplitude``,
-    ``controller.damping`` and ``controller.natural_frequency``, a robot's ``plant.limits``, the nonlinear
-    element's levels and ``requirements.max_control`` (one value per input: a robot has one per joint).
+    Only a robot's lists are checked here (a link or an elastic joint is built in milliseconds, and its own
+    stages say what its lists mean): ``simulation.step``, ``simulation.initial_position``, the trajectories'
+    ``amplitude``, ``max_velocity``, ``max_acceleration`` and ``points[k]``, ``controller.damping`` and
+    ``controller.natural_frequency`` of the model-based families (:data:`PER_JOINT_GAINS`), ``plant.limits``, the
+    nonlinear element's levels and ``requirements.max_control`` (one value per input: a robot has one per joint).
     """
+    if getattr(spec.plant, "kind", None) != "robot":
+        return
     sim = spec.simulation
     _refuse("simulation.step", sim.step, n)
     _refuse("simulation.initial_position", sim.initial_position, n)
@@ -77,13 +83,10 @@ def check_joint_lists(spec: Any, n: int) -> None:
         for k, point in enumerate(getattr(traj, "points", None) or ()):
             _refuse(f"simulation.trajectory.points[{k}]", point, n)
     ctrl = getattr(spec, "controller", None)
-    for key in ("damping", "natural_frequency"):
-        if ctrl is not None and isinstance(getattr(ctrl, key, None), list):
-            _refuse(f"controller.{key}", getattr(ctrl, key), n)
-    plant = spec.plant
-    if getattr(plant, "kind", None) != "robot":
-        return
-    limits = getattr(plant, "limits", None)
+    if getattr(ctrl, "kind", None) in PER_JOINT_GAINS:
+        for key in ("damping", "natural_frequency"):
+            _refuse(f"controller.{key}", getattr(ctrl, key, None), n)
+    limits = getattr(spec.plant, "limits", None)
     if limits is not None:
         for key in ("velocity", "acceleration", "torque"):
             _refuse(f"plant.limits.{key}", getattr(limits, key, None), n)
