@@ -157,3 +157,20 @@ def test_printed_c4_is_figure_5_3_as_printed(comparison):
     assert c[3] == pytest.approx(printed + c1 / (c2 * 400.0) - c1 / (p.tau2 * 400.0), rel=1e-12)
     text = " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
     assert "printed c4 = -0.33375" in text
+
+
+def test_sliding_poles_over_the_box_against_the_reduced_system(comparison):
+    import itertools
+
+    from designkit.display.numbers import fmt_number
+
+    c = np.asarray(comparison["sliding-regulator"].design.extra["vsc"]["c"])
+    keep = [0, 2, 3]
+    rates = []
+    for J2, Km, KR in itertools.product((0.45, 0.55), (1.8, 2.2), (180.0, 220.0)):
+        A, _ = elastic_state_space(elastic_link(J2=J2, Km=Km, KR=KR))
+        # on sigma = 0, x2 = -(c1 x1 + c3 x3 + c4 x4) (c2 = 1): the reduced system of the other three states
+        Ar = A[np.ix_(keep, keep)] + np.outer(A[keep, 1], -c[keep])
+        rates.append(min(-np.linalg.eigvals(Ar).real))
+    text = " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
+    assert f"slowest decay rate is {fmt_number(min(rates), 3)} 1/s to {fmt_number(max(rates), 3)} 1/s" in text

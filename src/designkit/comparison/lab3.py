@@ -294,6 +294,13 @@ def _why(result: Any, chat: dict[str, Chatter]) -> Question:
             f"({', '.join(_f(complex(*p).real) for p in info['sliding_poles'])} 1/s) whatever Km and τ1, with "
             f"gains that keep it there for every plant of the box (theorem 3, certified: "
             f"{_check(run, 'vsc_gains').status if _check(run, 'vsc_gains') else '—'}).")
+        vertex = [min(-complex(*z).real for z in v["poles"]) for v in info.get("vertex_poles", ())]
+        if vertex:
+            sentences.append(
+                f"The sliding motion does depend on the link's parameters (J2, τ2, KR, R2 enter the reduced system): "
+                f"at the corners of the box its slowest decay rate is {_f(min(vertex), '1/s')} to "
+                f"{_f(max(vertex), '1/s')}, against {_f(min(-complex(*z).real for z in info['sliding_poles']), '1/s')}"
+                " requested at the nominal plant; theorem 3 keeps the state on σ = 0 there, not the poles.")
         sentences.append(
             f"How: it reached the surface in {_f(reach.achieved if reach else None, 's')}, then slid with the "
             f"measured poles {measured} 1/s; the equivalent control stayed between the two switching controls on "
