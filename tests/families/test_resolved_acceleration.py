@@ -431,3 +431,28 @@ def test_a_path_starting_at_a_singular_configuration_is_refused_naming_the_start
     loaded = parse_spec(damped)
     check = error_poles_check(loaded.spec, design_of(loaded))
     assert np.isfinite(check.achieved)  # defined at every instant of the path with the damping
+
+
+def test_the_friction_layer_replaces_the_coulomb_sign_by_the_smoothstep_inside_the_layer():
+    """``controller.friction_layer`` on the PUMA 560 (Coulomb friction on every joint): the law with the layer minus
+    the law without it is ``Fc (s(q'/phi) - sign(q'))`` with ``s(x) = sign(x)(3x^2 - 2|x|^3)`` written out here and
+    ``Fc`` the robot's published Coulomb levels; zero outside the layer; the design's linearization unchanged."""
+    text = ("name: ra-layer\nplant: {kind: robot, robot: puma560}\n"
+            "controller: {kind: resolved_acceleration, damping: 1.0, natural_frequency: 10, orientation: held%s}\n"
+            "simulation: {duration: 3.0, initial_position: [0, 0.785, -3.14, 0.2, 0.15, 0.2],\n"
+            "  trajectory: {kind: line, displacement: [0.0, 0.0, 0.15], duration: 2.0}}\n")
+    layer = 0.05
+    exact = design_of(parse_spec(text % ""))
+    smooth = design_of(parse_spec(text % f", friction_layer: {layer}"))
+    fc = np.array([float(link.coulomb) for link in robot("puma560").description.links])
+    rng = np.random.default_rng(11)
+    for _ in range(10):
+        q = np.array([0, 0.785, -3.14, 0.2, 0.15, 0.2]) + rng.normal(scale=0.05, size=6)
+        qd = rng.uniform(-2 * layer, 2 * layer, 6)
+        args = (np.concatenate([q, qd]), np.zeros(0), np.zeros(0), rng.normal(scale=0.1, size=18))
+        diff = np.asarray(smooth.law.command(*args)).ravel() - np.asarray(exact.law.command(*args)).ravel()
+        a = np.minimum(np.abs(qd) / layer, 1.0)
+        want = fc * (np.sign(qd) * (3 * a**2 - 2 * a**3) - np.sign(qd))
+        np.testing.assert_allclose(diff, want, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(smooth.closed_loop.A, exact.closed_loop.A, rtol=0, atol=1e-9)
+    assert any("boundary layer φ = 0.05 rad/s" in n for n in smooth.notes)

@@ -31,8 +31,9 @@ against a loop stiffness of only ``M^_jj K1`` per joint, and on a fixed integrat
 own speed switch by about ``Fc dt / M_jj`` per step, which the compensation then follows:
 
 * PUMA 560 resolved acceleration (no rotor inertia: ``M_66 = 4e-5 kg*m^2`` against ``Fc6 = 0.55 N*m``,
-  ``Fc/(M K1)`` about 140 rad at the wrist): with phi = 0.01 rad/s the wrist errors grow to 0.27 rad and the
-  command still chatters (joint 4); with phi >= 0.05 rad/s the run diverges;
+  ``Fc/(M K1)`` about 140 rad at the wrist): with phi = 1e-6 rad/s the shoulder's command still jumps 10 times
+  (100 with the sign) and the wrist error reaches 13 mrad; with phi = 0.01 rad/s the wrist errors grow to 0.27 rad
+  and the command still chatters (joint 4); with phi >= 0.05 rad/s the run diverges;
 * PUMA 560 computed torque with a payload error (rotor inertia included): the command does not chatter with
   the exact ``sign`` (one jump as the arm leaves rest); a layer of 0.01, 0.05 or 0.5 rad/s raises the largest
   joint error from 3.5 mrad to 7, 10 and 20 mrad and the commanded torque's total variation.
