@@ -166,3 +166,16 @@ def test_the_interpreted_driver_gives_the_compiled_run():
     a, b = compiled.run(), interpreted.run()
     assert "interpreted: numerics.compile: never" in b.settings["integrator"]
     np.testing.assert_allclose(b.state, a.state, rtol=0, atol=1e-8)
+
+
+@needs_cc
+def test_a_diverging_loop_is_integrated_again_by_rk4_and_says_so():
+    """mrac-gamma-unstable diverges: the pair's step collapses; the run is repeated by RK4 on the grid, so every
+    state is recorded as far as it stays finite (the reference model's stays finite throughout)."""
+    from designkit.pipeline import run
+
+    result = run(load_spec(SPECS / "mrac-gamma-unstable.yaml"))
+    sim = result.simulation
+    assert "the Dormand-Prince pair stopped at t =" in sim.settings["integrator"]
+    assert sim.settings["integrator"].startswith("rk4")
+    assert not np.all(np.isfinite(sim.state)) or "integrator_failure" in sim.settings or np.abs(sim.state).max() > 1e3

@@ -216,6 +216,14 @@ class Simulator:
         if self.dopri5 is not None:  # a feedforward changing at a step is a breakpoint the pair ends a step on
             rec = self.dopri5.run(self.z0, inputs, failure)
             settings = freeze({**settings, "integrator_work": _work_words(self.dopri5.stats, self.time.size - 1)})
+            if failure:  # a diverging loop: integrated again on the grid, every state as far as it stays finite
+                t_stop = float(self.time[max(failure["step"], 0)])
+                failure.clear()
+                rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, failure=failure)
+                settings = freeze({**settings, "integrator": (
+                    f"{RK4_WORDS}: the Dormand-Prince pair stopped at t = {t_stop:.6g} s (its step fell below 1e-14 s "
+                    "or its step budget ran out: a diverging or stiff loop), so the run was integrated again by RK4 "
+                    "on the output grid")})
         else:
             rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
         if parameters:
