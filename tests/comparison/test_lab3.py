@@ -27,6 +27,12 @@ def comparison():
     return run(load_spec(ROBEL))
 
 
+@pytest.fixture(scope="module")
+def lab_text(comparison):
+    """Every sentence of the section, computed once."""
+    return " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
+
+
 def _closed_loop_response(params, K, N, t):
     """The state regulator's loop by scipy: x' = (A - BK) x + B N r + D w, step r = 1, load W from T_W."""
     from scipy.signal import lsim
@@ -143,7 +149,7 @@ def test_robel_bad_input_exits_2_with_the_key_path(old, new, message, tmp_path, 
     assert_bad_input(tmp_path, capsys, text.replace(old, new, 1), message)
 
 
-def test_printed_c4_is_figure_5_3_as_printed(comparison):
+def test_printed_c4_is_figure_5_3_as_printed(comparison, lab_text):
     run = comparison["sliding-regulator"]
     p = elastic_link()
     p1, p2, p3 = -8.0, -10.0, -12.0
@@ -155,11 +161,10 @@ def test_printed_c4_is_figure_5_3_as_printed(comparison):
     assert lab3.printed_c4(c, p.tau2, p.KR * p.R2**2 / p.J2) == pytest.approx(printed, rel=1e-12)
     # ... and the designed c4 is the derivation's (tau2 in the last term), which places -8, -10, -12
     assert c[3] == pytest.approx(printed + c1 / (c2 * 400.0) - c1 / (p.tau2 * 400.0), rel=1e-12)
-    text = " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
-    assert "printed c4 = -0.33375" in text
+    assert "printed c4 = -0.33375" in lab_text
 
 
-def test_sliding_poles_over_the_box_against_the_reduced_system(comparison):
+def test_sliding_poles_over_the_box_against_the_reduced_system(comparison, lab_text):
     import itertools
 
     from designkit.display.numbers import fmt_number
@@ -172,5 +177,4 @@ def test_sliding_poles_over_the_box_against_the_reduced_system(comparison):
         # on sigma = 0, x2 = -(c1 x1 + c3 x3 + c4 x4) (c2 = 1): the reduced system of the other three states
         Ar = A[np.ix_(keep, keep)] + np.outer(A[keep, 1], -c[keep])
         rates.append(min(-np.linalg.eigvals(Ar).real))
-    text = " ".join(" ".join(q.sentences) for q in lab3.section(comparison).questions)
-    assert f"slowest decay rate is {fmt_number(min(rates), 3)} 1/s to {fmt_number(max(rates), 3)} 1/s" in text
+    assert f"slowest decay rate is {fmt_number(min(rates), 3)} 1/s to {fmt_number(max(rates), 3)} 1/s" in lab_text
