@@ -97,3 +97,14 @@ def test_uncontrollable_elastic_joint_is_refused_at_the_parameter(tmp_path, caps
     assert_bad_input(tmp_path, capsys, text, "plant.KR: makes the plant uncontrollable")
     bad_pole = SPEC.replace("[-3, -4, -12]", "[-3, -4, 0.5]")
     assert_bad_input(tmp_path, capsys, bad_pole, "controller.poles[2]")
+
+
+def test_figures_draw_the_motor_and_the_link(result):
+    from designkit.families import family
+    from designkit.families.pid_sliding_mode.elastic import motion_figure, sliding_variable_figure
+
+    assert {sliding_variable_figure, motion_figure} <= set(family("pid_sliding_mode").figures)
+    slm, motion = sliding_variable_figure(result), motion_figure(result)
+    assert slm is not None and "<svg" in slm.svg and "the band (green)" in slm.caption
+    assert motion is not None and "the simulated link (purple)" in motion.caption
+    assert "20 rad/s, damping 0.0125" in motion.caption

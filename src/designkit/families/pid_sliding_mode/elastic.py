@@ -175,6 +175,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "rigid": {"Km": Km_r, "tau": tau_r}, "load_mode": {"k2": k2, "omega": float(np.sqrt(k2)), "zeta": zeta},
         "ideal_t": t[:: max(1, len(t) // 2000)].tolist(),
         "ideal_x3": nominal["x"][:: max(1, len(t) // 2000), 2].tolist(), "pid_gains": list(values),
+        "ideal_x1": nominal["x"][:: max(1, len(t) // 2000), 0].tolist(),
     }}
     formulas = (
         "slm = a1 x1 + a2 x2 + z (motor side), z' = x1 − xD; u = u0 − M sign(slm)",
@@ -270,6 +271,81 @@ RUN_RULE = CheckRule(
             "pid_sm_elastic_motion": "Load against its sliding motion (measured)"})
 
 
+def _draw_slm(t: np.ndarray, slm: np.ndarray, band: float) -> Any:
+    from designkit.display.figure import plain_ticks
+    from designkit.display.svg import BLUE, GREEN, new_figure, plot_decimated, tag
+
+    fig, (ax,) = new_figure(6.8, 3.6)
+    tag(fig, "band", ax.fill_between([t[0], t[-1]], -band, band, color=GREEN, alpha=0.2, lw=0,
+                                     label=f"band |slm| ≤ {band:.3g} rad·s"))
+    tag(fig, "slm", *plot_decimated(ax, t, slm, color=BLUE, lw=1.0, label="slm = a1 x1 + a2 x2 + z (motor)"))
+    ax.set_yscale("symlog", linthresh=band, linscale=1.0)
+    plain_ticks(ax.yaxis)
+    ax.set_xlim(t[0], t[-1])
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("slm (rad·s)")
+    ax.legend(loc="best", framealpha=0.9)
+    return fig
+
+
+def sliding_variable_figure(result: Any) -> Any:
+    """The motor's sliding variable against its band (symmetric-log axis, linear within the band)."""
+    from designkit.display.figure import Figure
+    from designkit.display.svg import render_tagged
+
+    sim = result.simulation
+    if sim is None or EXTRA not in result.design.extra:
+        return None
+    band = float(result.design.extra[EXTRA]["band"])
+    svg, keys, _ = render_tagged(_draw_slm, np.asarray(sim.time, float), np.asarray(sim.signals["slm"], float), band)
+    drawn = [w for k, w in (("band", "the band (green)"), ("slm", "the motor's sliding variable (blue)")) if k in keys]
+    return Figure("PID/sliding mode on the elastic joint: the motor's sliding variable",
+                  f"The motor's sliding variable over the run; the axis is linear within ±{band:.3g} rad·s. Drawn: "
+                  + " and ".join(drawn) + ".", svg, "fig-pid-sm-elastic-slm.svg", ("pid_sm_elastic_band",))
+
+
+def _draw_motion(t: np.ndarray, ref: np.ndarray, x: np.ndarray, info: dict) -> Any:
+    from designkit.display.figure import REFERENCE_STYLE
+    from designkit.display.svg import BLUE, GREEN, ORANGE, PURPLE, RED, new_figure, plot_decimated, tag
+
+    fig, (ax,) = new_figure(6.8, 4.0)
+    tag(fig, "reference", *plot_decimated(ax, t, ref, color=GREEN, **REFERENCE_STYLE, label="reference xD"))
+    it = np.asarray(info["ideal_t"], float)
+    tag(fig, "ideal-motor", ax.plot(it, info["ideal_x1"], color=ORANGE, lw=1.6, label="motor on slm = 0: xD/N(s)")[0])
+    tag(fig, "motor", *plot_decimated(ax, t, x[:, 0], color=BLUE, lw=1.0, label="motor x1"))
+    tag(fig, "ideal-link", ax.plot(it, info["ideal_x3"], color=RED, lw=1.6, ls="--",
+                                   label="link on slm = 0: k2 x1/(s² + s/τ2 + k2)")[0])
+    tag(fig, "link", *plot_decimated(ax, t, x[:, 2], color=PURPLE, lw=1.0, label="link x3"))
+    ax.set_xlim(t[0], t[-1])
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("position, spring side (rad)")
+    ax.legend(loc="best", framealpha=0.9)
+    return fig
+
+
+def motion_figure(result: Any) -> Any:
+    """The motor and the link against their motions on ``slm = 0`` at the nominal plant."""
+    from designkit.display.figure import Figure
+    from designkit.display.svg import render_tagged
+
+    sim = result.simulation
+    if sim is None or EXTRA not in result.design.extra:
+        return None
+    info = result.design.extra[EXTRA]
+    t = np.asarray(sim.time, float)
+    svg, keys, _ = render_tagged(_draw_motion, t, np.asarray(sim.reference[:, 0, 0], float),
+                                 np.asarray(sim.state, float), info)
+    words = {"reference": "the reference (dash-dot)", "ideal-motor": "the motor's sliding motion (orange)",
+             "motor": "the simulated motor (blue)", "ideal-link": "the link's motion on the surface (dashed, red)",
+             "link": "the simulated link (purple)"}
+    mode = info["load_mode"]
+    return Figure("PID/sliding mode on the elastic joint: motor and link",
+                  f"The motor follows its sliding motion; the link hangs on the spring with its own mode "
+                  f"({mode['omega']:.4g} rad/s, damping {mode['zeta']:.3g}). Drawn: "
+                  + ", ".join(words[k] for k in keys if k in words) + ".", svg, "fig-pid-sm-elastic-motion.svg",
+                  ("pid_sm_elastic_motion",))
+
+
 def json_summary(result: Any) -> dict[str, Any]:
     """The gains, ``M`` against ``sup|du_eq|``, the load mode on the sliding surface."""
     d = result.design
@@ -296,4 +372,5 @@ def extend(family: Any) -> Any:
         return base_json(result) if base_json is not None else {}
 
     return dataclasses.replace(family, plants=(*family.plants, "elastic_joint"), synthesize=synth, law=law_of,
-                               checks=(*family.checks, RELAY_RULE, RUN_RULE), json=json_of)
+                               checks=(*family.checks, RELAY_RULE, RUN_RULE), json=json_of,
+                               figures=(*family.figures, sliding_variable_figure, motion_figure))
