@@ -397,7 +397,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786); default: a "
                    "LocalCluster on this machine")
     p.add_argument("--workers", type=_samples, help="workers of the LocalCluster (default one per core)")
-    p.add_argument("--chunk", type=_samples, help="samples per chunk (default 1000); the results do not depend on it")
+    p.add_argument("--chunk", type=_samples, help="samples per chunk (default N/64, 10 to 1000); the results do not "
+                   "depend on it")
     p.add_argument("--out", default="sweeps", help="output directory (default: sweeps/); the sweep goes to "
                    "OUT/<spec name>/ (chunks/, samples.csv, worst/, sweep.json, report.html, report.pdf); an "
                    "interrupted sweep re-run with the same arguments resumes from its chunks")

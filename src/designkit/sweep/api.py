@@ -25,7 +25,7 @@ __all__ = ["DEFAULT_CHUNK", "MAX_SAMPLES", "WORST", "sweep"]
 MAX_SAMPLES = 10_000_000
 """Most samples in one sweep (the per-sample table of 10^7 samples is about a gigabyte)."""
 DEFAULT_CHUNK = 1000
-"""Samples per chunk (one task, one file) unless given."""
+"""Largest default number of samples per chunk (one task, one file); see :func:`default_chunk`."""
 WORST = 5
 """How many of the worst samples are written as specs."""
 RECORD_BUDGET = 32e6
@@ -43,6 +43,12 @@ def _sweep_of(spec: Any) -> Any:
     if isinstance(spec, str | Path):
         return load_sweep(spec)
     raise SpecError("spec", f"expected a spec path, a LoadedSpec or a LoadedSweep, got {type(spec).__name__}")
+
+
+def default_chunk(samples: int) -> int:
+    """Samples per chunk when not given: ``ceil(N / 64)`` between 10 and :data:`DEFAULT_CHUNK` -- at least 64 tasks
+    to spread over the workers (a function of ``N`` alone, so the same command resumes whatever the workers)."""
+    return int(min(DEFAULT_CHUNK, max(10, -(-samples // 64)), samples))
 
 
 def _batch_size(steps: int, n: int, nu: int, chunk: int) -> int:
@@ -74,7 +80,7 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
         Folder for the chunk files (``chunks/``, resumable), the per-sample table, the worst cases' specs and the
         report; None keeps everything in memory.
     chunk : int, optional
-        Samples per chunk (default :data:`DEFAULT_CHUNK`); the results do not depend on it.
+        Samples per chunk (default :func:`default_chunk`); the results do not depend on it.
     engine : {"dask", "process"}
         ``process`` runs the chunks in this process, one after the other.
     progress : bool
@@ -101,7 +107,7 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
         raise SpecError("engine", f"must be 'dask' or 'process', got {engine!r}")
     sw = _sweep_of(spec)
     name = sw.loaded.spec.name
-    chunk = int(chunk or min(DEFAULT_CHUNK, samples))
+    chunk = int(chunk or default_chunk(samples))
     text = _full_text(sw)
     ready = base(text, sw.path)  # validates the spec (and its sweep section) before any cluster starts
     sim = ready.simulator
