@@ -57,7 +57,10 @@ def _design(path: str = SIMNOG, **changes):
         *head, last = key.split(".")
         for k in head:
             node = node.setdefault(k, {})
-        node[last] = value
+        if value is None:
+            node.pop(last, None)
+        else:
+            node[last] = value
     return parse_spec(yaml.safe_dump(data))
 
 
@@ -234,6 +237,8 @@ def test_a_run_beyond_the_velocity_limit_exceeds_the_bound():
     ({"plant.limits.velocity": [1.0, 1.0, 1.0]}, None, "plant.limits.velocity"),
     ({"plant.uncertainty": {"m2": [2.0, 4.0]}}, None, "plant.uncertainty"),
     ({"controller.work_limit": 0}, None, "controller.work_limit"),
+    ({"controller.perturbation_bound": 0.5}, None, "controller.perturbation_bound"),
+    ({"simulation.perturbation": {"value": 0.5, "time": 1.0}}, None, "simulation.perturbation"),
 ])
 def test_bad_input_exits_2_naming_the_key(tmp_path, capsys, change, remove, path):
     from designkit.cli import main
@@ -284,3 +289,14 @@ def test_small_M_fails_and_says_by_how_much(capsys):
     assert check["passed"] is False
     bound = obj["pid_sliding_mode"]["bound"]["per_joint"]
     assert f"below the bound by {bound[0] - 4.0:.4g} N·m" in check["detail"]
+
+
+def test_tracking_form_takes_the_later_joint_at_the_trajectorys_acceleration():
+    """Figure 3.2 per joint: on slm = 0 the joint follows its quintic, whose largest acceleration is
+    (10 sqrt(3)/3) A/T^2 (at t = T (3 -+ sqrt(3))/6): joint 1's box has joint 2 there; the loop stays in its layers."""
+    spec = _design(**{"controller.form": "tracking", "simulation.step": None,
+                      "simulation.trajectory": {"kind": "quintic", "amplitude": [0.5, -0.3], "duration": 2.0}})
+    result = run(spec)
+    info = result.design.extra["pid_sm_robot"]
+    assert info["acceleration_rows"][0][1] == pytest.approx(10 * np.sqrt(3) / 3 * 0.3 / 2.0**2, rel=1e-4)
+    assert all(c.passed for c in result.checks if c.required)

@@ -125,6 +125,13 @@ def synthesize(spec: Any, plant: Any) -> Design:
     if spec.plant.uncertainty is not None:
         raise SpecError("plant.uncertainty", "pid_sliding_mode on a robot bounds xi for the arm's own model over "
                         "the workspace; a parameter box is not supported there yet")
+    for key in ("perturbation", "plant_change", "nonlinearity", "delay"):
+        if getattr(sim, key, None):
+            raise SpecError(f"simulation.{key}", "not supported by pid_sliding_mode on a robot yet: the run's xi is "
+                            "computed from the commanded torques on the model the bound covers")
+    if ctl.perturbation_bound is not None:
+        raise SpecError("controller.perturbation_bound", "on a robot xi is bounded from the model over the "
+                        "workspace box (the hierarchy of control); an external bound is not supported there yet")
     if not robot.friction:
         raise SpecError("plant.friction", "each joint is designed on Km = 1/f (f its viscous friction): set "
                         "plant.friction: true")
