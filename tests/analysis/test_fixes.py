@@ -81,7 +81,8 @@ def test_every_numbered_fix_passes_and_every_tried_one_fails(name, diagnosed, tm
     stated = text.count("Tried, and not a fix: ") - text.count("Tried, and not a fix: as under")
     assert stated == len(tried)
     # no fix text twice in the section: a sentence or a tried remedy stated by an earlier row is referred to
-    sentences = [s for r in rows for s in r.fix.split(". ") if s and not s.startswith(("As under", "See fix", "Not re-simulated"))]
+    tags = ("As under", "See fix", "Not re-simulated")
+    sentences = [s for r in rows for s in r.fix.split(". ") if s and not s.startswith(tags)]
     assert len(sentences) == len(set(sentences)), sentences
 
 

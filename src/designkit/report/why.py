@@ -117,7 +117,8 @@ def _trial_words(trial: Any) -> str:
 def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], proposed: Sequence[Any]
                       ) -> tuple[tuple[WhyRow, ...], tuple[WhyFix, ...]]:
     """Rows whose fixes are re-run: a sentence stated once (later rows refer to the first row that states it),
-    followed by what its re-runs showed; the numbered fixes are the re-runs that pass every required check.
+    followed by what its re-runs showed; the numbered fixes are the re-runs that pass every required check, so
+    every row refers to every one of them.
 
     Parameters
     ----------
@@ -134,12 +135,10 @@ def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], 
     tried: dict[int, str] = {}  # id(trial) -> the row that states it
     out = []
     for row, row_parts in zip(rows, parts, strict=True):
-        texts, refs = [], []
+        texts: list[str] = []
         for part in row_parts:
             if part in first:
                 texts.append(f"As under {first[part]} (above).")
-                found = by_sentence.get(part)
-                refs += [numbers[id(t)] for t in (found.trials if found else ()) if id(t) in numbers]
                 continue
             first[part] = row.label
             texts.append(part)
@@ -151,7 +150,6 @@ def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], 
                     if id(trial) not in numbers:  # the same change proposed under several sentences is one fix
                         numbers[id(trial)] = len(numbers) + 1
                         fixes.append(WhyFix(numbers[id(trial)], _trial_words(trial), ()))
-                    refs.append(numbers[id(trial)])
                 elif id(trial) in tried:
                     texts.append(f"Tried, and not a fix: as under {tried[id(trial)]} (above).")
                 else:
@@ -160,12 +158,15 @@ def resimulated_fixes(rows: Sequence[WhyRow], parts: Sequence[tuple[str, ...]], 
                     texts.append("Tried, and not a fix: " + words[0].lower() + words[1:])
             if found.note:
                 texts.append(found.note[0].upper() + found.note[1:] + ".")
-        refs = list(dict.fromkeys(refs))
-        if refs:
-            texts.append(_refs_text(refs).replace("below.", "below (re-simulated, passing)."))
-        out.append(dataclasses.replace(row, fix=" ".join(texts), fix_refs=tuple(refs)))
-    labels = {k: tuple(r.label for r in out if k in r.fix_refs) for k in range(1, len(fixes) + 1)}
-    return tuple(out), tuple(dataclasses.replace(f, checks=labels[f.number]) for f in fixes)
+        out.append((row, texts))
+    # a numbered fix passes every required check on its re-run, so it fixes every row
+    refs = list(range(1, len(fixes) + 1))
+    ending = [_refs_text(refs).replace("below.", "below (re-simulated, passing every required check).")] \
+        if refs else []
+    rows_out = tuple(dataclasses.replace(row, fix=" ".join([*texts, *ending]), fix_refs=tuple(refs))
+                     for row, texts in out)
+    labels = tuple(r.label for r in rows_out)
+    return rows_out, tuple(dataclasses.replace(f, checks=labels) for f in fixes)
 
 
 REPEATED_CAUSE_MIN = 120

@@ -274,7 +274,7 @@ def _raise_k1(m: re.Match[str], result: Any, data: dict[str, Any], text: str) ->
     changes = _gain_factor(factor, data)
     if changes is None:
         return []
-    return [Remedy(f"K1 times {fmt_number(factor, 3)} and K2 times its square root (the natural frequency times "
+    return [Remedy(f"K1 times {fmt_number(factor, 4)} and K2 times its square root (the natural frequency times "
                    f"{fmt_number(math.sqrt(factor), 4)}, the damping unchanged)", changes, text)]
 
 

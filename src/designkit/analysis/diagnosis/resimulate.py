@@ -200,7 +200,7 @@ def margins_of(checks: Sequence[Any]) -> tuple[tuple[LoopMargin, ...], str]:
     """The loop margins per plant input from the ``loop_margins`` check, or why there are none."""
     check = next((c for c in checks if c.name == "loop_margins"), None)
     if check is None:
-        return (), "no loop-margin check for this design (the family offers none: no fixed linear loop)"
+        return (), "no loop margins: the family offers no loop-margin check"
     cert = check.certificate if hasattr(check.certificate, "get") else {}
     loops = cert.get("loops") or ()
     out = []
