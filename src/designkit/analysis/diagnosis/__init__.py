@@ -57,6 +57,14 @@ What is diagnosed (SI units: s, rad, rad/s, N·m; derivations in ``docs/diagnosi
   on the ideal linear response (:func:`~designkit.simulation.linear.linear_response`, same instants,
   reference and perturbation, no nonlinear element, noise, delay or sampling) and on the simulation.
 
+* **Every proposed fix re-simulated** (:func:`~designkit.analysis.diagnosis.fixes.check_fixes`): each fix
+  sentence the findings give that reads as a change of the spec
+  (:mod:`~designkit.analysis.diagnosis.remedies`) is re-run through the pipeline
+  (:mod:`~designkit.analysis.diagnosis.resimulate`: design, checks, simulation on the true plant, at most
+  :data:`~designkit.analysis.diagnosis.resimulate.MAX_FIX_RUNS` runs); ``Diagnosis.proposed`` says per fix the
+  changed values, each previously failing requirement measured against its limit, the loop margins and whether
+  every required check passes.  The report numbers only those that pass.
+
 Each concept lives with what it explains: an element's analysis in its module of
 :mod:`designkit.analysis.elements` (:mod:`~designkit.analysis.elements.saturation`,
 :mod:`~designkit.analysis.elements.relay`), a family's in the family

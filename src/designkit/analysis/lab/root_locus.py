@@ -101,7 +101,7 @@ def _rightmost(poles: np.ndarray) -> complex:
 
 
 def _pole(p: complex) -> str:
-    if abs(p.imag) <= 1e-9 * max(1.0, abs(p)):
+    if abs(p.imag) <= 1e-6 * max(1.0, abs(p)):  # a double real pole splits by ~sqrt(eps) |p| in eigvals
         return fmt_number(p.real, 3)
     return f"{fmt_number(p.real, 3)} ± {fmt_number(abs(p.imag), 3)}j"
 
