@@ -108,3 +108,19 @@ def test_figures_draw_the_motor_and_the_link(result):
     assert slm is not None and "<svg" in slm.svg and "the band (green)" in slm.caption
     assert motion is not None and "the simulated link (purple)" in motion.caption
     assert "20 rad/s, damping 0.0125" in motion.caption
+
+
+def test_relay_covers_interior_plants_of_the_box(result):
+    # M is sized on the corners; at random interior plants the sliding motion's equivalent control stays below it
+    info = result.design.extra[EXTRA]
+    gains = {k: float(result.design.gains[k]) for k in ("K1", "K2", "K3", "K4")}
+    t = np.linspace(0.0, 3.0, 12001)
+    r = np.ones_like(t)
+    w = np.where(t >= 2.0, 0.2, 0.0)
+    rng = np.random.default_rng(17)
+    worst = 0.0
+    for _ in range(20):
+        params = elastic_link(J2=rng.uniform(0.45, 0.55), Km=rng.uniform(1.8, 2.2))
+        m = sliding_motion(params, info["a1"], info["a2"], gains, t, r, w, 0.0)
+        worst = max(worst, float(np.max(np.abs(m["du_eq"]))))
+    assert worst <= info["sup_du_eq"] * (1 + 1e-9) < info["M"]
