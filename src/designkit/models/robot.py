@@ -121,6 +121,7 @@ class Robot:
     parameter_names: tuple[str, ...] = field(init=False, repr=False)
     parameters: np.ndarray | None = field(init=False, repr=False)
     _evaluators: dict[str, Evaluator] = field(init=False, repr=False, default_factory=dict)
+    _single: dict[str, Any] = field(init=False, repr=False, compare=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         _validate(self.description)
@@ -192,8 +193,43 @@ class Robot:
     # ---------------------------------------------------------------- dynamics
 
     def inverse_dynamics(self, q: Any, qd: Any, qdd: Any, *, p: Any = None) -> np.ndarray:
-        """Joint torques (N*m or N) by recursive Newton--Euler: ``(n,)`` or ``(N, n)``."""
+        """Joint torques (N*m or N) by recursive Newton--Euler: ``(n,)`` or ``(N, n)``.
+
+        One state of a numeric robot as float arrays of shape ``(n,)`` takes a fast path: the function's
+        zero-copy buffers, kept per robot (no argument parsing, no batch machinery); same numbers.
+        """
+        if p is None and not self.symbol_names:
+            out = self._one_state("inverse_dynamics", (q, qd, qdd))
+            if out is not None:
+                return out
         return self._call("inverse_dynamics", [("q", q), ("qd", qd), ("qdd", qdd)], p)
+
+    def _one_state(self, name: str, args: tuple[Any, ...]) -> np.ndarray | None:
+        """``name`` at one state through its buffers, or None when an argument is not a float ``(n,)`` array."""
+        n = self.n
+        for a in args:
+            if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (n,)):
+                return None
+        import threading
+
+        local = self._single.get(name)
+        if local is None:
+            local = self._single.setdefault(name, threading.local())
+        state = getattr(local, "buffers", None)
+        if state is None:  # per thread: a buffer is written and read by one call at a time
+            f = self.functions[name]
+            ins = [np.zeros(f.size1_in(k)) for k in range(f.n_in())]
+            out = np.zeros(f.size1_out(0))
+            buf, evaluate = f.buffer()
+            for k, a in enumerate(ins):
+                buf.set_arg(k, memoryview(a))
+            buf.set_res(0, memoryview(out))
+            state = local.buffers = (buf, evaluate, ins, out)
+        _, evaluate, ins, out = state
+        for target, a in zip(ins, args, strict=True):
+            target[:] = a
+        evaluate()
+        return out.copy()
 
     def mass_matrix(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Joint-space inertia matrix ``M(q)``: ``(n, n)`` or ``(N, n, n)``."""
