@@ -20,6 +20,9 @@ Dormand--Prince pair's count) times the cost of one compiled evaluation of the c
 interface, timed).  Ratios are taken in one run,
 interleaved rounds, medians.
 
+Also timed: one-state ``Robot.inverse_dynamics`` on the PUMA against ``pinocchio.rnea`` (same DH model), per call
+from Python.
+
 Run: ``python benchmarks/bench_floor.py``; writes ``benchmarks/results/floor.json``.
 """
 
@@ -229,8 +232,33 @@ def simnog() -> dict[str, Any]:
                        "designkit_over_floor": dk / floor}}
 
 
+def one_state(calls: int = 2000) -> dict[str, Any]:
+    """``Robot.inverse_dynamics`` on one PUMA state against ``pinocchio.rnea`` (same DH model), per call."""
+    import pinocchio as pin
+    from tests.models.support import pinocchio_model
+
+    r = robot("puma560")
+    model, _ = pinocchio_model(r.description)
+    data = model.createData()
+    q, qd, qdd = np.random.default_rng(2).normal(size=(3, 6))
+    diff = float(np.abs(r.inverse_dynamics(q, qd, qdd) - pin.rnea(model, data, q, qd, qdd)).max())
+
+    def ours() -> None:
+        for _ in range(calls):
+            r.inverse_dynamics(q, qd, qdd)
+
+    def theirs() -> None:
+        for _ in range(calls):
+            pin.rnea(model, data, q, qd, qdd)
+
+    timing = interleaved({"designkit": ours, "pinocchio": theirs}, REPEAT)
+    per = {k: v["median_s"] / calls for k, v in timing.items()}
+    return {"per_call_s": per, "ratio_designkit_over_pinocchio": per["designkit"] / per["pinocchio"],
+            "max_abs_diff_Nm": diff}
+
+
 def main() -> None:
-    out = {"benchmark": "bench_floor", "puma": puma(), "simnog": simnog()}
+    out = {"benchmark": "bench_floor", "puma": puma(), "simnog": simnog(), "one_state": one_state()}
     p, s = out["puma"]["ratios"], out["simnog"]["ratios"]
     out["goals"] = {
         "puma_10x_dop853_pinocchio": {"goal": GOALS["puma_vs_dop853"], "ratio": p["dop853_matched_over_designkit"],
@@ -239,6 +267,8 @@ def main() -> None:
                                  "met": bool(p["designkit_over_floor"] <= 2)},
         "simnog_10x_solve_ivp": {"goal": GOALS["simnog_vs_solve_ivp"], "ratio": s["dop853_matched_over_designkit"],
                                  "met": bool((s["dop853_matched_over_designkit"] or 0) >= 10)},
+        "one_state_within_2x_pinocchio": {"goal": 2.0, "ratio": out["one_state"]["ratio_designkit_over_pinocchio"],
+                                          "met": bool(out["one_state"]["ratio_designkit_over_pinocchio"] <= 2)},
     }
     out["machine"] = {"platform": platform.platform(), "python": platform.python_version(), "cpus": os.cpu_count(),
                       "load": "2 cores shared with up to 7 engineers' jobs: ratios are in one run, absolute times "
