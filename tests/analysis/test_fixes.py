@@ -1,10 +1,10 @@
 """Every fix the diagnosis numbers passes when applied to the spec and run through the CLI; every remedy it
 tried and does not number fails there.
 
-The fixes are applied here to the spec's own YAML dict (key paths set or removed by this test's code, not
-the package's), written to a file and run with ``designkit.cli.main(["synth", ...])``: exit 0 for every
-numbered fix, exit 1 for every "tried, and not a fix".  The numbered fixes of the report's "why it failed"
-are exactly the passing re-runs.
+The fixes are applied here to the spec's own YAML dict (the YAML snippet the report shows, merged by this
+test's code, a null leaving the key to its default), written to a file and run with
+``designkit.cli.main(["synth", ...])``: exit 0 for every numbered fix, exit 1 for every "tried, and not a
+fix".  The numbered fixes of the report's "why it failed" are exactly the passing re-runs.
 """
 
 from __future__ import annotations
@@ -43,16 +43,17 @@ def diagnosed():
 
 
 def _apply(text: str, changes) -> dict:
+    """The spec's YAML with the fix's YAML snippet (what the report shows) merged in, as a user would."""
     data = yaml.safe_load(text)
-    for path, value in changes:
-        *parents, last = path.split(".")
-        node = data
-        for key in parents:
-            node = node.setdefault(key, {})
-        if value is None:
-            del node[last]
-        else:
-            node[last] = value
+
+    def merge(node: dict, patch: dict) -> None:
+        for key, value in patch.items():
+            if isinstance(value, dict) and isinstance(node.get(key), dict):
+                merge(node[key], value)
+            else:
+                node[key] = value
+
+    merge(data, yaml.safe_load(snippet(changes)))
     return data
 
 

@@ -91,7 +91,7 @@ def why_section(result: Any, diagnosis: Any) -> tuple[tuple[WhyRow, ...], str, t
         shared_rows, fixes = resimulated_fixes(rows, parts, proposed)
         note += (" Every fix the diagnosis can write as a change of the spec was re-run through the same pipeline "
                  "(design, checks, simulation on the true plant); only those whose re-run passes every required "
-                 "check are numbered below the table (section Fixes re-simulated).")
+                 "check are numbered below the table, each with the change as YAML to merge into the spec.")
         return shared_rows, note, fixes
     shared_rows, fixes = share_fixes(rows, parts)
     if fixes:
