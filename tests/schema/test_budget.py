@@ -55,6 +55,17 @@ def _corners() -> dict:
     return doc
 
 
+def _scara() -> dict:
+    """``grid: 1001`` over all twelve of the SCARA's parameters (each +-10 %)."""
+    from designkit.models.robots import zoo_module
+
+    doc = _doc("scara-decentralized-pid")
+    values = zoo_module("scara").DEFAULTS
+    doc["plant"]["uncertainty"] = {k: [0.9 * v, 1.1 * v] if v > 0 else [v - 0.1, v + 0.1] for k, v in values.items()}
+    doc["plant"]["uncertainty"]["grid"] = 1001
+    return doc
+
+
 def _khz() -> dict:
     doc = _doc("puma560-computed-torque")
     doc["simulation"] = {"duration": 20.0, "initial_position": doc["simulation"]["initial_position"],
@@ -88,6 +99,7 @@ COSTLY = [
     (_samples, "plant.uncertainty.samples", None),  # 10^5 full simulations of the PUMA 560
     (_corners, "plant.uncertainty", None),  # twelve uncertain parameters: 4096 corners re-simulated
     (lambda: _chain(40), "plant.dh", None),  # a 40-joint model
+    (_scara, "plant.uncertainty", None),  # 4096 corners of the SCARA's twelve parameters: the common Lyapunov LMI
     (_cvodes, "numerics.rtol", 5.0),  # CVODES at rtol 1e-14: ~9 s estimated, ~6 s measured
     (_khz, "simulation.trajectory.frequency", 10.0),  # a kHz sine: 2e6 steps of the PUMA, ~26 s estimated
 ]

@@ -30,7 +30,8 @@ The terms (each a :class:`Term` with the key path that drives it):
 * **task path** -- a line or circle of the end effector is solved by inverse kinematics at 401 instants
   (:data:`IK_EVALUATIONS` each);
 * **lattice** -- the robustness checks linearize the loop at every plant of the uncertainty lattice
-  (``grid^k`` capped at 100,000, plus the samples): :data:`LINEARIZATION` ``x size(n)`` each.
+  (``grid^k`` capped at 100,000, plus the samples): :data:`LINEARIZATION` ``x size(n)`` each; and the common
+  Lyapunov matrix of a linear family is one LMI per corner of the box: :data:`LMI_VERTEX` ``x 2^k x (3n)^3``.
 
 Which field is named: the largest term's driver.  For the simulations, the factor that is furthest
 above an ordinary run: the samples or the corners when the runs dominate, else what sets the step count
@@ -68,8 +69,11 @@ CVODES_STEP = 50.0
 against 1 µs per RK4 step; about 0.55 ms per step on the PUMA 560 at rtol 1e-14, against 4-6 µs per RK4 step)."""
 ADAPTIVE_STEP = 14.0
 """Evaluations per output step of an adaptive explicit pair (seven stages, twice for rejected steps)."""
-LINEARIZATION = 250.0
+LINEARIZATION = 50.0
 """Evaluations per lattice plant of a robustness check (a Jacobian and the eigenvalues of the closed loop)."""
+LMI_VERTEX = 136.0
+"""Evaluations per corner and cubed closed-loop state of the common-Lyapunov LMI over the box's corners (measured:
+15 s of CPU time for 512 corners of a SCARA's 12-state loop)."""
 LATTICE_CAP = 100_000
 """Most lattice plants (:data:`designkit.spec.plants.MAX_GRID_POINTS`)."""
 PATH_SAMPLES, IK_EVALUATIONS = 401, 100.0
@@ -369,7 +373,7 @@ def estimate(spec: Any, base_dir: Path | None = None, *, joints: int | None = No
     robot = getattr(spec.plant, "kind", None) == "robot"
     source = next((f"plant.{k}" for k in ("dh", "urdf", "robot") if robot and getattr(spec.plant, k) is not None),
                   "plant")
-    terms: list[Term] = [Term("fixed work", OVERHEAD, "", "checks, certificates and the report's numbers")]
+    terms = [Term("fixed work", OVERHEAD, "budget", "imports, checks and certificates, which any run needs")]
     if robot and n is not None:
         terms.append(Term("model build", BUILD * n ** 3.5, source,
                           f"a {n}-joint model takes about {BUILD * n ** 3.5 * SECONDS_PER_EVALUATION:.2g} s to build "
@@ -396,6 +400,12 @@ def estimate(spec: Any, base_dir: Path | None = None, *, joints: int | None = No
         terms.append(Term("lattice", plants * LINEARIZATION * size(n),
                           "plant.uncertainty.samples" if samples > lattice else "plant.uncertainty.grid",
                           f"{plants:,} plants of the uncertainty lattice linearized and checked"))
+        family = _family(spec)
+        if "robustness" in tuple(getattr(family, "checks", ()) or ()):
+            states = 3 * (n or 1)
+            terms.append(Term("common Lyapunov LMI", 2**k * states**3 * LMI_VERTEX, "plant.uncertainty",
+                              f"one Lyapunov matrix for the {2**k} corners of {k} uncertain parameter"
+                              f"{'s' if k > 1 else ''} (an LMI of {states} states at each corner)"))
     return Estimate(n, tuple(sorted(terms, key=lambda t: -t.evaluations)))
 
 
