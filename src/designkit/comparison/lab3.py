@@ -29,11 +29,14 @@ import numpy as np
 from designkit.comparison.studies import rise_times
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
+from designkit.families.pid_servo import KIND as PID
+from designkit.families.pid_sliding_mode.spec import KIND as PID_SM
+from designkit.families.state_regulator.spec import KIND as STATE_REGULATOR
+from designkit.families.vsc.spec import KIND as VSC
 
 __all__ = ["BOX_RUNS_MAX", "VARIANTS", "Chatter", "CornerRun", "OatRun", "PerturbationEffect", "applies", "chattering",
            "corner_runs", "oat_runs", "perturbation_effect", "predicted_offset", "printed_c4", "section"]
 
-VSC, STATE_REGULATOR, PID, PID_SM = "vsc", "state_regulator", "pid_servo", "pid_sliding_mode"
 BOX_RUNS_MAX = 16
 """Corners of the parameter box re-simulated per controller (a larger box is not re-simulated)."""
 REVERSAL_TOL = 1e-9
@@ -58,7 +61,7 @@ VARIANTS: dict[str, tuple[tuple[str, Any], ...]] = {
     VSC: (("sliding poles 1.5 times faster", lambda c, d: {"sliding_poles": _scaled(c.sliding_poles, 1.5)}),
           ("gain margin 0.05 (α, β close to the l_i)", lambda c, d: {"margin": 0.05}),
           ("gain margin 1 (α, β far from the l_i)", lambda c, d: {"margin": 1.0}),
-          ("chattering band 3 times wider", lambda c, d: {"chattering_band": 3.0 * d.extra["vsc"]["band"]})),
+          ("chattering band 3 times wider", lambda c, d: {"chattering_band": 3.0 * d.extra[VSC]["band"]})),
 }
 """Kind -> (what is changed, in words; ``(controller section, design) -> fields to change``) of the one-at-a-time
 study."""
