@@ -43,7 +43,7 @@ def main() -> None:
     for name in SPECS:
         loaded = dk.load_spec(ROOT / "specs" / f"{name}.yaml")
         result = dk.run(loaded)
-        remedies = [t.remedy for p in diagnose(result).proposed for t in p.trials]
+        remedies = [t.remedy for t in {id(t): t for p in diagnose(result).proposed for t in p.trials}.values()]
         rows: dict[str, list[float]] = {"run": [], "diagnose_without": [], "diagnose_with": [], "by_hand": []}
         for _ in range(args.repeat):
             rows["run"].append(_time(lambda: dk.run(loaded)))  # noqa: B023
