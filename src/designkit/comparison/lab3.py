@@ -59,8 +59,8 @@ VARIANTS: dict[str, tuple[tuple[str, Any], ...]] = {
     STATE_REGULATOR: (("poles 1.5 times faster", lambda c, d: {"poles": _scaled(c.poles, 1.5)}),
                       ("poles 0.75 times as fast", lambda c, d: {"poles": _scaled(c.poles, 0.75)})),
     VSC: (("sliding poles 1.5 times faster", lambda c, d: {"sliding_poles": _scaled(c.sliding_poles, 1.5)}),
-          ("gain margin 0.05 (α, β close to the l_i)", lambda c, d: {"margin": 0.05}),
-          ("gain margin 1 (α, β far from the l_i)", lambda c, d: {"margin": 1.0}),
+          ("gain margin 0.05 (α, β close to the equivalent-control gains lᵢ)", lambda c, d: {"margin": 0.05}),
+          ("gain margin 1 (α, β far from the lᵢ)", lambda c, d: {"margin": 1.0}),
           ("chattering band 3 times wider", lambda c, d: {"chattering_band": 3.0 * d.extra[VSC]["band"]})),
 }
 """Kind -> (what is changed, in words; ``(controller section, design) -> fields to change``) of the one-at-a-time
@@ -313,8 +313,8 @@ def _why(result: Any, chat: dict[str, Chatter]) -> Question:
         sentences.append(
             f"With what success: overshoot {_f(result.table.row(label).values.get('overshoot'), '%')}, settling "
             f"{_f(result.table.row(label).values.get('settling_time'), 's')}, at the price of a command that "
-            f"reverses {_f(chat[label].rate, '1/s')} (total variation {_f(chat[label].total_variation)} input "
-            f"units).")
+            f"reverses {_f(chat[label].rate)} times per second (total variation "
+            f"{_f(chat[label].total_variation, result.table.command_unit)}).")
     found = _by_kind(result, PID_SM)
     if found is not None:
         label, run = found
@@ -330,7 +330,7 @@ def _why(result: Any, chat: dict[str, Chatter]) -> Question:
 
 
 def _importance(result: Any, oat: dict[str, tuple[OatRun, ...]]) -> Question:
-    eu = result.table.error_unit
+    eu, cu = result.table.error_unit, result.table.command_unit
     rows, sentences = [], []
     for label, runs in oat.items():
         base = runs[0]
@@ -338,7 +338,7 @@ def _importance(result: Any, oat: dict[str, tuple[OatRun, ...]]) -> Question:
             stable = (v.error or "no") if not v.bounded else ("yes" if v.slowest_pole is None or v.slowest_pole < 0
                                                               else f"no (pole at {_f(v.slowest_pole, '1/s')})")
             rows.append((label, v.change, _f(v.overshoot, "%"), _f(v.settling_time, "s"), _f(v.final_error, eu),
-                         _f(v.peak_command), _f(v.total_variation), stable))
+                         _f(v.peak_command, cu), _f(v.total_variation, cu), stable))
         parts = []
         for v in runs[1:]:
             if v.error:
@@ -349,8 +349,8 @@ def _importance(result: Any, oat: dict[str, tuple[OatRun, ...]]) -> Question:
                              "the elastic mode)")
                 continue
             parts.append(f"{v.change}: settling {_f(base.settling_time, 's')} → {_f(v.settling_time, 's')}, peak "
-                         f"command {_f(base.peak_command)} → {_f(v.peak_command)}, TV(u) {_f(base.total_variation)} → "
-                         f"{_f(v.total_variation)}")
+                         f"command {_f(base.peak_command, cu)} → {_f(v.peak_command, cu)}, TV(u) "
+                         f"{_f(base.total_variation, cu)} → {_f(v.total_variation, cu)}")
         if parts:
             sentences.append(f"{label}: " + "; ".join(parts) + ".")
     table = Table("One parameter changed at a time (the first row of each controller: the spec's design)",
@@ -382,7 +382,7 @@ def _structure(result: Any) -> Question:
                              PID: "the rigid approximation and the PID pole/zero matching",
                              PID_SM: "the PID matching, a1 and a2 from the sliding poles, M over the sliding motions",
                              STATE_REGULATOR: "Ackermann's formula and the reference gain",
-                             VSC: "c from the sliding poles (Ackermann for surfaces), the l_i ranges over the box "
+                             VSC: "c from the sliding poles (Ackermann for surfaces), the lᵢ ranges over the box "
                                   "and the gain certificate",
                          }.get(d.kind, "its family's synthesis") + ".")
     found = _by_kind(result, VSC)
