@@ -61,7 +61,8 @@ VARIANTS: dict[str, tuple[tuple[str, Any], ...]] = {
     VSC: (("sliding poles 1.5 times faster", lambda c, d: {"sliding_poles": _scaled(c.sliding_poles, 1.5)}),
           ("gain margin 0.05 (α, β close to the equivalent-control gains lᵢ)", lambda c, d: {"margin": 0.05}),
           ("gain margin 1 (α, β far from the lᵢ)", lambda c, d: {"margin": 1.0}),
-          ("chattering band 3 times wider", lambda c, d: {"chattering_band": 3.0 * d.extra[VSC]["band"]})),
+          ("chattering band 3 times wider", lambda c, d: {"chattering_band": 3.0 * d.extra[VSC]["band"]}),
+          ("relay δ 5 times larger", lambda c, d: {"relay_amplitude": 5.0 * d.extra[VSC]["delta"]})),
 }
 """Kind -> (what is changed, in words; ``(controller section, design) -> fields to change``) of the one-at-a-time
 study."""
