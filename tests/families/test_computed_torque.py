@@ -42,7 +42,7 @@ def _spec(plant: str, controller: str, q0, amplitude, *, dt: float | None = None
           requirements: str = "") -> str:
     step = f"dt: {dt}, " if dt is not None else ""
     return (f"name: ct-test\nplant: {plant}\ncontroller: {controller}\n{requirements}"
-            "numerics: {compile: never}\n"
+            "numerics: {compile: never, integrator: rk4}\n"
             f"simulation: {{duration: {duration}, {step}initial_position: {list(q0)}, "
             f"trajectory: {{kind: quintic, amplitude: {list(amplitude)}, duration: {MOVE_S}}}}}\n")
 

@@ -95,7 +95,7 @@ def line(t: np.ndarray, p0: np.ndarray, delta: np.ndarray, T: float = MOVE_S) ->
 def _planar(controller: str, trajectory: str, *, dt: float | None = None, duration: float = 1.5) -> str:
     step = f"dt: {dt}, " if dt is not None else ""
     return (f"name: rac-test\nplant: {{kind: robot, robot: planar2r}}\ncontroller: {controller}\n"
-            "numerics: {compile: never}\n"
+            "numerics: {compile: never, integrator: rk4}\n"
             f"simulation: {{duration: {duration}, {step}initial_position: {Q0.tolist()}, trajectory: {trajectory}}}\n")
 
 
