@@ -22,7 +22,7 @@ Fields (every number with its unit and range, refused with its key path otherwis
 * On a robot (:mod:`~designkit.families.pid_sliding_mode.robot`): ``workspace`` (the decentralized PID's
   :class:`~designkit.families.decentralized_pid.Workspace`, or ``joint_limits``; required, with
   ``plant.limits.velocity`` and ``plant.limits.acceleration``), ``gravity_feedforward`` (``measured`` or
-  ``none``) and ``work_limit`` (1 to 100000 boxes per joint, default 300).  ``M`` is then one amplitude for
+  ``none``) and ``work_limit`` (1 to 100000 boxes per joint, default 150).  ``M`` is then one amplitude for
   every joint.
 """
 
@@ -80,7 +80,7 @@ class PidSlidingModeSpec(Section):
         default="measured", description="Robot: the model's gravity torque g(q) fed forward, or none (then g is "
         "part of xi).")
     work_limit: RangedInt(1, 100000) = Field(
-        default=300, description="Robot: configuration boxes per joint the proven bound of sup|xi_i| may bisect.")
+        default=150, description="Robot: configuration boxes per joint the proven bound of sup|xi_i| may bisect.")
 
     @field_validator("workspace", mode="before")
     @classmethod
