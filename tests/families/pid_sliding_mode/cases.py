@@ -31,6 +31,9 @@ CONFORMANCE = {
     "link": ("{kind: pid_sliding_mode, poles: [-4, -5, -20], perturbation_bound: 0.5}",
              "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
              "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
+    # ROBEL's elastic joint (families/pid_sliding_mode/elastic.py): the sliding variable on the motor
+    "elastic_joint": ("{kind: pid_sliding_mode, poles: [-3, -4, -12]}", "{duration: 3.0}",
+                      "{overshoot: 15, settling_time: 2.5, steady_state_error: 0.01}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
