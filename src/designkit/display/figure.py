@@ -68,6 +68,10 @@ class Figure:
         ``overshoot``, ``settling_time``, ...; the Bode and sensitivity figures for ``loop_margins``),
         only checks present in the run.  A report links each requirement to the first figure whose
         ``evidence`` names its check.
+    narrow_svg : str or None
+        The same drawing at :data:`~designkit.display.svg.NARROW_WIDTH` inches, which the HTML report
+        shows on screens below 600 px so that its text stays about 9.6 px high; by default the variant
+        that :func:`~designkit.display.svg.render` drew along with ``svg`` (None for an SVG from elsewhere).
     """
 
     title: str
@@ -75,6 +79,13 @@ class Figure:
     svg: str
     filename: str
     evidence: tuple[str, ...] = ()
+    narrow_svg: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.narrow_svg is None and getattr(self.svg, "narrow", None):
+            object.__setattr__(self, "narrow_svg", self.svg.narrow)
+        if isinstance(self.svg, str) and type(self.svg) is not str:
+            object.__setattr__(self, "svg", str(self.svg))
 
     @property
     def anchor(self) -> str:

@@ -17,7 +17,9 @@ imported lazily, inside the functions.
 
 from __future__ import annotations
 
+import contextvars
 import io
+import re
 from pathlib import Path
 from typing import Any
 
@@ -77,8 +79,36 @@ on the left, the tick labels and x label below, and between stacked axes (which 
 labels are hidden)."""
 
 
+NARROW_WIDTH = 4.6
+"""Width (inches) of a figure's narrow variant, drawn for screens below 600 px (:func:`render`): at the
+390-400 px a 420 px window leaves for a figure, 1 pt of the drawing is about 1.2 px, so the 8 pt tick and
+legend text is about 9.6 px on screen (the wide drawing, 6.4-6.8 inches, would set it at 6.5 px)."""
+_NARROW = contextvars.ContextVar("designkit_narrow_figure", default=False)
+
+
+class SvgText(str):
+    """The SVG text of a figure, carrying the SVG of its narrow variant as :attr:`narrow` (None when the
+    drawing has none); :class:`~designkit.display.figure.Figure` picks it up."""
+
+    narrow: str | None = None
+
+
+def _with_narrow(svg: str, narrow: str | None) -> SvgText:
+    out = SvgText(svg)
+    out.narrow = narrow if narrow is not None and _viewbox_width(narrow) < _viewbox_width(svg) else None
+    return out
+
+
+def _viewbox_width(svg: str) -> float:
+    found = re.search(r'viewBox="\s*[-\d.eE+]+[\s,]+[-\d.eE+]+[\s,]+([-\d.eE+]+)', svg)
+    return float(found.group(1)) if found else float("nan")
+
+
 def new_figure(width: float, height: float, rows: int = 1, sharex: bool = True, layout: str = "fixed"):
     """A ``width`` x ``height`` inch figure and its ``rows`` axes (one column).
+
+    While :func:`render` draws a figure's narrow variant the width is at most :data:`NARROW_WIDTH`
+    (the height, the fonts and the margins in inches stay as asked).
 
     ``layout="fixed"`` places the axes with the fixed :data:`MARGINS` (one text layout pass when the
     figure is saved); ``"constrained"`` lets matplotlib's constrained layout fit colour bars, titles and
@@ -86,6 +116,8 @@ def new_figure(width: float, height: float, rows: int = 1, sharex: bool = True, 
     """
     from matplotlib.figure import Figure as MplFigure
 
+    if _NARROW.get():
+        width = min(width, NARROW_WIDTH)
     if layout != "fixed":
         fig = MplFigure(figsize=(width, height), layout=layout)
         return fig, fig.subplots(rows, 1, sharex=sharex, squeeze=False)[:, 0]
@@ -143,16 +175,31 @@ def to_svg(fig) -> str:
     return buf.getvalue()
 
 
-def render(draw, *args: Any) -> str | None:
-    """Run ``draw(*args) -> figure or None`` under the report's rc settings and return SVG text."""
+def _narrow_variant(draw, args: tuple[Any, ...]) -> str | None:
+    """The SVG of ``draw(*args)`` drawn again with :data:`NARROW_WIDTH` (None when it draws nothing)."""
+    token = _NARROW.set(True)
+    try:
+        out = draw(*args)
+    finally:
+        _NARROW.reset(token)
+    if out is None:
+        return None
+    return to_svg(out[0] if isinstance(out, tuple) else out)
+
+
+def render(draw, *args: Any) -> SvgText | None:
+    """Run ``draw(*args) -> figure or None`` under the report's rc settings and return SVG text (with the
+    narrow variant, :class:`SvgText`, drawn by the same function at :data:`NARROW_WIDTH`)."""
     import matplotlib
 
     with matplotlib.rc_context(RC_PARAMS):
         fig = draw(*args)
-        return None if fig is None else to_svg(fig)
+        if fig is None:
+            return None
+        return _with_narrow(to_svg(fig), _narrow_variant(draw, args))
 
 
-def render_tagged(draw, *args: Any) -> tuple[str | None, tuple[str, ...], dict[str, Any]]:
+def render_tagged(draw, *args: Any) -> tuple[SvgText | None, tuple[str, ...], dict[str, Any]]:
     """Like :func:`render` for ``draw(*args) -> figure or (figure, info) or None``: the SVG text, the keys
     of what was drawn (:func:`drawn_keys`, read after the layout) and ``info`` (what the drawing measured
     for the caption, e.g. an axis scale; empty when ``draw`` returns a figure alone)."""
@@ -163,7 +210,7 @@ def render_tagged(draw, *args: Any) -> tuple[str | None, tuple[str, ...], dict[s
         if out is None:
             return None, (), {}
         fig, info = out if isinstance(out, tuple) else (out, {})
-        svg = to_svg(fig)
+        svg = _with_narrow(to_svg(fig), _narrow_variant(draw, args))
         return svg, drawn_keys(fig), dict(info)
 
 

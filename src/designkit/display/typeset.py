@@ -14,7 +14,7 @@ import unicodedata
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["Equation", "MathFrac", "MathToken", "equation"]
+__all__ = ["Equation", "MathFrac", "MathToken", "equation", "line_pieces"]
 
 
 @dataclass(frozen=True)
@@ -201,3 +201,42 @@ def equation(label: str, text: str, note: str = "") -> Equation:
     if "=" not in math_part:  # no formula: words only
         return Equation(label, (), "; ".join([text.strip()]), text)
     return Equation(label, _fractions(_lex(math_part), math_part), "; ".join(n for n in notes if n), text)
+
+
+def _is_op(n: Any, *texts: str) -> bool:
+    return isinstance(n, MathToken) and n.kind == "mo" and (not texts or n.text in texts)
+
+
+def line_pieces(nodes: tuple[MathToken | MathFrac, ...]) -> list[list[list[MathToken | MathFrac]]]:
+    """The units a typeset equation may be broken between, as formulas of terms.
+
+    The equation is cut after each separator (``sep``: the formulas of one line), and each formula before
+    every binary ``+``/``−`` at parenthesis depth 0 (a sign right after ``=``, ``(``, an operator or a
+    separator is unary and stays with its term, one after ``)`` is binary; the first term keeps the left
+    side and ``=``).  A renderer keeps each term whole and lets a line break only between terms, the
+    operator opening the next line, so that no formula is split inside a parenthesis or a fraction.
+
+    Examples
+    --------
+    >>> eq = equation("law", "u = -K1 (x1 - xD) + K3 xD, K4 = 2")
+    >>> [[" ".join(n.text for n in term) for term in f] for f in line_pieces(eq.nodes)]
+    [['u = − K ( x − x )', '+ K x ,'], ['K = 2']]
+    """
+    formulas: list[list[list[MathToken | MathFrac]]] = [[[]]]
+    depth = 0
+    for n in nodes:
+        terms = formulas[-1]
+        if isinstance(n, MathToken) and n.kind == "sep":
+            terms[-1].append(n)
+            formulas.append([[]])
+            continue
+        if _is_op(n, "("):
+            depth += 1
+        elif _is_op(n, ")"):
+            depth = max(depth - 1, 0)
+        previous = terms[-1][-1] if terms[-1] else None
+        binary = previous is not None and (not _is_op(previous) or _is_op(previous, ")"))
+        if depth == 0 and _is_op(n, "+", "−", "-") and binary:
+            terms.append([])
+        terms[-1].append(n)
+    return [[term for term in f if term] for f in formulas if any(f)]

@@ -13,7 +13,7 @@ import re
 import jinja2
 from markupsafe import Markup, escape
 
-from designkit.display.typeset import Equation, MathFrac, MathToken
+from designkit.display.typeset import Equation, MathFrac, MathToken, line_pieces
 from designkit.report.model import ReportModel
 
 _TEMPLATE = "report.html.j2"
@@ -102,42 +102,18 @@ def _mathml_nodes(nodes) -> str:
     return "".join(out[0])
 
 
-def _pieces(nodes) -> list[list[list]]:
-    """The line-break units of an equation: its formulas (split after each separator), each split into
-    terms before every binary ``+``/``−`` at parenthesis depth 0 (the first term keeps the left side and
-    ``=``), so that a long formula wraps between terms, the operator opening the next line."""
-    formulas: list[list[list]] = [[[]]]
-    depth = 0
-    for n in nodes:
-        terms = formulas[-1]
-        if isinstance(n, MathToken) and n.kind == "sep":
-            terms[-1].append(n)
-            formulas.append([[]])
-            continue
-        if _is_op(n, "("):
-            depth += 1
-        elif _is_op(n, ")"):
-            depth = max(depth - 1, 0)
-        previous = terms[-1][-1] if terms[-1] else None
-        binary = previous is not None and not _is_op(previous) and not (
-            isinstance(previous, MathToken) and previous.kind == "sep")
-        if depth == 0 and _is_op(n, "+", "−", "-") and binary:
-            terms.append([])
-        terms[-1].append(n)
-    return [[t for t in f if t] for f in formulas if any(f)]
-
-
 def mathml(eq: Equation) -> Markup:
     """An :class:`~designkit.display.typeset.Equation` as presentation MathML (no script, no web font).
 
-    The equation is written as a row of ``<math>`` elements, one per term (:func:`_pieces`), inside a
-    wrapping ``<span class="eq">`` labelled with the whole formula: MathML in browsers does not break lines,
+    The equation is written as a row of ``<math>`` elements, one per term
+    (:func:`~designkit.display.typeset.line_pieces`), inside a wrapping ``<span class="eq">`` labelled with
+    the whole formula: MathML in browsers does not break lines,
     so a formula wider than its column wraps between its terms instead of being clipped."""
     if not eq.nodes:
         return Markup("")
     alt = escape(eq.text)
     formulas = []
-    for terms in _pieces(eq.nodes):
+    for terms in line_pieces(eq.nodes):
         maths = "".join(_term(t, leading=k > 0) for k, t in enumerate(terms))
         formulas.append(f'<span class="eq-formula">{maths}</span>')
     return Markup(f'<span class="eq" role="math" aria-label="{alt}">{"".join(formulas)}</span>')
@@ -204,7 +180,8 @@ def render_html(model: ReportModel) -> str:
     anchors = model.figure_anchors or tuple(f"figure-{k}" for k in range(1, len(model.figures) + 1))
     figures = [
         {"title": f.title, "caption": f.caption, "anchor": anchor,
-         "svg": Markup(inline_svg(f.svg, f"f{k}-", title=f.title))}
+         "svg": Markup(inline_svg(f.svg, f"f{k}-", title=f.title)),
+         "narrow": Markup(inline_svg(f.narrow_svg, f"f{k}n-", title=f.title)) if f.narrow_svg else None}
         for k, (f, anchor) in enumerate(zip(model.figures, anchors, strict=True), start=1)
     ]
     return _environment().get_template(_TEMPLATE).render(m=model, figures=figures)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import jinja2
 
-from designkit.display.typeset import Equation, MathFrac, MathToken
+from designkit.display.typeset import Equation, MathFrac, MathToken, line_pieces
 from designkit.report.model import ReportModel
 
 _TEMPLATE = "report.typ.j2"
@@ -117,8 +117,8 @@ def _math_letter(text: str) -> str:
 
 
 def _math_token(t: MathToken) -> str:
-    if t.kind == "sep":
-        return f"{typst_string(t.text)} wide"
+    if t.kind == "sep":  # the space after it is the one between formulas (typst_math)
+        return typst_string(t.text)
     if t.kind == "mi":
         core = _math_letter(t.text)
     elif t.kind == "mn" and t.text.replace(".", "", 1).isdigit():
@@ -142,11 +142,32 @@ def _math_nodes(nodes) -> str:
                     for n in nodes)
 
 
+_BINARY = {"+": "plus", "−": "minus", "-": "minus"}
+
+
+def _math_term(nodes, *, continued: bool) -> str:
+    """One term as an unbreakable box of display math; a continued term's leading sign is set as a binary
+    operator (``class("binary", ...)``: alone at the start of a box Typst would set it as a unary sign)."""
+    head = ""
+    first = nodes[0]
+    if continued and isinstance(first, MathToken) and first.kind == "mo" and first.text in _BINARY:
+        head, nodes = f'class("binary", {_BINARY[first.text]}) ', nodes[1:]
+    return f"#box($display({head}{_math_nodes(nodes)})$)"
+
+
 def typst_math(eq: Equation) -> TypstCode:
-    """An :class:`~designkit.display.typeset.Equation` as inline Typst math (every word quoted: any text compiles)."""
+    """An :class:`~designkit.display.typeset.Equation` as Typst markup of inline display math (every word
+    quoted: any text compiles).
+
+    Each term (:func:`~designkit.display.typeset.line_pieces`) is a ``box``, so a line breaks only between
+    terms (at the word space before a term's sign, which stands for the sign's left math spacing: Typst
+    sets none at the start of a box) or between the formulas of a line (a 1.5 em space), never inside a
+    parenthesis, a fraction or a term."""
     if not eq.nodes:
         return TypstCode("")
-    return TypstCode(f"$display({_math_nodes(eq.nodes)})$")
+    formulas = [" ".join(_math_term(t, continued=k > 0) for k, t in enumerate(terms))
+                for terms in line_pieces(eq.nodes)]
+    return TypstCode(" #h(1.5em) ".join(formulas))
 
 
 def _environment() -> jinja2.Environment:
