@@ -13,6 +13,7 @@ from typing import Any
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA, law, synthesize
 from designkit.families.pid_sliding_mode.robot_checks import CERTIFICATE_RULE, RUN_RULE, run_perturbation
+from designkit.families.pid_sliding_mode.robot_figures import ROBOT_FIGURES
 from designkit.families.pid_sliding_mode.spec import KIND
 
 __all__ = ["extend", "json_summary", "section"]
@@ -110,4 +111,4 @@ def extend(family: Any) -> Any:
 
     return dataclasses.replace(family, plants=(*family.plants, "robot"), synthesize=synth, law=law_of,
                                checks=(*family.checks, CERTIFICATE_RULE, RUN_RULE), json=json_of,
-                               sections=(*family.sections, section))
+                               sections=(*family.sections, section), figures=(*family.figures, *ROBOT_FIGURES))
