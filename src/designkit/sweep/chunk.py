@@ -102,9 +102,11 @@ def base(text: str, path: str) -> Prepared:
     simulator yet (``batch`` is None)."""
     from designkit.pipeline import design, plant
     from designkit.simulation.run import build
+    from designkit.sweep.allocator import keep_large_arrays_on_the_heap
     from designkit.sweep.sampling import sample_space
     from designkit.sweep.section import parse_sweep
 
+    keep_large_arrays_on_the_heap()
     sw = parse_sweep(text, path=path)
     true_plant = plant(sw.loaded)
     dsn = design(sw.loaded, true_plant)
