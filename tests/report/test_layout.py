@@ -156,3 +156,35 @@ def test_formulas_wrap_between_terms(wide_html):
     assert len(formulas) >= 4  # K1, K2, K3, K4: each may go to its own line
     css = _css(wide_html)
     assert ".eq { display: flex; flex-wrap: wrap;" in css and ".eq-formula { display: flex; flex-wrap: wrap;" in css
+
+
+def _text_boxes(svg: str):
+    """Each unrotated ``<text>`` of an SVG written by matplotlib as (text, x0, x1, viewBox width), the extent
+    from DejaVu Sans's own metrics (matplotlib's text-to-path, points = viewBox units)."""
+    import html
+
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextToPath
+
+    measure_text = TextToPath()
+    view_width = float(re.search(r'viewBox="[-\d.]+ [-\d.]+ ([\d.]+)', svg).group(1))
+    for m in re.finditer(r'<text style="([^"]*)" x="([-\d.]+)" y="[-\d.]+"(?: transform="([^"]*)")?>([^<]*)</text>',
+                         svg):
+        style, x, transform, text = m.groups()
+        if transform and not re.match(r"rotate\(-?0 ", transform):
+            continue  # a rotated axis label: its width runs vertically
+        size = float(re.search(r"font-size: ([\d.]+)px", style).group(1))
+        anchor = (re.search(r"text-anchor: (\w+)", style) or [None, "start"])[1]
+        width, _h, _d = measure_text.get_text_width_height_descent(
+            html.unescape(text), FontProperties(family="DejaVu Sans", size=size), ismath=False)
+        x0 = float(x) - {"start": 0.0, "middle": width / 2, "end": width}[anchor]
+        yield text, x0, x0 + width, view_width
+
+
+def test_no_figure_text_runs_off_the_drawing(servo_model):
+    for fig in servo_model.figures:
+        for svg in (fig.svg, fig.narrow_svg):
+            boxes = list(_text_boxes(svg))
+            assert boxes, fig.title
+            for text, x0, x1, view_width in boxes:
+                assert x0 >= -0.5 and x1 <= view_width + 0.5, (fig.title, text, x0, x1, view_width)

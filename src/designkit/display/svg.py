@@ -73,10 +73,10 @@ def font_files() -> tuple[Path, ...]:
     return tuple(folder / name for name in FONT_FILES if (folder / name).is_file())
 
 
-MARGINS = {"left": 0.85, "right": 0.12, "bottom": 0.48, "top": 0.1, "gap": 0.14}
+MARGINS = {"left": 0.85, "right": 0.25, "bottom": 0.48, "top": 0.1, "gap": 0.14}
 """Fixed margins (inches) of a ``layout="fixed"`` figure: room for 8-character tick labels and an axis label
-on the left, the tick labels and x label below, and between stacked axes (which share x, so their inner tick
-labels are hidden)."""
+on the left, the tick labels and x label below, half of a 5-character tick label centred on the right end of the
+x axis (``1000``, ``1e+04``), and between stacked axes (which share x, so their inner tick labels are hidden)."""
 
 
 NARROW_WIDTH = 4.6

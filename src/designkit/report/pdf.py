@@ -170,6 +170,29 @@ def typst_math(eq: Equation) -> TypstCode:
     return TypstCode(" #h(1.5em) ".join(formulas))
 
 
+CERT_TABLE_WIDTH_PT = 430.0
+"""Width (pt) a certificate table may take in appendix A: the A4 text width (17.6 cm, 499 pt) less the status
+column and the cell's inset."""
+_ADVANCE_PT = 0.5 * 7.5  # a generous average advance of Libertinus Serif (0.5 em) at the certificates' 7.5 pt
+_INSET_PT = 8.0
+_MAX_COLUMNS = 8  # more columns leave each about 50 pt: sentences in them would run a word a line
+
+
+def fits_as_table(header: tuple[str, ...] | None, rows: tuple[tuple[str, ...], ...] | None) -> bool:
+    """Whether a certificate table can be set as a table in :data:`CERT_TABLE_WIDTH_PT`: the sum over its
+    columns of the longest word (which Typst cannot break) and the cell inset, and at most 8 columns; one that
+    cannot is written one row a line as ``column: value`` pairs (the HTML counterpart is
+    :func:`designkit.report.html.fits_as_table`)."""
+    columns = list(zip(header or (), *(rows or ()), strict=False))
+    if len(columns) > _MAX_COLUMNS:
+        return False
+    width = 0.0
+    for cells in columns:
+        longest = max((len(word) for cell in cells for word in str(cell).split()), default=0)
+        width += longest * _ADVANCE_PT + _INSET_PT
+    return width <= CERT_TABLE_WIDTH_PT
+
+
 def _environment() -> jinja2.Environment:
     from designkit.report.templates_cache import bytecode_cache
 
@@ -194,6 +217,7 @@ def _environment() -> jinja2.Environment:
     env.filters["matrix"] = _matrix
     env.filters["breakable"] = _breakable
     env.filters["math"] = typst_math
+    env.tests["fitting"] = lambda e: fits_as_table(e.header, e.matrix)
     return env
 
 
