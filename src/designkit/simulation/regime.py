@@ -12,7 +12,9 @@ The one place that decides, from the law, the nonlinear element and the scenario
   reference), so an adaptive integrator may take steps across grid points and write the output grid from
   its continuous extension (:mod:`designkit.simulation.dopri5`).  It is not when the chain is held per step,
   when the law has discrete memory (updated at every step), an anti-windup gate or clamp (a switch decided
-  at each step's start), when measurement noise changes the input at every step, or when the plant itself is
+  at each step's start), when measurement noise changes the input at every step, when the law declares how a
+  trial's per-step feedforward enters (a learning controller, whose lifted model is the step-by-step map of
+  RK4 on the grid: :mod:`designkit.families.ilc.lifted`), or when the plant itself is
   not smooth (Coulomb friction: ``plant.nonsmooth()``) and the law does not cancel its jump (:func:`cancelled`).
 
 A trial's feedforward (:mod:`designkit.simulation.trials`) is a per-step sequence held over each step: every
@@ -106,6 +108,9 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
         reasons.append("the anti-windup switches or clamps the integrals at each step")
     if noisy:
         reasons.append("the measurement noise changes at every step")
+    if getattr(law, "feedforward", None) is not None:
+        reasons.append("the law learns a per-step feedforward from trial to trial (its lifted model is the map of "
+                       "the step-by-step integration)")
     rough = plant.nonsmooth() if plant is not None and hasattr(plant, "nonsmooth") else ()
     if rough and probe is not None and cancelled(probe[0], probe[1], getattr(plant, "velocities", ())):
         rough = ()
