@@ -300,3 +300,16 @@ def test_tracking_form_takes_the_later_joint_at_the_trajectorys_acceleration():
     info = result.design.extra["pid_sm_robot"]
     assert info["acceleration_rows"][0][1] == pytest.approx(10 * np.sqrt(3) / 3 * 0.3 / 2.0**2, rel=1e-4)
     assert all(c.passed for c in result.checks if c.required)
+
+
+def test_report_section_has_one_row_per_joint_from_the_last_to_the_first(simnog):
+    from designkit.families.pid_sliding_mode.robot_family import section
+
+    info = simnog.design.extra["pid_sm_robot"]
+    sec = section(simnog)
+    (table,) = sec.questions[0].tables
+    assert [row[0] for row in table.rows] == ["joint 2", "joint 1"]
+    for row, i in zip(table.rows, (1, 0), strict=True):
+        assert row[2] == f"{info['bound'][i]:.4g} N·m" and row[3] == f"{info['sampled'][i]:.4g} N·m"
+        assert "rad/s²" in row[1] and "q =" in row[4]
+    assert "pid_sm" not in " ".join(sec.questions[0].sentences)  # words, not identifiers
