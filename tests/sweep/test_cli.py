@@ -49,3 +49,27 @@ def test_a_swept_payload_is_the_link_mass_the_pipeline_sees(tmp_path):
         if c.name in res.requirements:
             assert w.margins[c.name] == pytest.approx(c.margin, rel=1e-9, abs=1e-12), c.name
     assert np.all((res.values >= 0.0) & (res.values <= 1.5))
+
+
+def test_no_progress_bar_when_stderr_is_not_a_terminal(tmp_path, capsys):
+    from tests.sweep.specs import link
+
+    code = main(["sweep", str(write(tmp_path, link(km=(0.5, 1.0), tau=(0.5, 0.7), duration=5.0))), "--samples", "6",
+                 "--workers", "1", "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert code == 0 and captured.err == ""
+    assert "6 of 6 samples met every requirement" in captured.out and captured.out.rstrip().endswith("VERIFIED")
+
+
+def test_the_progress_line_says_samples_rate_and_time_left(capsys):
+    from designkit.sweep.engine import _progress
+
+    show = _progress(100, True)
+    show(0)
+    show(50)
+    show(100)
+    err = capsys.readouterr().err
+    assert "50/100 samples" in err and "/s" in err and "s left" in err and err.endswith("\n")
+    quiet = _progress(100, False)
+    quiet(50)
+    assert capsys.readouterr().err == ""
