@@ -73,9 +73,9 @@ def _sentences(texts: list[str]) -> list[str]:
 
 def test_no_fix_text_twice_in_the_why_section_of_infeasible_requirements(infeasible_model):
     model = infeasible_model
-    assert len(model.why) == 3 and len(model.why_fixes) == 1
+    assert len(model.why) == 3 and len(model.why_fixes) == 2  # both fixes re-simulated and passing (tests/analysis/test_fixes.py)
     section = _why_html(render_html(model))
-    sentences = [s for s in _sentences(_fix_texts(section)) if not s.startswith("See fix")]
+    sentences = [s for s in _sentences(_fix_texts(section)) if not s.startswith(("See fix", "As under"))]  # back-references
     assert sentences and len(sentences) == len(set(sentences)), sentences
     assert section.count("ideal linear loop itself commands 122.4") == 1
     # the anti-windup, whose re-simulation stalls short of the command, is said once as tried and is no numbered fix
@@ -84,10 +84,11 @@ def test_no_fix_text_twice_in_the_why_section_of_infeasible_requirements(infeasi
     # the root cause leads the section, before the divergence it explains
     assert model.divergence.startswith("Root cause:") and model.divergence.index("cannot be met") < \
         model.divergence.index("diverges")
-    # every row points at the shared fix; the settling-time row keeps its own bound
-    assert all(r.fix_refs == (1,) for r in model.why)
+    # every row points at the shared fixes; the settling-time row keeps its own bound
+    assert all(r.fix_refs == (1, 2) for r in model.why)
     settling = next(r for r in model.why if r.check == "settling_time")
-    assert "0.3974 s" in settling.fix and settling.fix.endswith("See fix 1 below.")
+    assert "0.3974 s" in settling.fix
+    assert settling.fix.endswith("See fixes 1 and 2 below (re-simulated, passing every required check).")
     # the PDF (Typst source) and the notebook view show each shared fix once too
     typ = render_typst(model)
     notebook = result_html(model)
