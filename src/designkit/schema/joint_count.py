@@ -19,8 +19,19 @@ from designkit.errors import SpecError
 
 __all__ = ["PER_JOINT_GAINS", "check_joint_lists", "joint_count"]
 
-PER_JOINT_GAINS = ("computed_torque", "resolved_acceleration", "ilc")
-"""Families whose ``damping`` and ``natural_frequency`` are per joint (or per task coordinate, as many)."""
+
+
+def _per_joint_gain_kinds() -> tuple[str, ...]:
+    from designkit.families.computed_torque import KIND as COMPUTED_TORQUE
+    from designkit.families.ilc import KIND as ILC
+    from designkit.families.resolved_acceleration import KIND as RESOLVED_ACCELERATION
+
+    return (COMPUTED_TORQUE, RESOLVED_ACCELERATION, ILC)
+
+
+PER_JOINT_GAINS = _per_joint_gain_kinds()
+"""Families whose ``damping`` and ``natural_frequency`` are per joint (or per task coordinate, as many); each
+kind is imported from its family, where it is written once."""
 
 
 def joint_count(plant: Any, base_dir: Path | None = None) -> int | None:
