@@ -171,3 +171,16 @@ def test_inline_svg_prefixes_ids_and_drops_namespaces():
 def test_tracking_report_renders(tracking_result):
     html = render_html(build_report_model(tracking_result))
     assert "PID trajectory tracking" in html and "http" not in html
+
+
+def test_a_formula_is_one_math_element_per_term():
+    from designkit.display.typeset import equation
+    from designkit.report.html import mathml
+
+    out = str(mathml(equation("law", "u = -K1 (x1 - xD) - K2 x2 + (Km/τ) u, K4 = 2")))
+    terms = re.findall(r'<math display="block" alttext="([^"]*)">', out)
+    assert [t.split()[0] for t in terms] == ["u", "−", "+", "K_4"]  # broken before each binary sign, after ","
+    assert out.count('<span class="eq-formula">') == 2
+    assert '<mo form="infix">−</mo>' in out  # a continued term's sign keeps its binary spacing
+    assert '<mrow><mo stretchy="false">(</mo><msub><mi>x</mi>' in out  # (x1 - xD): at the text's size
+    assert "<mfrac>" in out and out.count('<mo stretchy="false">(</mo>') == 1  # (Km/τ) grows with its fraction

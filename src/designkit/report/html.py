@@ -107,8 +107,8 @@ def mathml(eq: Equation) -> Markup:
 
     The equation is written as a row of ``<math>`` elements, one per term
     (:func:`~designkit.display.typeset.line_pieces`), inside a wrapping ``<span class="eq">`` labelled with
-    the whole formula: MathML in browsers does not break lines,
-    so a formula wider than its column wraps between its terms instead of being clipped."""
+    the whole formula: MathML in browsers does not break lines, so a formula wider than its column wraps
+    between its terms instead of being clipped."""
     if not eq.nodes:
         return Markup("")
     alt = escape(eq.text)
