@@ -65,3 +65,48 @@ def test_a_batch_holds_at_most_its_size():
     sim, p = _simulator(SATURATED_LINK)
     with pytest.raises(ValueError, match="1 to 2"):
         batch_simulator(sim, 2).run(np.tile(p.parameter_vector, (3, 1)))
+
+
+def test_the_default_integrator_s_runs_are_its_single_runs():
+    """Without ``numerics.integrator`` (the compiled adaptive pair where the simulator has one, else RK4): each
+    run of the batch is the simulator's own run of that sample, and a batch's buffer carries nothing over."""
+    sim, p = _simulator(SIMNOG.replace("numerics: {integrator: rk4}\n", "").replace(
+        ", noise: {std: 0.001, seed: 4}", ""))
+    k = [q.name for q in p.parameters].index("m2")
+    P = np.tile(p.parameter_vector, (3, 1))
+    P[:, k] = [4.0, 2.0, 3.1]
+    rec = batch_simulator(sim, 3).run(P)
+    for i, v in enumerate(P[:, k]):
+        single = sim.run(parameters={"m2": float(v)})
+        assert np.array_equal(rec.tracked[i], single.state[:, :2], equal_nan=True)
+        assert np.array_equal(rec.u_command[i], single.u_command.reshape(-1, 2), equal_nan=True)
+
+
+class _Adaptive:
+    """A simulator seen through the adaptive interface (``dopri5.run(z0, inputs, failure)``), each run a plain
+    single run of the same inputs: the one-by-one path of the batch, whichever integrator the machine has."""
+
+    def __init__(self, sim):
+        self._sim = sim
+        self.dopri5 = self
+
+    def __getattr__(self, name):
+        return getattr(self._sim, name)
+
+    def run(self, z0, inputs, failure=None):
+        from designkit.simulation.integrate import run_steps
+
+        assert inputs.T.flags.c_contiguous  # the integrator reads the buffer without copying it
+        return run_steps(self._sim.step, z0, np.array(inputs), failure=failure)
+
+
+def test_the_one_by_one_path_gives_each_sample_its_own_inputs():
+    sim, p = _simulator(SIMNOG)
+    k = [q.name for q in p.parameters].index("m2")
+    P = np.tile(p.parameter_vector, (3, 1))
+    P[:, k] = [4.0, 2.0, 3.1]
+    std = np.full(len(p.states), 0.001)
+    noise = np.stack([noise_rows(std, s, sim.time.size) for s in (4, 4, 4)])
+    rec = batch_simulator(_Adaptive(sim), 3).run(P, noise=noise)
+    for i, v in enumerate(P[:, k]):
+        assert np.array_equal(rec.tracked[i], sim.run(parameters={"m2": float(v)}).state[:, :2])

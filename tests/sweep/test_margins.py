@@ -51,8 +51,10 @@ def test_margins_equal_the_pipeline_checks_on_the_same_runs(text):
         assert 0 < sum(verdicts) < 6  # the box straddles the requirements
 
 
-def test_a_worst_sample_written_as_a_spec_gives_the_pipeline_the_same_margins(tmp_path):
-    spec = write(tmp_path, SIMNOG)
+@pytest.mark.parametrize("integrator", ["rk4", "default"])
+def test_a_worst_sample_written_as_a_spec_gives_the_pipeline_the_same_margins(tmp_path, integrator):
+    text = SIMNOG if integrator == "rk4" else SIMNOG.replace("numerics: {integrator: rk4}\n", "")
+    spec = write(tmp_path, text)
     res = sweep(spec, 12, seed=4, engine="process", out=tmp_path / "out", falsification=False, report=False)
     worst = res.worst[0]
     assert worst.objective == min(np.min(res.margin[i] / np.array([res.limits[k] for k in res.requirements]))
@@ -65,7 +67,7 @@ def test_a_worst_sample_written_as_a_spec_gives_the_pipeline_the_same_margins(tm
         assert worst.margins[name] == pytest.approx(c.margin, rel=1e-9, abs=1e-12), name
     m2 = result.simulation.settings["plant_change"]["values"]["m2"]  # the true plant from t = 0
     assert m2 == pytest.approx(worst.values["m2"])
-    assert result.design.gains.to_json() == run(parse_spec(SIMNOG), simulate=False).design.gains.to_json()
+    assert result.design.gains.to_json() == run(parse_spec(text), simulate=False).design.gains.to_json()
 
 
 def test_a_swept_initial_position_and_noise_seed_reach_the_pipeline(tmp_path):

@@ -205,35 +205,40 @@ class BatchSimulator:
         from designkit.simulation.integrate import run_steps
 
         sim = self.simulator
-        outs = []
+        L = layout(sim.plant, sim.law, _NoElement, 0)
+        cuts = np.cumsum([0, *L.record_sizes])
+        pos = [int(cuts[0]) + k for k in sim.plant.positions]
+        rows = np.r_[pos, np.arange(cuts[2], cuts[4])].astype(int)
+        npar, nw = L.np_, sim.inputs.shape[0]
+        # one (N, nw) buffer per batch, changed in place run by run; the integrator is given its transpose, whose
+        # own transpose is this C-contiguous buffer, so nothing of the size of the run is copied per run
+        buf = np.ascontiguousarray(sim.inputs.T)
+        kept, failed = [], []
         for i in range(P.shape[0]):
-            inputs = sim.inputs.copy()
-            npar = len(sim.plant.parameters)
             if npar:
-                inputs[-npar:] = P[i][:, None]
-            L = layout(sim.plant, sim.law, _NoElement, 0)
+                buf[:, nw - npar:] = P[i][None, :]
             if noise is not None:
-                inputs[9 * L.n:9 * L.n + L.nx] = noise[i]
+                buf[:, 9 * L.n:9 * L.n + L.nx] = noise[i].T
             if refs is not None:
-                inputs[:9 * L.n] = _reference_rows([refs[i]], sim.time, sim.settings["dt"])[:, 0, :].T
+                buf[:, :9 * L.n] = _reference_rows([refs[i]], sim.time, sim.settings["dt"])[:, 0, :]
             failure: dict[str, Any] = {}
             if self.adaptive:
-                rec = sim.dopri5.run(Z[i], inputs, failure)
+                rec = sim.dopri5.run(Z[i], buf.T, failure)
             else:
-                rec = run_steps(sim.step, Z[i], inputs, failure=failure)
-            cuts = np.cumsum([0, *L.record_sizes])
-            outs.append((rec, failure))
+                rec = run_steps(sim.step, Z[i], buf.T, failure=failure)
+            kept.append(rec[rows].T)
+            failed.append(failure)
         time = sim.time
-        pos = [int(cuts[0]) + k for k in sim.plant.positions]
-        tracked = np.stack([r[pos].T for r, _ in outs])
+        npos = len(pos)
+        tracked = np.stack([k[:, :npos] for k in kept])
         if sim.motion is not None:
             from designkit.simulation.motion import tracked_outputs
 
             tracked = np.stack([tracked_outputs(sim.motion, q) for q in tracked])
-        u_c = np.stack([r[cuts[2]:cuts[3]].T for r, _ in outs])
-        u_a = np.stack([r[cuts[3]:cuts[4]].T for r, _ in outs])
+        u_c = np.stack([k[:, npos:npos + L.nu] for k in kept])
+        u_a = np.stack([k[:, npos + L.nu:] for k in kept])
         failures = tuple(
-            (f"the integrator stopped at t = {time[f['step']]:.6g} s ({f['error']})" if f else "") for _, f in outs)
+            (f"the integrator stopped at t = {time[f['step']]:.6g} s ({f['error']})" if f else "") for f in failed)
         return BatchRecords(time=time, desired=self._desired(refs, P.shape[0]), tracked=tracked, u_command=u_c,
                             u_applied=u_a, failures=failures)
 

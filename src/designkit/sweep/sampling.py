@@ -130,9 +130,9 @@ def sample_space(loaded_sweep: Any, plant: Any) -> SampleSpace:
             raise SpecError(f"sweep.parameters.{name}", f"the plant has no parameter {name!r} (it has "
                             f"{', '.join(names) or 'none'})")
         intervals[name] = (float(lo), float(hi), f"sweep.parameters.{name}")
-    if spec.simulation.plant_change is not None and intervals:
+    if spec.simulation.plant_change is not None:
         raise SpecError("simulation.plant_change", "a sweep sets the true plant's parameters from the start of each "
-                        "run; remove simulation.plant_change (or sweep it as a spec of its own)")
+                        "run (that is how its worst cases are written); remove simulation.plant_change")
     dims = [Dimension(n, "parameter", n, lo, hi, units.get(n, ""), path) for n, (lo, hi, path) in intervals.items()
             if hi > lo]
     if section.initial_position is not None:
