@@ -44,6 +44,8 @@ def test_flags_out_of_range(capsys, tmp_path, flags, key):
     (SIMNOG.replace("  uncertainty: {m2: [2.0, 4.0]}\n", ""), "plant.uncertainty"),
     (SIMNOG.replace("  uncertainty: {m2: [2.0, 4.0]}\n", "  uncertainty: {m2: [3.0, 3.0]}\n"), "plant.uncertainty"),
     (link().replace("requirements: {steady_state_error: 0.5}\n", ""), "requirements"),
+    (SIMNOG.replace("  step: [1.0, -0.5]", "  step: [1.0, -0.5]\n  plant_change: {time: 1.0, values: {m2: 3.5}}"),
+     "simulation.plant_change"),
 ])
 def test_bad_sweep_sections_name_their_key_path(capsys, tmp_path, text, key):
     code, err, out = _run(capsys, tmp_path, text, "--samples", "10")
