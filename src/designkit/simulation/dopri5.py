@@ -101,7 +101,9 @@ class Dopri5:
         """Records ``(nrec, N)`` of the run from ``z0`` (its first ``ns`` entries) over the columns of ``inputs``.
 
         ``failure`` (when given) receives ``step`` and ``error`` if the integration stopped early (step size
-        underflow, step budget, a state beyond 1e150): the records are NaN from there.
+        underflow, step budget, a state beyond 1e150): the records are NaN from there.  The same array object
+        passed again is taken as unchanged (its transpose and breakpoints are kept: a simulator's own inputs,
+        run again); after changing an array in place, pass a new view of it (``buf.T`` is one per call).
         """
         nw, n = inputs.shape
         prepared = self._prepared.get("inputs")
