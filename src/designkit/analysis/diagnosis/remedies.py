@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from designkit.display.numbers import fmt_number, quantity, unit
+from designkit.spec.fields import parse_pole
 
 __all__ = ["HEADROOM", "RECOGNIZERS", "Remedy", "printed_bound", "propose", "round_down", "round_up", "snippet"]
 
@@ -148,7 +149,8 @@ def _pole_text(p: complex) -> Any:
     re_, im = float(f"{p.real:.4g}"), float(f"{abs(p.imag):.4g}") if p.imag else 0.0
     if not im:
         return re_
-    return f"{re_:g}{'+' if p.imag > 0 else '-'}{im:g}j"
+    # the spec's complex-pole syntax (spec.fields.parse_pole reads i as j); j would read as a Python literal
+    return f"{re_:g}{'+' if p.imag > 0 else '-'}{im:g}i"
 
 
 def _scaled_poles(result: Any, c: float) -> tuple[tuple[str, Any], ...]:
@@ -158,7 +160,7 @@ def _scaled_poles(result: Any, c: float) -> tuple[tuple[str, Any], ...]:
     fields = getattr(type(result.loaded.spec.controller), "model_fields", {})
     if "zero" in fields and design.zeros:
         zero = float(f"{c * complex(design.zeros[0]).real:.4g}")
-        if any(abs(complex(q) - zero) <= 1e-9 * (1 + abs(zero)) for q in changes[0][1]):
+        if any(abs(parse_pole(q) - zero) <= 1e-9 * (1 + abs(zero)) for q in changes[0][1]):
             zero = float(f"{zero * (1 + CANCELLATION):.4g}")  # the spec refuses a zero on a pole: just beyond it
         changes.append(("controller.zero", zero))
     return tuple(changes)
