@@ -105,7 +105,7 @@ def test_without_a_mismatch_the_error_comparison_is_informational():
     c = checks["adaptation_error"]
     assert c.required is False and c.passed is True
     assert c.certificate["reasons"] == []
-    assert c.certificate["error_rms"]["fixed"] < 1e-12  # the fixed-gain loop is the model
+    assert c.certificate["error_rms"]["fixed"] < 1e-10  # the loop is the model: 0 up to dopri5 (rtol 1e-10)
     assert np.allclose(result.simulation.controller_state[-1, -2:], (20.0, 9.0), rtol=1e-9)  # nothing moved
 
 
