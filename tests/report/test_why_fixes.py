@@ -73,9 +73,9 @@ def _sentences(texts: list[str]) -> list[str]:
 
 def test_no_fix_text_twice_in_the_why_section_of_infeasible_requirements(infeasible_model):
     model = infeasible_model
-    assert len(model.why) == 3 and len(model.why_fixes) == 2  # both fixes re-simulated and passing (tests/analysis/test_fixes.py)
+    assert len(model.why) == 3 and len(model.why_fixes) == 2
     section = _why_html(render_html(model))
-    sentences = [s for s in _sentences(_fix_texts(section)) if not s.startswith(("See fix", "As under"))]  # back-references
+    sentences = [s for s in _sentences(_fix_texts(section)) if not s.startswith(("See fix", "As under"))]
     assert sentences and len(sentences) == len(set(sentences)), sentences
     assert section.count("ideal linear loop itself commands 122.4") == 1
     # the anti-windup, whose re-simulation stalls short of the command, is said once as tried and is no numbered fix
