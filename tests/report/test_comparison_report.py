@@ -75,3 +75,14 @@ def test_a_failing_comparison_says_which_controller_and_why(tmp_path):
     for c in failed:
         assert c.label in text
     assert "1 of 2 controllers verified" in text
+
+
+def test_poppler_reads_the_comparison_pdf_without_a_message(written, tmp_path):
+    import shutil
+    import subprocess
+
+    if shutil.which("pdfinfo") is None:
+        pytest.skip("poppler-utils (pdfinfo) not installed")
+    _, files, _ = written
+    done = subprocess.run(["pdfinfo", str(files.pdf)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stderr == "", done.stderr

@@ -43,7 +43,7 @@ def compile_comparison_pdf(model: ComparisonReportModel) -> bytes:
 
     import typst
 
-    from designkit.report.pdf import figure_font_dir
+    from designkit.report.pdf import figure_font_dir, without_false_suspects
 
     source = render_comparison_typst(model)
     with tempfile.TemporaryDirectory(prefix="designkit-comparison-") as tmp:
@@ -60,7 +60,7 @@ def compile_comparison_pdf(model: ComparisonReportModel) -> bytes:
             raise RuntimeError(f"typst could not compile the comparison report: {detail}") from exc
     if not isinstance(out, bytes) or not out.startswith(b"%PDF"):
         raise RuntimeError("typst did not return a PDF document")
-    return out
+    return without_false_suspects(out)  # poppler reads Typst's /Suspects false as a syntax error
 
 
 def write_comparison_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1) -> ReportFiles:
