@@ -38,16 +38,31 @@ TARGET = re.compile(r"^\s*(<=|>=|<|>|≤|≥)\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE]
 """A requirement written as a comparison with a number (``"<= 5 %"``): operator, number, rest."""
 
 _UNIT_STAR = re.compile(r"(?<=[A-Za-z)])\*(?=[A-Za-z(])")  # N*m -> N·m inside sentences
+_UNIT_POWER = re.compile(r"(?<![A-Za-z_])(m|s|rad|kg·m|N·m)\^(2|3)(?![0-9.])")  # kg·m^2 -> kg·m², m/s^2 -> m/s²
+_UNIT_EXPONENT = {"2": "²", "3": "³"}
+
+
+def _powers(text: str) -> str:
+    return _UNIT_POWER.sub(lambda m: m.group(1) + _UNIT_EXPONENT[m.group(2)], text)
 
 
 def unit(text: str) -> str:
-    """A unit as the report writes it (``N*m`` -> ``N·m``)."""
-    return text.replace("*", "·")
+    """A unit as the report writes it (``N*m`` -> ``N·m``, ``kg*m^2`` -> ``kg·m²``).
+
+    >>> unit("kg*m^2"), unit("m/s^2"), unit("N*m*s/rad")
+    ('kg·m²', 'm/s²', 'N·m·s/rad')
+    """
+    return _powers(text.replace("*", "·"))
 
 
 def sentence_units(text: str) -> str:
-    """The units inside a sentence written one way (``5 N*m`` -> ``5 N·m``; ``a * b`` is left alone)."""
-    return _UNIT_STAR.sub("·", text)
+    """The units inside a sentence written one way (``5 N*m`` -> ``5 N·m``, ``kg*m^2`` -> ``kg·m²``; ``a * b`` and
+    a symbol's power such as ``wn^2`` are left alone).
+
+    >>> sentence_units("D_ii = 1.93 kg*m^2, f = 2 N*m*s/rad, a = 9.81 m/s^2, 1/wn^2")
+    'D_ii = 1.93 kg·m², f = 2 N·m·s/rad, a = 9.81 m/s², 1/wn^2'
+    """
+    return _powers(_UNIT_STAR.sub("·", text))
 
 
 def is_real(x: Any) -> bool:

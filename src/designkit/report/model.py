@@ -19,7 +19,7 @@ from typing import Any
 
 from designkit.analysis.lab.section import lab_section
 from designkit.display.figure import Figure
-from designkit.display.numbers import plain_complex, unit
+from designkit.display.numbers import plain_complex, sentence_units, unit
 from designkit.display.typeset import Equation
 from designkit.families import check_rules, family
 from designkit.report.check_rows import check_rows
@@ -274,7 +274,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         poles=pole_rows(design),
         zeros=zero_rows(design),
         loop=loop_rows(checks),
-        notes=tuple(plain_complex(n) for n in design.notes),
+        notes=tuple(plain_complex(sentence_units(n)) for n in design.notes),
         checks=check_rows(checks),
         simulation=simulation,
         figures=figures,
