@@ -39,6 +39,8 @@ PLANTS = {
 CASES = {
     "pid_servo": {
         "link": ("{kind: pid_servo, poles: [-4, -5, -20], zero: -3}", "{duration: 3.0}"),
+        # the link-position PID from the rigid approximation (specs/robel.yaml's controller (i))
+        "elastic_joint": ("{kind: pid_servo, poles: [-4, -5, -6], zero: -5.5}", "{duration: 4.0}"),
     },
     "pid_tracking": {
         "link": ("{kind: pid_tracking, poles: [-10, -12, -15]}",
@@ -98,8 +100,14 @@ REQUIREMENTS = "{overshoot: 50, settling_time: 10.0, steady_state_error: 0.05}"
 
 
 def case_yaml(kind: str, plant: str) -> str:
-    """The spec of one conformance case."""
+    """The spec of one conformance case.
+
+    A case is ``(controller, simulation[, requirements[, plant]])``; the optional ``plant`` replaces the canonical
+    plant's flow mapping when the family needs what the canonical one leaves out (the hierarchy of control needs
+    velocity and acceleration limits and takes no parameter box).
+    """
     controller, simulation, *rest = CASES[kind][plant]
-    requirements = rest[0] if rest else REQUIREMENTS
-    return (f"name: conformance-{kind}-{plant}\nplant: {PLANTS[plant]}\ncontroller: {controller}\n"
+    requirements = rest[0] if rest and rest[0] is not None else REQUIREMENTS
+    plant_text = rest[1] if len(rest) > 1 else PLANTS[plant]
+    return (f"name: conformance-{kind}-{plant}\nplant: {plant_text}\ncontroller: {controller}\n"
             f"requirements: {requirements}\nsimulation: {simulation}\n")

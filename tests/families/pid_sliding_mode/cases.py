@@ -34,8 +34,19 @@ CONFORMANCE = {
     # ROBEL's elastic joint (families/pid_sliding_mode/elastic.py): the sliding variable on the motor
     "elastic_joint": ("{kind: pid_sliding_mode, poles: [-3, -4, -12]}", "{duration: 3.0}",
                       "{overshoot: 15, settling_time: 2.5, steady_state_error: 0.01}"),
+    # the hierarchy of control (robot.py) needs velocity and acceleration limits and takes no parameter box, so the
+    # robots' cases carry their own plant (the canonical arm with limits, as specs/hierarchy-*.yaml)
+    "two_link": ("{kind: pid_sliding_mode, poles: [-4, -5, -20], workspace: {low: [-0.2, -0.8], high: [0.8, 0.3]},"
+                 " epsilon: 0.002}",
+                 "{duration: 2.0, step: [0.5, -0.3]}", None,
+                 "{kind: robot, robot: planar2r, limits: {velocity: [2.0, 2.0], acceleration: [12.0, 12.0]}}"),
+    "puma560": ("{kind: pid_sliding_mode, poles: [-4, -5, -20], epsilon: 0.005, workspace: "
+                "{low: [-0.3, 0.485, -3.4416, -0.3, 0.485, -0.3], high: [0.6, 1.285, -2.8416, 0.6, 1.285, 0.6]}}",
+                "{duration: 1.5, initial_position: [0, 0.785, -3.1416, 0, 0.785, 0], "
+                "step: [0.3, 0.3, 0.2, 0.3, 0.3, 0.3]}",
+                None, "{kind: robot, robot: puma560, motor_inertia: true, limits: {velocity: 1.0, acceleration: 8.0}}"),
 }
-"""Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
+"""Canonical plant -> (controller, simulation, requirements[, plant]) of the conformance suite (tests/problems.py)."""
 
 EXAMPLES = {
     "pid-sm-link": 0,

@@ -7,6 +7,9 @@ CONFORMANCE = {
     # ROBEL figure 5.2 on the default elastic joint: four poles placed, no load
     "elastic_joint": ("{kind: state_regulator, poles: [-8, -10, -12, -15]}", "{duration: 2.0}",
                       "{overshoot: 15, settling_time: 1.5, steady_state_error: 0.01}"),
+    # the link (position, speed): two real poles, on the canonical Km and tau box
+    "link": ("{kind: state_regulator, poles: [-6, -8]}", "{duration: 2.0}",
+             "{overshoot: 5, settling_time: 1.5, steady_state_error: 0.01}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
