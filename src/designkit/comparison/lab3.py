@@ -30,6 +30,9 @@ from designkit.comparison.studies import rise_times
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.pid_servo import KIND as PID
+from designkit.families.pid_sliding_mode.elastic import BAND as PID_SM_BAND
+from designkit.families.pid_sliding_mode.elastic import EXTRA as PID_SM_EXTRA
+from designkit.families.pid_sliding_mode.elastic import RELAY as PID_SM_RELAY
 from designkit.families.pid_sliding_mode.spec import KIND as PID_SM
 from designkit.families.state_regulator.spec import KIND as STATE_REGULATOR
 from designkit.families.vsc.spec import KIND as VSC
@@ -168,7 +171,7 @@ def predicted_offset(run: Any, w: float) -> float | None:
     p = plant.params
     if d.kind == PID:
         return 0.0
-    if d.kind == PID_SM and "pid_sm_elastic" in d.extra:
+    if d.kind == PID_SM and PID_SM_EXTRA in d.extra:
         return w / (p.KR * p.R2)
     if d.kind == STATE_REGULATOR:
         return w * float(d.extra[STATE_REGULATOR]["load_offset_per_unit"])
@@ -319,8 +322,8 @@ def _why(result: Any, chat: dict[str, Chatter]) -> Question:
     found = _by_kind(result, PID_SM)
     if found is not None:
         label, run = found
-        info = run.design.extra.get("pid_sm_elastic")
-        band = _check(run, "pid_sm_elastic_band")
+        info = run.design.extra.get(PID_SM_EXTRA)
+        band = _check(run, PID_SM_BAND)
         if info is not None and band is not None:
             sentences.append(
                 f"{label} slides too, on the motor (|slm| at most {_f(band.achieved, 'rad·s')} against the band "
@@ -373,7 +376,7 @@ def _structure(result: Any) -> Question:
                  ("continuous, integrated with a step of at most " + _f(law.max_step, "s") if law.max_step else
                   "continuous"))
         lines = family(d.kind).display.law
-        if d.kind == PID_SM and "pid_sm_elastic" in d.extra:
+        if d.kind == PID_SM and PID_SM_EXTRA in d.extra:
             lines = (d.formulas[0],)
         elif d.kind == PID and d.plant.kind == "elastic_joint":
             lines = ("u = −K1 (x3 − xD) − K2 x4 − K3 ∫(x3 − xD) dt + K3 K4 xD (the link's position and speed)",)
@@ -510,7 +513,7 @@ def _robustness(result: Any, corners: dict[str, tuple[CornerRun, ...]]) -> Quest
         sentences.append(f"{label}: bounded at {bounded} of {len(runs)} corners; overshoot "
                          f"{span([c.overshoot for c in runs], '%')}, settling {settle} (longest at {at}).")
     evidence = {"lyapunov": "a Lyapunov function of the nominal loop", "robust_vertices": "every corner's linear loop "
-                "stable", "vsc_gains": "theorem 3's conditions certified on the whole box", "pid_sm_elastic_relay":
+                "stable", "vsc_gains": "theorem 3's conditions certified on the whole box", PID_SM_RELAY:
                 "the relay above the equivalent control at every corner (simulated)"}
     for label, run in _runs(result):
         found = [f"{words} ({c.status})" for name, words in evidence.items() if (c := _check(run, name)) is not None]

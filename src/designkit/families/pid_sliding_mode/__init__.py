@@ -51,7 +51,14 @@ from designkit.families.pid_sliding_mode.bound import corners, design_box, pertu
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.pid_sliding_mode.figures import FIGURES
 from designkit.families.pid_sliding_mode.measure import json_summary
-from designkit.families.pid_sliding_mode.spec import EXTRA, KIND, PidSlidingModeSpec, perturbation_level, validate
+from designkit.families.pid_sliding_mode.spec import (
+    EXTRA,
+    KIND,
+    PID_GAINS,
+    PidSlidingModeSpec,
+    perturbation_level,
+    validate,
+)
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
 from designkit.simulation.reference import reference_for
 from designkit.synthesis import pid
@@ -157,7 +164,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     extra = {EXTRA: {
         "form": form, "sliding_variable": ("slm = a1 x1 + a2 x2 + x3" if form == "servo" else
                                            "slm = a1 (x1 - xD) + a2 (x2 - xD') + x3"),
-        "pid_gains": list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3, "g_nominal": sf.a2 * Km0 / tau0,
+        PID_GAINS: list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3, "g_nominal": sf.a2 * Km0 / tau0,
         "g_range": [g_min, g_max], "M": M, "M_given": ctl.M is not None, "margin": m,
         "xi_total": xi, "xi_parameter": xb.parameter, "xi_external": external, "xi_corner": list(xb.corner),
         "xi_at": xb.at, "xi_sampled": xb.sampled, "hull": [list(p) for p in xb.points],
@@ -186,7 +193,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     ``slm`` (rad*s), the switching part ``du`` and the PID part ``u0`` (N*m).  ``anti_windup`` is refused at the
     spec."""
     info = design.extra[EXTRA]
-    G = {k: float(design.gains[k]) for k in (*info["pid_gains"], "a1", "a2", "M")}
+    G = {k: float(design.gains[k]) for k in (*info[PID_GAINS], "a1", "a2", "M")}
     a1, a2, M = G["a1"], G["a2"], G["M"]
     Km0, tau0 = info["nominal"]
     eps, layer, form = info["epsilon"], info["layer"], info["form"]

@@ -39,7 +39,7 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
-from designkit.families.pid_sliding_mode.spec import KIND
+from designkit.families.pid_sliding_mode.spec import KIND, PID_GAINS
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
@@ -49,10 +49,12 @@ from designkit.synthesis.linearization import Linearization
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
-__all__ = ["EXTRA", "RELAY_RULE", "RUN_RULE", "extend", "law", "sliding_motion", "synthesize"]
+__all__ = ["BAND", "EXTRA", "RELAY", "RELAY_RULE", "RUN_RULE", "extend", "law", "sliding_motion", "synthesize"]
 
 EXTRA = "pid_sm_elastic"
 """The key of this design's data in ``Design.extra`` (and of its ``--json`` object)."""
+RELAY, BAND = "pid_sm_elastic_relay", "pid_sm_elastic_band"
+"""The names of the relay-amplitude check and of the in-band run check (read by the lab 3 answers)."""
 BAND_FRACTION = 1e-3
 REASON = ("the law switches on slm = 0 (the relay M sign(slm)), where it spends its life: no linearization "
           "describes the loop; the relay is sized on the sliding motions of the box's corners instead")
@@ -174,7 +176,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         else eps, "epsilon": eps, "max_step": h, "g_range": [min(g), g_max], "l1": l1, "q0": q0,
         "rigid": {"Km": Km_r, "tau": tau_r}, "load_mode": {"k2": k2, "omega": float(np.sqrt(k2)), "zeta": zeta},
         "ideal_t": t[:: max(1, len(t) // 2000)].tolist(),
-        "ideal_x3": nominal["x"][:: max(1, len(t) // 2000), 2].tolist(), "pid_gains": list(values),
+        "ideal_x3": nominal["x"][:: max(1, len(t) // 2000), 2].tolist(), PID_GAINS: list(values),
         "ideal_x1": nominal["x"][:: max(1, len(t) // 2000), 0].tolist(),
     }}
     formulas = (
@@ -194,7 +196,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = u0 - M sign(slm)`` (or ``sat(slm/epsilon)``) on the motor side; records ``slm``, ``du``, ``u0``."""
     info = design.extra[EXTRA]
-    G = {k: float(design.gains[k]) for k in (*info["pid_gains"], "a1", "a2", "M")}
+    G = {k: float(design.gains[k]) for k in (*info[PID_GAINS], "a1", "a2", "M")}
     eps = info["epsilon"]
 
     def slm(s: Any) -> Any:
@@ -223,7 +225,7 @@ def _relay(design: Any, ctx: Context) -> tuple[Check, ...]:
     M, sup = info["M"], info["sup_du_eq"]
     at = ", ".join(f"{k} = {v:g}" for k, v in info["sup_at"].items()) or "the nominal plant"
     ok = sup < M
-    return (Check("pid_sm_elastic_relay", ok, "M > sup|Δu_eq| on the sliding motions", M, M - sup, "input",
+    return (Check(RELAY, ok, "M > sup|Δu_eq| on the sliding motions", M, M - sup, "input",
                   f"M = {M:.4g} is {'above' if ok else 'NOT above'} the largest equivalent switching control "
                   f"{sup:.4g} needed to stay on slm = 0 (at {at}; the nominal plant and every corner of the box "
                   "simulated with the spec's step and load): a bound from simulations, not a certificate",
@@ -246,7 +248,7 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     ideal = np.interp(t, info["ideal_t"], info["ideal_x3"])
     dev = float(np.max(np.abs(x3 - ideal)))
     return (
-        Check("pid_sm_elastic_band", ok, f"|slm| <= {band:.4g} rad*s", worst, band - worst, "rad*s",
+        Check(BAND, ok, f"|slm| <= {band:.4g} rad*s", worst, band - worst, "rad*s",
               f"the largest |slm| over the run is {worst:.4g} rad*s against the band {band:.4g} rad*s: "
               + ("the motor slides" if ok else "it leaves the band: the relay does not hold the motor on slm = 0"),
               {"band": band, "max_abs_slm": worst}),
@@ -260,13 +262,13 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     )
 
 
-RELAY_RULE = CheckRule(name="pid_sm_elastic_relay", order=55, applies=lambda d, c: EXTRA in d.extra, run=_relay,
+RELAY_RULE = CheckRule(name=RELAY, order=55, applies=lambda d, c: EXTRA in d.extra, run=_relay,
                        label="Relay dominates the equivalent control (elastic joint)")
 RUN_RULE = CheckRule(
     name="pid_sm_elastic_run", order=127,
     applies=lambda d, c: c.simulation is not None and EXTRA in d.extra and "slm" in c.simulation.signals,
     run=_run, label="Sliding mode of the motor in the simulated run (elastic joint)",
-    labels={"pid_sm_elastic_band": "The motor stays in the band around slm = 0",
+    labels={BAND: "The motor stays in the band around slm = 0",
             "pid_sm_elastic_chattering": "Chattering (measured)",
             "pid_sm_elastic_motion": "Load against its sliding motion (measured)"})
 
@@ -301,7 +303,7 @@ def sliding_variable_figure(result: Any) -> Any:
     drawn = [w for k, w in (("band", "the band (green)"), ("slm", "the motor's sliding variable (blue)")) if k in keys]
     return Figure("PID/sliding mode on the elastic joint: the motor's sliding variable",
                   f"The motor's sliding variable over the run; the axis is linear within ±{band:.3g} rad·s. Drawn: "
-                  + " and ".join(drawn) + ".", svg, "fig-pid-sm-elastic-slm.svg", ("pid_sm_elastic_band",))
+                  + " and ".join(drawn) + ".", svg, "fig-pid-sm-elastic-slm.svg", (BAND,))
 
 
 def _draw_motion(t: np.ndarray, ref: np.ndarray, x: np.ndarray, info: dict) -> Any:
@@ -350,7 +352,7 @@ def json_summary(result: Any) -> dict[str, Any]:
     """The gains, ``M`` against ``sup|du_eq|``, the load mode on the sliding surface."""
     d = result.design
     info = d.extra[EXTRA]
-    return {EXTRA: {"gains": {k: float(d.gains[k]) for k in info["pid_gains"]}, "a1": info["a1"], "a2": info["a2"],
+    return {EXTRA: {"gains": {k: float(d.gains[k]) for k in info[PID_GAINS]}, "a1": info["a1"], "a2": info["a2"],
                     "p3": info["p3"], "M": info["M"], "sup_du_eq": info["sup_du_eq"], "band": info["band"],
                     "max_step": info["max_step"], "rigid": info["rigid"], "load_mode": info["load_mode"]}}
 

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.pid_sliding_mode.spec import EXTRA, KIND
+from designkit.families.pid_sliding_mode.spec import EXTRA, KIND, PID_GAINS
 from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 
 __all__ = ["Run", "json_summary", "measure"]
@@ -116,7 +116,7 @@ def json_summary(result: Any) -> dict[str, Any]:
     info = d.extra[EXTRA]
     out: dict[str, Any] = {
         "form": info["form"], "sliding_variable": info["sliding_variable"],
-        "gains": {k: float(d.gains[k]) for k in info["pid_gains"]},
+        "gains": {k: float(d.gains[k]) for k in info[PID_GAINS]},
         "a1": info["a1"], "a2": info["a2"], "p3": info["p3"], "zero": info["p3"],
         "sliding_gain_nominal": info["g_nominal"],
         "M": [info["M"]], "M_given": info["M_given"],

@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import ModelError, SpecError
-from designkit.families.pid_sliding_mode.spec import KIND
+from designkit.families.pid_sliding_mode.spec import KIND, PID_GAINS
 from designkit.families.pid_sliding_mode.surface import Surface, ideal_motion, l1_norm, surface
 from designkit.simulation.reference import reference_for
 from designkit.spec.fields import per_joint
@@ -203,7 +203,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
               Gain("a2", sf.a2, "s^2", "sliding variable, q' coefficient: 1/(p1 p2)"),
               Gain("M", M.tolist(), "N*m", "relay amplitude per joint (the hierarchy of control)")]
     extra = {ROBOT_EXTRA: {
-        "form": form, "pid_gains": list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3,
+        "form": form, PID_GAINS: list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3,
         "gains": [{k: float(gj[k]) for k in names} for gj in gains],
         "links": [{"Km": lk.Km, "tau": lk.tau, "inertia": lk.inertia, "damping": lk.damping} for lk in links],
         "inertia_range": d_range, "gravity_feedforward": ctl.gravity_feedforward,

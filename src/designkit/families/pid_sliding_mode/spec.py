@@ -41,6 +41,8 @@ KIND = "pid_sliding_mode"
 
 EXTRA = "pid_sm"
 """The key of the family's design data in ``Design.extra`` (and of its JSON object)."""
+PID_GAINS = "pid_gains"
+"""The key, inside the design data, of the names of the PID part's gains."""
 
 IN_BAND, PRECISION, CHATTERING = "pid_sm_in_band", "pid_sm_precision", "pid_sm_chattering"
 """The names of the run checks the figures are the evidence of."""
