@@ -157,26 +157,30 @@ def loop_functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.
     n_ref = 3 * L.n
     nq = L.nx + L.nd + 1 + L.nu + L.np_
     s, a, q = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", n_ref), ca.SX.sym("q", nq)
-    noise, dist, _flag, uff, p = ca.vertsplit(q, np.cumsum([0, L.nx, L.nd, 1, L.nu, L.np_]).tolist())
+    _noise, dist, _flag, uff, p = ca.vertsplit(q, np.cumsum([0, L.nx, L.nd, 1, L.nu, L.np_]).tolist())
     x, xc = s[:L.nx], s[L.nx:]
     m, e = ca.SX(0, 1), ca.SX(0, 1)
-    y = x + noise
+    # The pair runs only loops without measurement noise (regime_of), so the law measures the state itself: its
+    # terms of x (the gravity feed-forward's sines) are then the plant's, which the common-subexpression pass
+    # below computes once.  The noise rows stay in the held inputs' layout, unread.
+    y = x
     command = law.command(y, xc, m, a) + _feedforward(law, y, xc, m, a, uff)
     u = element.function(command, e)[0]
     gate = law.gate(y, xc, m, a)
     s_dot = ca.vertcat(plant.ode()(x, u, dist, p), law.derivative(y, xc, m, a, gate))
     signals = law.signals(y, xc, m, a) if law.signals is not None else ca.SX(0, 1)
     record = ca.vertcat(x, xc, command, u, y, dist, signals)
-    rhs = ca.Function("dk_rhs", [s, a, q], [s_dot], ["s", "a", "q"], ["s_dot"])
-    rec = ca.Function("dk_rec", [s, a, q], [record], ["s", "a", "q"], ["record"])
+    rhs = ca.Function("dk_rhs", [s, a, q], [ca.cse(s_dot)], ["s", "a", "q"], ["s_dot"])
+    rec = ca.Function("dk_rec", [s, a, q], [ca.cse(record)], ["s", "a", "q"], ["record"])
     return rhs, rec, n_ref + n_ref + n_ref + nq, n_ref
 
 
-def source(rhs: ca.Function, rec: ca.Function, nw: int, n_ref: int) -> str:
-    """The C source of the library: CasADi's code of ``rhs`` and ``rec``, then the driver."""
+def source(rhs: ca.Function, rec: ca.Function, nw: int, n_ref: int, extra: tuple[ca.Function, ...] = ()) -> str:
+    """The C source of the library: CasADi's code of ``rhs``, ``rec`` (and of the ``extra`` functions, in the same
+    generated unit), then the driver."""
     gen = ca.CodeGenerator("dk_loop.c", {"with_header": False, "verbose": False})
-    gen.add(rhs)
-    gen.add(rec)
+    for f in (rhs, rec, *extra):
+        gen.add(f)
     sizes = {"ns": rhs.size1_in(0), "na": n_ref, "nw": nw, "nrec": rec.size1_out(0)}
     for tag, f in (("rhs", rhs), ("rec", rec)):
         sizes.update({f"{tag}_arg": f.sz_arg(), f"{tag}_res": f.sz_res(), f"{tag}_iw": f.sz_iw(),
@@ -192,11 +196,12 @@ def _compiler() -> str | None:
     return None
 
 
-def _library(text: str, cc: str) -> tuple[Path, bool] | str:
-    """The cached library of ``text`` (built now if needed) and whether it was built now, or why not."""
+def _library(text: str, cc: str, flags: tuple[str, ...] = FLAGS) -> tuple[Path, bool] | str:
+    """The cached library of ``text`` built with ``flags`` (built now if needed) and whether it was built now, or
+    why not."""
     from designkit.cache import cache_dir
 
-    digest = hashlib.sha256("\0".join([text, cc, *FLAGS, ca.__version__]).encode()).hexdigest()[:16]
+    digest = hashlib.sha256("\0".join([text, cc, *flags, ca.__version__]).encode()).hexdigest()[:16]
     folder = cache_dir("codegen")
     library = folder / f"dk_dopri5_{digest}.so"
     if library.exists():
@@ -207,7 +212,7 @@ def _library(text: str, cc: str) -> tuple[Path, bool] | str:
         c_file.write_text(text)
         fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
         os.close(fd)
-        proc = subprocess.run([cc, *FLAGS, str(c_file), "-o", tmp, "-lm"], capture_output=True, text=True)
+        proc = subprocess.run([cc, *flags, str(c_file), "-o", tmp, "-lm"], capture_output=True, text=True)
         if proc.returncode != 0:
             os.unlink(tmp)
             return f"compilation failed ({cc}): {(proc.stderr.strip().splitlines() or ['unknown error'])[0]}"

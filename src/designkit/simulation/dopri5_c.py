@@ -16,7 +16,9 @@ section II.4 for the PI control, II.6 for the dense output); written here from t
   (``t_k``, ``t_k + dt/2``, ``t_k + dt``), as for the CVODES step
   (:func:`designkit.simulation.integrate.variable_step`).
 
-Entry point::
+The stepping is ``dk_integrate``, which hands every grid point's state to an emitter; the entry point of a
+single run records them (:mod:`designkit.simulation.observed` adds one that runs a batch of samples and reduces
+each grid point on the fly instead).  Entry point::
 
     int dk_dopri5(const double *s0, const double *W, const double *brk, long N, double dt, double rtol,
                   double atol, long max_steps, double *R, double *stats)
@@ -48,11 +50,26 @@ DRIVER = r"""
 #define REC_W {rec_w}
 #define DIVERGED 1e150
 
+#define NQ (NW - 3 * NA)
+
+typedef void (*dk_emit)(void *user, long k, const double *s);
+
 typedef struct {{
   const double *W; long k0, k1; double dt;
+  const double *P; int np; const double *held; double q[NQ + 1];
   casadi_int iw[RHS_IW + REC_IW + 1]; casadi_real w[RHS_W + REC_W + 1]; double a[NA + 1];
   long nfev;
 }} dk_ctx;
+
+/* The held inputs of grid step k (noise, disturbance, flag, feedforward, parameters): W's own, or a copy with its
+   last np entries (the true plant's parameters) replaced by P (one sample of a batch). */
+static const double *dk_held(dk_ctx *c, long k) {{
+  const double *h = c->W + (size_t)k * NW + 3 * NA;
+  if (!c->P) return h;
+  memcpy(c->q, h, sizeof(double) * NQ);
+  memcpy(c->q + NQ - c->np, c->P, sizeof(double) * c->np);
+  return c->q;
+}}
 
 static void dk_ref(dk_ctx *c, double t, double *a) {{
   long i = (long)floor(t / c->dt);
@@ -68,7 +85,7 @@ static void dk_f(dk_ctx *c, double t, const double *s, double *out) {{
   const casadi_real *arg[RHS_ARG + 3] = {{0}};
   casadi_real *res[RHS_RES + 1] = {{0}};
   dk_ref(c, t, c->a);
-  arg[0] = s; arg[1] = c->a; arg[2] = c->W + (size_t)c->k0 * NW + 3 * NA;
+  arg[0] = s; arg[1] = c->a; arg[2] = c->held;
   res[0] = out;
   dk_rhs(arg, res, c->iw, c->w, 0);
   c->nfev++;
@@ -88,8 +105,10 @@ static int dk_bad(const double *y) {{
   return !(m < DIVERGED);
 }}
 
-int dk_dopri5(const double *s0, const double *W, const double *brk, long N, double dt, double rtol,
-              double atol, long max_steps, double *R, double *stats) {{
+/* The whole grid from s0: every grid point's state goes to emit(user, k, s); returns 0, or 1 (stopped: stats[3] is
+   the first grid point not emitted). */
+static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N, double rtol, double atol,
+                        long max_steps, dk_emit emit, void *user, double *stats) {{
   static const double c2 = 1.0 / 5, c3 = 3.0 / 10, c4 = 4.0 / 5, c5 = 8.0 / 9;
   static const double a21 = 1.0 / 5;
   static const double a31 = 3.0 / 40, a32 = 9.0 / 40;
@@ -104,21 +123,20 @@ int dk_dopri5(const double *s0, const double *W, const double *brk, long N, doub
                       d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0,
                       d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
   const double safe = 0.9, beta = 0.04, expo1 = 0.2 - 0.04 * 0.75, facc1 = 5.0, facc2 = 0.1;
-  dk_ctx c;
+  dk_ctx c = *c0;
+  const double dt = c.dt;
   double y[NS], y1[NS], k1[NS], k2[NS], k3[NS], k4[NS], k5[NS], k6[NS], k7[NS], ys[NS];
   double r1[NS], r2[NS], r3[NS], r4[NS], r5[NS];
   long nacc = 0, nrej = 0, k = 0, stop = N;
   double h = 0.0;
   int status = 0;
-  memset(&c, 0, sizeof c);
-  c.W = W; c.dt = dt;
   memcpy(y, s0, sizeof y);
   c.k0 = 0; c.k1 = N > 1 ? 1 : 0;
-  dk_record(&c, 0, y, R);
+  emit(user, 0, y);
   while (k < N - 1 && !status) {{
     long kend = k + 1, next = k + 1;
     while (kend < N - 1 && brk[kend] == 0.0) ++kend;
-    c.k0 = k; c.k1 = kend;
+    c.k0 = k; c.k1 = kend; c.held = dk_held(&c, k);
     double t = (double)k * dt, tend = (double)kend * dt, facold = 1e-4;
     int rejected = 0;
     dk_f(&c, t, y, k1);
@@ -180,9 +198,17 @@ int dk_dopri5(const double *s0, const double *W, const double *brk, long N, doub
               memcpy(ys, y1, sizeof ys);
             }} else {{
               double th = ((double)next * dt - t) / h, th1 = 1.0 - th;
+#ifdef DK_DENSE_ROWS  /* an emitter that reads only these states: the others are not interpolated */
+              static const int dense[] = {{DK_DENSE_ROWS}};
+              for (size_t i = 0; i < sizeof dense / sizeof dense[0]; ++i) {{
+                const int j = dense[i];
+                ys[j] = r1[j] + th * (r2[j] + th1 * (r3[j] + th * (r4[j] + th1 * r5[j])));
+              }}
+#else
               for (int j = 0; j < NS; ++j) ys[j] = r1[j] + th * (r2[j] + th1 * (r3[j] + th * (r4[j] + th1 * r5[j])));
+#endif
             }}
-            dk_record(&c, next, ys, R + (size_t)next * NREC);
+            emit(user, next, ys);
             ++next;
           }}
         }}
@@ -203,9 +229,26 @@ int dk_dopri5(const double *s0, const double *W, const double *brk, long N, doub
     }}
     k = kend;
   }}
-  for (long j = stop; j < N; ++j)
-    for (int i = 0; i < NREC; ++i) R[(size_t)j * NREC + i] = NAN;
   stats[0] = (double)c.nfev; stats[1] = (double)nacc; stats[2] = (double)nrej; stats[3] = (double)stop;
+  return status;
+}}
+
+typedef struct {{ dk_ctx *c; double *R; }} dk_rec_user;
+
+static void dk_emit_record(void *user, long k, const double *s) {{
+  dk_rec_user *u = (dk_rec_user *)user;
+  dk_record(u->c, k, s, u->R + (size_t)k * NREC);
+}}
+
+int dk_dopri5(const double *s0, const double *W, const double *brk, long N, double dt, double rtol,
+              double atol, long max_steps, double *R, double *stats) {{
+  dk_ctx c;
+  memset(&c, 0, sizeof c);
+  c.W = W; c.dt = dt;
+  dk_rec_user u = {{&c, R}};
+  int status = dk_integrate(&c, s0, brk, N, rtol, atol, max_steps, dk_emit_record, &u, stats);
+  for (long j = (long)stats[3]; j < N; ++j)
+    for (int i = 0; i < NREC; ++i) R[(size_t)j * NREC + i] = NAN;
   return status;
 }}
 """

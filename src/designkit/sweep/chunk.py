@@ -75,6 +75,7 @@ class Prepared:
     batch: Any
     space: Any
     requirements: Any
+    kernel: Any = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,9 +151,14 @@ def prepared(text: str, path: str, batch: int) -> Prepared:
     import dataclasses
 
     from designkit.simulation.batch import batch_simulator
+    from designkit.sweep.kernel import kernel_for
 
     b = base(text, path)
-    return dataclasses.replace(b, batch=batch_simulator(b.simulator, batch))
+    kernel = None
+    if not b.space.noise and not any(d.kind == "initial_position" for d in b.space.dimensions):
+        found = kernel_for(b.simulator, b.requirements)
+        kernel = None if isinstance(found, str) else found
+    return dataclasses.replace(b, batch=batch_simulator(b.simulator, batch), kernel=kernel)
 
 
 def design_has_motion(dsn: Any) -> bool:
@@ -222,8 +228,11 @@ def start_of(prep: Prepared, q0: np.ndarray) -> tuple[np.ndarray, Any]:
 def run_samples(prep: Prepared, values: np.ndarray, seeds: np.ndarray) -> tuple[Any, np.ndarray]:
     """Simulate and score samples ``values`` (``(B, d)``, ``B`` at most the batch): their margins and whether the
     integrator failed on each."""
-    from designkit.sweep.margins import margins
+    from designkit.sweep.margins import margins, margins_of
 
+    if prep.kernel is not None:  # every grid point reduced inside the compiled pair (designkit.sweep.kernel)
+        jm, failed = prep.kernel.run(prep.simulator, _inputs(prep, values, seeds)["parameters"])
+        return margins_of(jm, prep.simulator.kind, prep.requirements), failed
     records = prep.batch.run(**_inputs(prep, values, seeds))
     return margins(records, prep.simulator.kind, prep.requirements), np.array([bool(f) for f in records.failures])
 

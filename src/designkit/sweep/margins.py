@@ -17,7 +17,7 @@ import numpy as np
 
 from designkit.verification.tolerances import REST_TOL, RISE_LIMITS, STEADY_STATE_WINDOW
 
-__all__ = ["REQUIREMENTS", "Margins", "margins"]
+__all__ = ["REQUIREMENTS", "JointMetrics", "Margins", "joint_metrics", "margins", "margins_of"]
 
 REQUIREMENTS = {
     "overshoot": "%", "settling_time": "s", "rise_time": "s", "steady_state_error": "rad",
@@ -104,19 +104,46 @@ def _joint_step(t, y, xd, band_frac, scale, several):
     return overshoot, rise, settle, amp
 
 
-def margins(records, kind: str, requirements) -> Margins:
-    """The margin of every requirement in ``requirements`` for every run of ``records`` (module docstring).
+@dataclass(frozen=True, eq=False)
+class JointMetrics:
+    """The per-joint metrics of ``B`` runs, before the worst over the joints is taken (:func:`margins_of`).
 
     Parameters
     ----------
-    records : BatchRecords
-        ``time``, ``desired`` and ``tracked`` ``(B, N, n)``, ``u_command`` ``(B, N, nu)``.
-    kind : str
-        ``"step"`` or ``"trajectory"``.
-    requirements : Requirements or None
-        The spec's requirements.
+    finite : ndarray of bool, shape (B, n)
+        The joint's tracked and desired positions are finite over the whole run.
+    overshoot, rise, settle : ndarray, shape (B, n)
+        Overshoot (%), 10-90 % rise time (s), settling time (s); NaN where undefined.
+    moving : ndarray, shape (B, n)
+        The joint's move: the step's signed amplitude, or the trajectory's largest excursion (NaN: not finite).
+    sse, max_err : ndarray, shape (B, n)
+        Mean tracking error over the last 5 % of the run, largest tracking error (rad or m).
+    amps : ndarray, shape (B, n)
+        ``|xD(end) - y(0)|`` (step) or ``max |xD - xD(0)|`` (trajectory): the joints' scale.
+    u_peak : ndarray, shape (B, nu)
+        Peak ``|u|`` of every input (N*m).
+    u_ok : ndarray of bool, shape (B,)
+        Every command is finite.
     """
-    names = tuple(k for k in REQUIREMENTS if requirements is not None and getattr(requirements, k) is not None)
+
+    finite: np.ndarray
+    overshoot: np.ndarray
+    rise: np.ndarray
+    settle: np.ndarray
+    moving: np.ndarray
+    sse: np.ndarray
+    max_err: np.ndarray
+    amps: np.ndarray
+    u_peak: np.ndarray
+    u_ok: np.ndarray
+
+
+def joint_metrics(records, kind: str, settling_band: float, control: bool = True) -> JointMetrics:
+    """The per-joint metrics of the runs ``records`` (``time``, ``desired``, ``tracked``, ``u_command``), in NumPy.
+
+    ``kind`` is ``"step"`` or ``"trajectory"``; ``settling_band`` the requirement's band (fraction of the move);
+    ``control`` False skips the peak commands (left NaN).
+    """
     t = np.asarray(records.time, dtype=float)
     y_all, xd_all = np.asarray(records.tracked, dtype=float), np.asarray(records.desired, dtype=float)
     B, N, n = y_all.shape
@@ -126,7 +153,7 @@ def margins(records, kind: str, requirements) -> Margins:
     # each run's mean over its own contiguous row: the same sum whatever the batch (bitwise across splits)
     sse = np.where(finite, np.mean(np.ascontiguousarray(err[:, window, :].transpose(0, 2, 1)), axis=2), np.nan)
     max_err = np.where(finite, np.max(err, axis=1), np.nan)
-    sb = requirements.settling_band if requirements is not None else 0.02
+    sb = settling_band
     several = n > 1
     if kind == "trajectory":
         amps = np.max(np.abs(xd_all - xd_all[:, :1, :]), axis=1)
@@ -151,6 +178,23 @@ def margins(records, kind: str, requirements) -> Margins:
         for arr in (os_j, rise_j, settle_j):
             arr[bad, j] = np.nan
         moving[bad, j] = np.nan
+    if control:
+        u = np.asarray(records.u_command, dtype=float)
+        u_peak = np.max(np.abs(u), axis=1)  # (B, nu)
+        u_ok = np.all(np.isfinite(u), axis=(1, 2))
+    else:
+        u_peak, u_ok = np.full((B, 0), np.nan), np.ones(B, dtype=bool)
+    return JointMetrics(finite=finite, overshoot=os_j, rise=rise_j, settle=settle_j, moving=moving, sse=sse,
+                        max_err=max_err, amps=amps, u_peak=u_peak, u_ok=u_ok)
+
+
+def margins_of(jm: JointMetrics, kind: str, requirements) -> Margins:
+    """Each requirement's margin from the per-joint metrics: the worst joint (module docstring)."""
+    names = tuple(k for k in REQUIREMENTS if requirements is not None and getattr(requirements, k) is not None)
+    B, n = jm.finite.shape
+    several = n > 1
+    finite, amps, max_err = jm.finite, jm.amps, jm.max_err
+    scale = np.where(np.all(np.isfinite(amps), axis=1), np.max(amps, axis=1), np.nan) if several else np.full(B, np.nan)
 
     def worst(vals: np.ndarray, candidates: np.ndarray) -> np.ndarray:
         """Worst over candidate joints; NaN when a candidate is undefined or there is none."""
@@ -160,7 +204,7 @@ def margins(records, kind: str, requirements) -> Margins:
         return np.where(has & ~undefined, v, np.nan)
 
     everyone = np.ones((B, n), dtype=bool)
-    is_moving = np.isfinite(moving) & (moving != 0)
+    is_moving = np.isfinite(jm.moving) & (jm.moving != 0)
     if kind == "trajectory":
         big = np.argmax(np.nan_to_num(amps, nan=-np.inf), axis=1) if several else np.zeros(B, dtype=int)
         amplitude = np.where(np.isfinite(scale) if several else True, amps[np.arange(B), big], np.nan)
@@ -169,13 +213,13 @@ def margins(records, kind: str, requirements) -> Margins:
             overshoot = np.where(amplitude > 0, 100.0 * mte / amplitude, np.nan)
         rise = np.full(B, np.nan)
     else:
-        overshoot = worst(os_j, is_moving) if several else os_j[:, 0]
-        rise = worst(rise_j, is_moving) if several else rise_j[:, 0]
+        overshoot = worst(jm.overshoot, is_moving) if several else jm.overshoot[:, 0]
+        rise = worst(jm.rise, is_moving) if several else jm.rise[:, 0]
     values = {
         "overshoot": overshoot,
-        "settling_time": worst(settle_j, everyone),
+        "settling_time": worst(jm.settle, everyone),
         "rise_time": rise,
-        "steady_state_error": worst(sse, everyone),
+        "steady_state_error": worst(jm.sse, everyone),
         "tracking_error": np.where(finite.all(axis=1), np.max(max_err, axis=1), np.nan),
     }
     limits: dict[str, float] = {}
@@ -183,16 +227,31 @@ def margins(records, kind: str, requirements) -> Margins:
     margin: dict[str, np.ndarray] = {}
     for k in names:
         if k == "max_control":
-            u = np.asarray(records.u_command, dtype=float)
-            lim = np.broadcast_to(np.asarray(requirements.max_control, dtype=float), (u.shape[2],))
-            peaks = np.max(np.abs(u), axis=1)  # (B, nu)
-            ok = np.all(np.isfinite(u), axis=(1, 2))
+            peaks = jm.u_peak
+            lim = np.broadcast_to(np.asarray(requirements.max_control, dtype=float), (peaks.shape[1],))
             worst_in = np.argmax(np.nan_to_num(peaks / lim, nan=np.inf), axis=1)
-            achieved[k] = np.where(ok, peaks[np.arange(B), worst_in], np.nan)
-            margin[k] = np.where(ok, lim[worst_in] - achieved[k], np.nan)
+            achieved[k] = np.where(jm.u_ok, peaks[np.arange(B), worst_in], np.nan)
+            margin[k] = np.where(jm.u_ok, lim[worst_in] - achieved[k], np.nan)
             limits[k] = float(np.min(lim))
             continue
         limits[k] = float(getattr(requirements, k))
         achieved[k] = values[k]
         margin[k] = limits[k] - values[k]
     return Margins(names=names, limits=limits, achieved=achieved, margin=margin)
+
+
+def margins(records, kind: str, requirements) -> Margins:
+    """The margin of every requirement in ``requirements`` for every run of ``records`` (module docstring).
+
+    Parameters
+    ----------
+    records : BatchRecords
+        ``time``, ``desired`` and ``tracked`` ``(B, N, n)``, ``u_command`` ``(B, N, nu)``.
+    kind : str
+        ``"step"`` or ``"trajectory"``.
+    requirements : Requirements or None
+        The spec's requirements.
+    """
+    sb = requirements.settling_band if requirements is not None else 0.02
+    control = requirements is not None and requirements.max_control is not None
+    return margins_of(joint_metrics(records, kind, sb, control), kind, requirements)
