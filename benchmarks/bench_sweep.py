@@ -16,7 +16,9 @@ machine under whatever load it carries (stated in the output: the load average b
 (e) peak memory: the resident set of the process engine's run (one process does everything) at N and 2 N,
     showing it is set by the chunk, not by N (the per-sample table, 10 numbers a sample, aside);
 (f) with ``numerics.integrator: rk4``: the batched mapped step against a loop of single runs
-    (``Simulator.run(parameters=...)``), per sample.
+    (``Simulator.run(parameters=...)``), per sample;
+(g) with the default integrator: a batch scored by the compiled kernel (``designkit.sweep.kernel``: the metrics
+    reduced inside the integrator) against the records path (each run's records, then NumPy), CPU per sample.
 
 Every sweep's per-sample table is checked identical across (a), (b), (c) before any figure is reported.
 
@@ -99,6 +101,28 @@ def _dask_run(spec: Path, n: int, workers: int, reference) -> dict:
     return {"wall_s": round(wall, 3), "cpu_s": round(cpu, 3), "startup_s": round(cold, 3)}
 
 
+def _kernel_against_records(spec: Path, b: int = 64, rounds: int = 3) -> dict:
+    """CPU per sample of one batch scored by the compiled kernel (metrics reduced inside the integrator) and by the
+    records path (each run's records, then the NumPy metrics), the same samples, interleaved rounds, best of each."""
+    import dataclasses
+
+    from designkit.sweep.chunk import prepared, run_samples
+
+    prep = prepared(spec.read_text(), str(spec), b)
+    assert prep.kernel is not None, "the default integrator's sweep runs the kernel"
+    slow = dataclasses.replace(prep, kernel=None)
+    vals = prep.space.draw(0, np.arange(b))[0]
+    seeds = np.full(b, -1)
+    best = {"kernel": np.inf, "records": np.inf}
+    for _ in range(rounds):
+        for name, p in (("kernel", prep), ("records", slow)):
+            c0 = time.process_time()
+            run_samples(p, vals, seeds)
+            best[name] = min(best[name], time.process_time() - c0)
+    return {"kernel": round(1e3 * best["kernel"] / b, 3), "records": round(1e3 * best["records"] / b, 3),
+            "records_over_kernel": round(best["records"] / best["kernel"], 2)}
+
+
 def main(n: int = 1000) -> dict:
     from designkit.sweep.api import sweep
     from designkit.sweep.chunk import prepared, run_samples
@@ -115,6 +139,7 @@ def main(n: int = 1000) -> dict:
         two = _dask_run(spec, n, 2, a)
         rss_n = _peak_rss_of_process_run(spec, n // 2)
         rss_2n = _peak_rss_of_process_run(spec, n)
+        kernel = _kernel_against_records(spec)
         rk4 = _spec(folder, rk4=True)
         prep = prepared(rk4.read_text(), str(rk4), 64)
         vals = prep.space.draw(0, np.arange(64))[0]
@@ -150,6 +175,7 @@ def main(n: int = 1000) -> dict:
         "extrapolated": "10^6 samples were not run: the figures are 10^6 times this run's time per sample",
         "peak_rss_mb": {f"process engine, {n // 2} samples": round(rss_n, 1),
                         f"process engine, {n} samples": round(rss_2n, 1)},
+        "default_integrator_cpu_ms_per_sample": kernel,
         "rk4_cpu_ms_per_sample": {"batched (64 mapped)": round(1e3 * c_batch / 64, 2),
                                   "single runs": round(1e3 * c_loop / 16, 2)},
         "rk4_single_over_batched": round((c_loop / 16) / (c_batch / 64), 3),
