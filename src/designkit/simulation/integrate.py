@@ -107,8 +107,18 @@ def variable_step(rhs: ca.Function, s: ca.MX, dt: float, stages: Sequence[ca.MX]
     return ca.if_else(finite, integrator(x0=s, p=ca.vertcat(a0, am, a1, held))["xf"], nan, True)
 
 
+def flat_inputs(inputs: np.ndarray, m: int) -> np.ndarray:
+    """The columns of ``inputs`` ``(nw, N)`` padded to whole chunks of ``m`` steps (the last column repeated; the
+    extra steps are discarded) and laid out step after step, as :func:`run_steps` hands them to ``mapaccum``."""
+    nw, n = inputs.shape
+    n_chunks = -(-n // m)
+    padded = np.concatenate([inputs, np.repeat(inputs[:, -1:], n_chunks * m - n, axis=1)], axis=1)
+    return np.ascontiguousarray(padded.T).ravel()  # column-major: each chunk is contiguous
+
+
 def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: int = 200,
-              accumulated: ca.Function | None = None, failure: dict[str, Any] | None = None) -> np.ndarray:
+              accumulated: ca.Function | None = None, failure: dict[str, Any] | None = None,
+              flat: np.ndarray | None = None) -> np.ndarray:
     """Run ``step: (z, w) -> (z_next, record)`` over the columns of ``inputs``.
 
     ``step.mapaccum(chunk)`` is built once and evaluated chunk after chunk through CasADi's
@@ -130,6 +140,9 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
         Steps per ``mapaccum`` evaluation.
     accumulated : casadi.Function, optional
         A ready ``mapaccum`` of ``step`` (e.g. compiled to C); its number of steps replaces ``chunk``.
+    flat : ndarray, optional
+        ``flat_inputs(inputs, m)`` computed before (a simulator's own inputs, run again), ``m`` the steps per
+        evaluation.
     failure : dict, optional
         When given, a chunk whose evaluation raises (e.g. ``CV_TOO_MUCH_WORK`` from CVODES) is
         re-run step by step; the records from the failing step on are NaN, and ``failure`` receives
@@ -145,9 +158,7 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
     nz, nrec = step.size1_in(0), step.size1_out(1)
     m = accumulated.size2_in(1) if accumulated is not None else max(1, min(chunk, n))
     n_chunks = -(-n // m)
-    # Pad to whole chunks by repeating the last input column; the extra steps are discarded.
-    padded = np.concatenate([inputs, np.repeat(inputs[:, -1:], n_chunks * m - n, axis=1)], axis=1)
-    w_flat = np.ascontiguousarray(padded.T).ravel()  # column-major: each chunk is contiguous
+    w_flat = flat_inputs(inputs, m) if flat is None else flat
     records = np.empty((n_chunks, m * nrec))
     acc = accumulated if accumulated is not None else step.mapaccum(f"{step.name()}_acc", m)
     buf, evaluate = acc.buffer()
@@ -163,7 +174,8 @@ def run_steps(step: ca.Function, z0: np.ndarray, inputs: np.ndarray, *, chunk: i
         except RuntimeError as exc:
             if failure is None:
                 raise
-            k, z = _step_by_step(step, z, padded[:, j * m:(j + 1) * m], records[j].reshape(m, nrec))
+            block = w_flat[j * m * nw:(j + 1) * m * nw].reshape(m, nw).T
+            k, z = _step_by_step(step, z, block, records[j].reshape(m, nrec))
             if k == m:  # every step of the chunk went through on its own
                 continue
             records[j].reshape(m, nrec)[k:] = np.nan

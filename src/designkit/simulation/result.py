@@ -82,7 +82,7 @@ class SimulationResult:
         n_t = np.size(self.time)
         for name in ("time", "reference", "state", "controller_state", "u_command", "u_applied", "perturbation",
                      "measured"):
-            arr = np.array(getattr(self, name), dtype=float)
+            arr = _owned(getattr(self, name))
             if name in ("u_command", "u_applied", "perturbation", "controller_state") and arr.ndim == 1:
                 arr = arr.reshape(n_t, -1)
             if name == "reference" and arr.ndim == 2:
@@ -90,7 +90,7 @@ class SimulationResult:
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         if self.tracked is not None:
-            arr = np.array(self.tracked, dtype=float).reshape(n_t, -1)
+            arr = _owned(self.tracked).reshape(n_t, -1)
             arr.setflags(write=False)
             object.__setattr__(self, "tracked", arr)
         object.__setattr__(self, "settings", freeze(dict(self.settings)))
@@ -147,3 +147,11 @@ class SimulationResult:
     def tracking_error(self) -> np.ndarray:
         """``x1 - xD`` of the first joint (rad), shape ``(N,)``."""
         return self.tracking_errors[:, 0]
+
+
+def _owned(value: Any) -> np.ndarray:
+    """``value`` as a float array the result may keep: a read-only float array is taken as it is (the simulator
+    hands over views of its own records, marked read-only), anything else is copied."""
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and not value.flags.writeable:
+        return value
+    return np.array(value, dtype=float)

@@ -18,15 +18,15 @@ one built simulator runs on any parameter values (``Simulator.run(parameters=...
 an uncertainty box and model-mismatch studies never rebuild the step, and the compiled step is
 shared by every parameter value.
 
-Integrators (``numerics.integrator``): ``dopri5`` (compiled Dormand--Prince 5(4) with error control and
-dense output over the whole grid, :mod:`designkit.simulation.dopri5`), ``rk4`` (classical, fixed step) or
-``cvodes`` (CasADi's variable-step BDF inside every step, for stiff plants).  Without ``numerics.integrator``
-the integrator is chosen from the poles (:func:`~designkit.simulation.timing.resolve`): CVODES with an output
-step set by the non-stiff poles when RK4 would need more steps than the bound, else the pair for a smooth loop
-and RK4 for one held per step, sampled, noisy or on a non-smooth plant (:mod:`designkit.simulation.regime`;
-``settings["integrator_choice"]`` says why).  The output grid is the same whichever integrator runs.  RK4 and
-CVODES steps are rolled by ``Function.mapaccum`` (:func:`~designkit.simulation.integrate.run_steps`): no
-Python loop per step.
+Integrators (``numerics.integrator``): ``dopri5`` (compiled Dormand--Prince 5(4) with error control and dense output
+over the whole grid, :mod:`designkit.simulation.dopri5`), ``rk4`` (classical, fixed step) or ``cvodes`` (CVODES, for
+stiff plants: one call over the whole grid on a smooth loop, :mod:`designkit.simulation.cvodes_grid`, else a BDF
+inside every step).  Without ``numerics.integrator`` the integrator is chosen from the poles
+(:func:`~designkit.simulation.timing.resolve`): CVODES with an output step set by the non-stiff poles when RK4 would
+need more steps than the bound, else the pair for a smooth loop and RK4 for one held per step, sampled, noisy or on
+a non-smooth plant (:mod:`designkit.simulation.regime`; ``settings["integrator_choice"]`` says why).  The output
+grid is the same whichever integrator runs.  RK4 and per-step CVODES steps are rolled by ``Function.mapaccum``
+(:func:`~designkit.simulation.integrate.run_steps`): no Python loop per step.
 A discontinuous law is held over each step (:mod:`designkit.simulation.step`), so CVODES integrates
 a smooth right-hand side inside each step and never meets the switch.
 
@@ -54,11 +54,12 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
+from designkit.simulation.cvodes_grid import IGNORED_METHOD, cvodes_for
 from designkit.simulation.dopri5 import ATOL as DOPRI5_ATOL
 from designkit.simulation.dopri5 import FLAGS as DOPRI5_FLAGS
 from designkit.simulation.dopri5 import RTOL as DOPRI5_RTOL
 from designkit.simulation.dopri5 import build_dopri5
-from designkit.simulation.integrate import run_steps
+from designkit.simulation.integrate import flat_inputs, run_steps
 from designkit.simulation.nonlinear import element_for
 from designkit.simulation.reference import Reference, reference_of
 from designkit.simulation.regime import regime_of
@@ -73,7 +74,12 @@ from designkit.synthesis.law import Law
 __all__ = ["COMPILE_BREAK_EVEN", "Simulator", "build", "simulate"]
 
 CHUNK = 200
-"""Steps per ``mapaccum`` evaluation (see :func:`~designkit.simulation.integrate.run_steps`)."""
+"""Steps per ``mapaccum`` evaluation of the interpreted step (see :func:`~designkit.simulation.integrate.run_steps`:
+building an interpreted ``mapaccum`` costs more the more steps it rolls)."""
+COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS = 2000, 1 << 18
+"""Steps per evaluation of the compiled step: at most ``COMPILED_CHUNK``, and at most ``COMPILED_CHUNK_NUMBERS``
+numbers of state and record per call (a long delay line makes the state large); compiling costs the same for any
+number of steps (CasADi writes the roll as a loop), and fewer calls cost less from Python."""
 COMPILE_BREAK_EVEN = 0.25
 """Compile (``numerics.compile: auto``) when the interpreted run is estimated above this (s): about what
 compiling the rolled two-link step costs with ``cc -O1`` (0.21-0.25 s measured, ``benchmarks/bench_simnog.py``)."""
@@ -181,6 +187,8 @@ class Simulator:
     motion: Any = None
     change: Any = None
     dopri5: Any = None
+    cvodes: Any = None
+    _flat: dict = field(default_factory=dict, repr=False)
 
     @property
     def n_inputs(self) -> int:
@@ -224,8 +232,17 @@ class Simulator:
                     f"{RK4_WORDS}: the Dormand-Prince pair stopped at t = {t_stop:.6g} s (its step fell below 1e-14 s "
                     "or its step budget ran out: a diverging or stiff loop), so the run was integrated again by RK4 "
                     "on the output grid")})
+        elif self.cvodes is not None:  # a smooth loop on CVODES: one call over the whole grid
+            rec = self.cvodes.run(self.z0, inputs, failure)
+            settings = freeze({**settings, "integrator_work": self.cvodes.work_words(self.time.size - 1)})
         else:
-            rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure)
+            m = self.accumulated.size2_in(1) if self.accumulated is not None else max(1, min(CHUNK, inputs.shape[1]))
+            flat = None
+            if inputs is self.inputs:  # run again on its own inputs: laid out once
+                kept = self._flat.get(m)
+                flat = kept if kept is not None else self._flat.setdefault(m, flat_inputs(inputs, m))
+            rec = run_steps(self.step, self.z0, inputs, chunk=CHUNK, accumulated=self.accumulated, failure=failure,
+                            flat=flat)
         if parameters:
             settings = freeze({**settings, "plant": {q.name: q.value for q in plant.parameters}})
         if failure:
@@ -234,6 +251,7 @@ class Simulator:
                 f"the integrator stopped at t = {t_fail:.6g} s ({failure['error']}): the loop diverged or is too "
                 "stiff for the step; the records are NaN from there")})
         p, law = plant, self.law
+        rec.setflags(write=False)  # the result keeps views of the records instead of copies
         cuts = np.cumsum([0, *layout(p, law, _NoElement, 0).record_sizes])
         x, xc, u_c, u_a, y, d, sig = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
         tracked: dict[str, Any] = {}
@@ -267,7 +285,8 @@ def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tup
     if mode == "auto" and estimate < CACHE_LOOKUP_FLOOR:
         return None, {**info, "compiled": False,
                       "why": f"interpreted run estimated at {estimate:.3g} s: nothing to gain"}
-    acc = step.mapaccum(f"{step.name()}_acc", CHUNK)
+    m = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
+    acc = step.mapaccum(f"{step.name()}_acc", m)
     cached = cached_library(acc, flags=COMPILE_FLAGS) is not None
     if mode == "auto" and not cached and estimate < COMPILE_BREAK_EVEN and runs <= 1:
         return None, {**info, "compiled": False,
@@ -406,7 +425,10 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy,
                            plant=true_plant, probe=_probe(true_plant, law, element, z0, inputs))
     dopri5, integrator, choice = _pair(spec, timing, regime, true_plant, law, element)
-    if dopri5 is None:
+    cvodes = cvodes_for(spec.numerics, timing, regime, rates, true_plant, law, element, t)  # None unless it applies
+    if cvodes is not None:
+        integrator, accumulated, compile_info = cvodes.settings_words, None, cvodes.compile_info
+    elif dopri5 is None:
         accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
     else:
         accumulated = None
@@ -422,6 +444,8 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     else:  # a servo follows simulation.trajectory when given (a square wave, a PRBS), else simulation.step
         ignored = (["simulation.step (the reference is simulation.trajectory)"]
                    if sim.trajectory is not None and "step" in sim.model_fields_set else [])
+    if "cvodes_method" in spec.numerics.model_fields_set and cvodes is None:
+        ignored.append(IGNORED_METHOD)
     evaluation = ("chain inside every integration step" if not held_per_step and timing.steps_per_sample == 0
                   else "controller output, nonlinear element and delay once per step, held over the step")
     if law.discontinuous and timing.steps_per_sample == 0:
@@ -448,9 +472,12 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         "start": _start_words(law, rest),
         "ignored": ignored,
     }
-    return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=ref.evaluate(t), kind=kind,
+    reference = ref.evaluate(t)
+    for arr in (t, reference):  # shared by every run's result, never written
+        arr.setflags(write=False)
+    return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=reference, kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5)
+                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes)
 
 
 def _probe(plant: Any, law: Law, element: Any, z0: np.ndarray, inputs: np.ndarray) -> tuple[Any, np.ndarray]:

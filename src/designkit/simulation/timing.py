@@ -13,9 +13,12 @@ Defaults:
   step); extended to ``perturbation.time + settle + delay`` when later;
 * ``dt``: ``min(DT_FACTOR / rate, duration / MIN_SAMPLES)`` rounded down to a "round" value
   ``{1, 2, 2.5, 5} x 10^k`` (so that round event times fall on the grid), then the largest step
-  not above it dividing the sampling period and the delay into whole numbers of steps.  ``rate``
+  not above it dividing the sampling period and the delay into whole numbers of steps.  A switching
+  law held over each step whose own largest step sets the rate (``Law.max_step``: the step *is* its
+  sampling, and each step costs its evaluation) is not rounded: its step is the largest not above
+  ``max_step`` that puts the scenario's events on the grid (:func:`_switching_dt`).  ``rate``
   is ``|p|max`` for RK4; for CVODES it leaves out the *stiff* poles (``|p| > STIFF_RATIO |p|med``),
-  which the BDF integrates inside each output step;
+  which CVODES' BDF integrates with steps of its own;
 * integrator (``numerics.integrator`` not given): RK4 unless its grid would need more than
   :data:`MAX_STEPS` steps (or a user ``dt`` is too coarse for it) because of stiff poles; then
   CVODES, whose output step follows the other poles and the reference;
@@ -191,6 +194,30 @@ def _rational_gcd(values: list[float]) -> float | None:
     return math.gcd(*(f.numerator * (den // f.denominator) for f in fracs)) / den
 
 
+def _event_times(spec: Any) -> list[float]:
+    """Instants a held law's grid should land on (s): a user duration, the perturbation's and the plant change's
+    onsets, a square wave's half period and a PRBS's bit."""
+    sim = spec.simulation
+    out = [float(sim.duration)] if sim.duration is not None else []
+    for section in (sim.perturbation, sim.plant_change):
+        if section is not None and float(section.time) > 0:
+            out.append(float(section.time))
+    traj = sim.trajectory
+    kind = getattr(traj, "kind", None)
+    if kind == "square":
+        out.append(0.5 * float(traj.period))
+    elif kind == "prbs":
+        out.append(float(traj.bit))
+    return out
+
+
+def _switching_dt(limit: float, events: list[float]) -> float:
+    """The largest step not above ``limit`` (s) that divides every event instant into whole steps (their rational
+    greatest common divisor ``e``, then ``e / ceil(e / limit)``), or ``limit`` itself when there is no event."""
+    e = _rational_gcd(events)
+    return limit if e is None else e / math.ceil(e / limit - ROUNDING)
+
+
 def _default_dt(rate: float, duration: float, g: float | None) -> float:
     """Default step (s) for the fastest resolved ``rate`` (1/s): see the module docstring."""
     target = _nice_floor(min(DT_FACTOR / rate, duration / MIN_SAMPLES))
@@ -233,8 +260,9 @@ def _choose_integrator(spec: Any, rates: Rates, stiff: tuple[float, ...], durati
         need = f"would need {_count(steps)} RK4 steps of {rk4_dt:.3g} s over {duration:.4g} s (more than {MAX_STEPS})"
     return "cvodes", (f"chosen: cvodes because the fastest pole |p| = {rates.fast:.4g} 1/s {need}; stiff poles "
                       f"(|p| > {STIFF_RATIO:g} |p|med = {STIFF_RATIO * rates.median:.4g} 1/s: "
-                      f"{', '.join(f'{r:.4g}' for r in stiff)} 1/s) are integrated by the BDF inside each output "
-                      f"step, which follows the other poles and the reference (|p| <= {rates.resolved():.4g} 1/s)")
+                      f"{', '.join(f'{r:.4g}' for r in stiff)} 1/s) are integrated by CVODES' BDF with steps of its "
+                      f"own, and the output step follows the other poles and the reference "
+                      f"(|p| <= {rates.resolved():.4g} 1/s)")
 
 
 def _bound_error(spec: Any, duration: float, dt: float, steps: float, *, integrator: str, stiff_hint: bool,
@@ -338,6 +366,15 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
         if law_rate and rate == law_rate and law_rate > rates.fast:
             dt_source += (f", set by the control law's largest step {max_dt:.3g} s (|p| = {DT_FACTOR:g}/max step): "
                           f"{max_dt_reason}")
+            if held_per_step and not any(v > 0 for v in periods.values()):
+                # a switching law held over each step: the step is its sampling, so take the step it can have (its
+                # largest step, down only to put the scenario's events on the grid) rather than a round value
+                dt = _switching_dt(min(max_dt, duration / MIN_SAMPLES), _event_times(spec))
+                dt_source = (f"default for a law held over each step: its largest step {max_dt:.3g} s "
+                             f"({max_dt_reason}), reduced to the largest step not above it (and not above "
+                             f"duration/{MIN_SAMPLES}) that puts the scenario's events (a set duration, the "
+                             "perturbation's and plant change's onsets, a square wave's half period, a PRBS bit) "
+                             "on the grid")
     else:
         dt, dt_source = float(sim.dt), "simulation.dt"
         if dt * rate > MAX_DT_RATE:
