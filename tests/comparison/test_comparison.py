@@ -159,3 +159,22 @@ def test_step_metrics_against_numpy():
         assert row["settling_time"] == pytest.approx(t[outside[-1] + 1], abs=1e-12)
         assert row["rms_error_after"] is None and row["reconvergence"] is None  # no plant change
     assert result.table.value("fast", "settling_time") < result.table.value("slow", "settling_time")
+
+
+def test_metric_words_follow_the_scenario():
+    """Without a plant change "before the change" is the whole run, and without a periodic reference the last
+    window is the last quarter of the run, named with its length; with both, the words are the definitions'."""
+    from types import SimpleNamespace
+
+    from designkit.comparison.table import METRICS, _worded
+
+    step = parse_spec("name: s\nplant: {kind: link, Km: 2.0, tau: 0.5}\ncontroller: {kind: pid_servo, poles: "
+                      "[-4, -5, -20]}\nsimulation: {duration: 4.0, perturbation: {value: 0.5, time: 2.0}}\n").spec
+    run_ = [SimpleNamespace(loaded=SimpleNamespace(spec=step), simulation=SimpleNamespace(time=np.linspace(0, 4, 9)))]
+    words = {m.key: _worded(m, run_) for m in METRICS}
+    assert words["rms_error_before"].label == "RMS tracking error over the run"
+    assert words["max_error_before"].meaning == "largest |xD − x| over the whole run"
+    assert words["rms_error_final"].label == "RMS tracking error over the last 1 s"
+    square = load_spec(EXAMPLE).spec  # a square wave of period 4 s and a plant change at 20 s
+    run_ = [SimpleNamespace(loaded=SimpleNamespace(spec=square), simulation=SimpleNamespace(time=np.arange(41.0)))]
+    assert [_worded(m, run_) for m in METRICS] == list(METRICS)

@@ -203,6 +203,31 @@ def _units(results: Sequence[Any]) -> tuple[str, str]:
     return one(errors, "rad"), one(commands, "")
 
 
+def _worded(metric: Metric, results: Sequence[Any]) -> Metric:
+    """``metric`` with its words for the comparison's scenario: without a plant change "before the change" is the
+    whole run, and without a periodic reference the last window is the last quarter of the run
+    (:func:`~designkit.comparison.metrics.window_length`)."""
+    import dataclasses
+
+    from designkit.comparison.metrics import window_length
+
+    spec = next((r.loaded.spec for r in results if r.simulation is not None), None)
+    if spec is None:
+        return metric
+    label, meaning = metric.label, metric.meaning
+    if spec.simulation.plant_change is None and metric.key in ("rms_error_before", "max_error_before"):
+        label = label.replace("before the change", "over the run")
+        for words in (" over the run before the plant change (the whole run without one)",
+                      " before the plant change (the whole run without one)"):
+            meaning = meaning.replace(words, " over the whole run")
+    if metric.key == "rms_error_final" and getattr(spec.simulation.trajectory, "period", None) is None:
+        t = next(r.simulation.time for r in results if r.simulation is not None)
+        window = fmt_number(window_length(spec, t), 3)
+        label = f"RMS tracking error over the last {window} s"
+        meaning = f"root mean square of |xD − x| over the last quarter of the run ({window} s)"
+    return dataclasses.replace(metric, label=label, meaning=meaning)
+
+
 def baselines(results: Sequence[Any]) -> tuple[Any, ...]:
     """Each run's re-run on the unchanged plant (:func:`~designkit.comparison.metrics.baseline_simulation`; None
     without a plant change, without a simulation, or for a design run in trials)."""
@@ -237,6 +262,6 @@ def comparison_table(labels: Sequence[str], results: Sequence[Any],
                        for c in res.checks)
         rows.append(ControllerRow(label, res.design.kind, family(res.design.kind).display.label,
                                   bool(res.verified), values, checks))
-    used = tuple(m for m in METRICS if any(r.values.get(m.key) is not None for r in rows))
+    used = tuple(_worded(m, results) for m in METRICS if any(r.values.get(m.key) is not None for r in rows))
     error_unit, command_unit = _units(results)
     return ComparisonTable(used, tuple(rows), error_unit, command_unit)
