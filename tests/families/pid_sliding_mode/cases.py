@@ -34,8 +34,8 @@ CONFORMANCE = {
     # ROBEL's elastic joint (families/pid_sliding_mode/elastic.py): the sliding variable on the motor
     "elastic_joint": ("{kind: pid_sliding_mode, poles: [-3, -4, -12]}", "{duration: 3.0}",
                       "{overshoot: 15, settling_time: 2.5, steady_state_error: 0.01}"),
-    # the hierarchy of control (robot.py) needs velocity and acceleration limits and takes no parameter box, so the
-    # robots' cases carry their own plant (the canonical arm with limits, as specs/hierarchy-*.yaml)
+    # the hierarchy of control (robot.py) needs velocity and acceleration limits, which the canonical arms do not
+    # carry, so the robots' cases carry their own plant (the canonical arm with limits, as specs/hierarchy-*.yaml)
     "two_link": ("{kind: pid_sliding_mode, poles: [-4, -5, -20], workspace: {low: [-0.2, -0.8], high: [0.8, 0.3]},"
                  " epsilon: 0.002}",
                  "{duration: 2.0, step: [0.5, -0.3]}", None,
@@ -56,5 +56,7 @@ EXAMPLES = {
     "hierarchy-simnog": 0,  # the hierarchy of control on the SIMNOG arm (robot.py)
     "hierarchy-puma560": 0,  # ... on the PUMA 560, six joints
     "hierarchy-simnog-small-M": 1,  # M below the proven sup|xi_i|: the certificate says by how much
+    "hierarchy-simnog-payload": 0,  # ... over a box of link 2's mass, the load picked up during the run
+    "hierarchy-puma560-payload": 0,  # ... the PUMA 560 with up to its rated 2.5 kg payload
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -235,7 +235,9 @@ def test_a_run_beyond_the_velocity_limit_exceeds_the_bound():
     ({"controller.M": -1.0}, None, "controller.M"),
     ({"controller.workspace": {"low": [0.5, -0.8], "high": [0.2, 0.3]}}, None, "controller.workspace.high[0]"),
     ({"plant.limits.velocity": [1.0, 1.0, 1.0]}, None, "plant.limits.velocity"),
-    ({"plant.uncertainty": {"m2": [2.0, 4.0]}}, None, "plant.uncertainty"),
+    ({"plant.uncertainty": {"m2": [-1.0, 4.0]}}, None, "plant.uncertainty.m2"),  # a negative mass
+    ({"plant.uncertainty": {"m2": [4.0, 2.0]}}, None, "plant.uncertainty"),
+    ({"plant.uncertainty": {"m7": [1.0, 2.0]}}, None, "plant.uncertainty.m7"),  # no such parameter
     ({"controller.work_limit": 0}, None, "controller.work_limit"),
     ({"controller.perturbation_bound": 0.5}, None, "controller.perturbation_bound"),
     ({"simulation.perturbation": {"value": 0.5, "time": 1.0}}, None, "simulation.perturbation"),

@@ -3,24 +3,26 @@
 Joint ``i`` is designed as the one-link controller (package docstring) on its simplified link
 ``D^_i q_i'' + f_i q_i' = u_i - g^_i(q) + xi_i`` (``Km_i = 1/f_i``, ``tau_i = D^_i/f_i``, ``f_i`` the joint's viscous
 friction, ``D^_i`` the middle of ``D_ii``'s sampled range over the workspace), with the gravity feed-forward
-``g^_i(q)`` of the model (``gravity_feedforward: measured``) or none.  Everything else is the perturbation::
+``g^_i(q)`` of the model (``gravity_feedforward: measured``) or none -- all three of the *nominal* parameters
+``p0`` (the spec's values).  The true arm's parameters ``p`` lie anywhere in the box ``plant.uncertainty`` (``p0``
+without one).  Everything else is the perturbation::
 
-    -xi_i = (D_ii(q) - D^_i) q_i'' + sum_(j != i) D_ij(q) q_j'' + sum_(j,k) Gamma_ijk(q) q_j' q_k'
-            + [g_i(q) without feed-forward] + Fc_i sign(q_i')
+    -xi_i = (D_ii(q, p) - D^_i) q_i'' + sum_(j != i) D_ij(q, p) q_j'' + sum_(j,k) Gamma_ijk(q, p) q_j' q_k'
+            + (g_i(q, p) - [g_i(q, p0) with the feed-forward]) + (Fv_i(p) - f_i) q_i' + Fc_i(p) sign(q_i')
 
 (the robot's ``M(q) q'' + C(q, q') q' + g(q) + Fv q' + Fc sign(q') = u``, minus the simplified model), and
 ``slm_i' = p3 slm_i + (a2/D^_i)(du_i + xi_i)`` holds *exactly* on the arm, so ``M_i > sup|xi_i|`` makes
 ``slm_i slm_i' < 0`` off ``slm_i = 0``.
 
 **The hierarchy of control.**  ``sup|xi_i|`` is proven (:func:`designkit.models.bounds.perturbation_enclosure`)
-over the workspace box ``controller.workspace``, the velocity limits ``|q_j'| <= plant.limits.velocity[j]`` and an
-acceleration box of joint ``i``'s own: designing from the last link to the first, the links after ``i`` are
-assumed in sliding mode, so their accelerations are those of their sliding motion (the reference through
-``1/(1 + a1 s + a2 s^2)``, or the trajectory itself when tracking), at most its largest value over the run's
-reference and at most the acceleration limit; joint ``i`` and the links before it are bounded by
-``plant.limits.acceleration``.  ``M_i = (1 + margin) sup|xi_i|`` (the proven bound) unless ``M`` is given (the
-same for every joint).  Whether the run stays in each joint's box, and the ``|xi_i(t)|`` it meets, are measured
-(:mod:`~designkit.families.pid_sliding_mode.robot_checks`).
+over the workspace box ``controller.workspace``, the parameter box ``plant.uncertainty``, the velocity limits
+``|q_j'| <= plant.limits.velocity[j]`` and an acceleration box of joint ``i``'s own: designing from the last link
+to the first, the links after ``i`` are assumed in sliding mode, so their accelerations are those of their sliding
+motion (the reference through ``1/(1 + a1 s + a2 s^2)``, or the trajectory itself when tracking), at most its
+largest value over the run's reference and at most the acceleration limit; joint ``i`` and the links before it are
+bounded by ``plant.limits.acceleration``.  ``M_i = (1 + margin) sup|xi_i|`` (the proven bound) unless ``M`` is
+given (the same for every joint).  Whether the run stays in each joint's box, and the ``|xi_i(t)|`` it meets, are
+measured (:mod:`~designkit.families.pid_sliding_mode.robot_checks`) on the true arm: the run's plant.
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.law import Law, State, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
-__all__ = ["ROBOT_EXTRA", "law", "motion_box", "sliding_acceleration", "synthesize"]
+__all__ = ["ROBOT_EXTRA", "law", "motion_box", "parameter_box", "sliding_acceleration", "synthesize"]
 
 ROBOT_EXTRA = "pid_sm_robot"
 """The key of the robot design's data in ``Design.extra``."""
@@ -105,14 +107,36 @@ def _grid(sim: Any, ref: Any, poles: Any) -> np.ndarray:
 
 
 def _coulomb(plant: Any) -> np.ndarray:
-    from designkit.models.chain import numeric_value
-
+    """Each joint's Coulomb friction (N*m) at the nominal parameters."""
     if not plant.robot.friction:
         return np.zeros(plant.n_joints)
-    values = [numeric_value(link.coulomb) for link in plant.robot.description.links]
-    if any(v is None for v in values):
-        raise SpecError("plant", "a joint's Coulomb friction is symbolic: the hierarchy needs its value")
-    return np.abs(np.array(values, dtype=float))
+    robot = plant.robot
+    syms = ca.vertcat(*[s for _, s in robot.description.symbols])
+    values = ca.vertcat(*[ca.SX(link.coulomb) for link in robot.description.links])
+    f = ca.Function("coulomb", [syms], [values])
+    p = plant.model_parameters()
+    return np.abs(np.array(f(p if p is not None else ca.DM(0, 1)), dtype=float).reshape(-1))
+
+
+def parameter_box(spec: Any, plant: Any) -> tuple[tuple[np.ndarray, np.ndarray] | None, list[dict]]:
+    """The box of the true arm's parameters from ``plant.uncertainty`` (the others at their nominal values), and
+    one row per uncertain parameter: ``name``, ``low``, ``high``, ``nominal``, ``unit``, ``meaning``.  ``(None,
+    [])`` without an uncertainty.  The loader has checked the names and each end (a mass below zero is refused at
+    ``plant.uncertainty.<name>``)."""
+    unc = spec.plant.uncertainty
+    if unc is None:
+        return None, []
+    p0 = np.array(plant.model_parameters(), dtype=float)
+    lo, hi = p0.copy(), p0.copy()
+    names = plant.parameter_names
+    rows = []
+    for name, (a, b) in unc.intervals.items():
+        k = names.index(name)
+        lo[k], hi[k] = a, b
+        par = plant.parameter(name)
+        rows.append({"name": name, "index": k, "low": float(a), "high": float(b), "nominal": float(p0[k]),
+                     "unit": par.unit, "meaning": par.meaning})
+    return (lo, hi), rows
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
@@ -122,13 +146,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
 
     ctl, sim = spec.controller, spec.simulation
     n, robot, p = plant.n_joints, plant.robot, plant.model_parameters()
-    if spec.plant.uncertainty is not None:
-        raise SpecError("plant.uncertainty", "pid_sliding_mode on a robot bounds xi for the arm's own model over "
-                        "the workspace; a parameter box is not supported there yet")
-    for key in ("perturbation", "plant_change", "nonlinearity", "delay"):
+    for key in ("perturbation", "nonlinearity", "delay"):
         if getattr(sim, key, None):
             raise SpecError(f"simulation.{key}", "not supported by pid_sliding_mode on a robot yet: the run's xi is "
-                            "computed from the commanded torques on the model the bound covers")
+                            "computed from the commanded torques on the arm the bound covers")
     if ctl.perturbation_bound is not None:
         raise SpecError("controller.perturbation_bound", "on a robot xi is bounded from the model over the "
                         "workspace box (the hierarchy of control); an external bound is not supported there yet")
@@ -167,9 +188,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
         rows[i, i + 1:] = np.minimum(A[i + 1:], ahat[i + 1:])
     gravity = ctl.gravity_feedforward == "none"
     Fc = _coulomb(plant)
+    p_box, box_rows = parameter_box(spec, plant)
     enc = perturbation_enclosure(
         robot, q=(lo, hi), qd_limit=V, qdd_limits=rows, inertia=[lk.inertia for lk in links],
-        damping=[lk.damping for lk in links], coulomb=Fc, gravity=gravity, p=p,
+        damping=[lk.damping for lk in links], coulomb=Fc, gravity=gravity, p=p, p_box=p_box,
         rel_tol=float(ctl.workspace.tolerance), max_boxes=int(ctl.work_limit), samples=SAMPLES)
     upper = np.array(enc.upper)
     m = float(ctl.margin)
@@ -211,14 +233,18 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "bound": list(enc.upper), "sampled": list(enc.sampled), "argmax": list(enc.argmax),
         "terms": list(enc.terms), "boxes": enc.boxes, "converged": list(enc.converged), "seconds": enc.seconds,
         "tolerance": enc.rel_tol, "work_limit": enc.max_boxes,
-        "workspace": box, "acceleration_rows": rows.tolist(), "sliding_acceleration": ahat.tolist(),
+        "workspace": box, "parameter_box": box_rows,
+        "acceleration_rows": rows.tolist(), "sliding_acceleration": ahat.tolist(),
         "coulomb": Fc.tolist(), "q0": starts.tolist(), "e_max": e_max.tolist(),
         "epsilon": eps, "layer": ctl.layer, "band_certified": None if certified is None else list(certified),
         "strip": strip.tolist(), "sdot_max": sdot.tolist(), "sliding_gain": g.tolist(), "max_step": h,
         "discontinuous": discontinuous, "l1": l1,
     }}
     formulas = (
-        "−ξ_i = (D_ii(q) − D̂_i) q̈_i + Σ_{j≠i} D_ij(q) q̈_j + Σ_jk Γ_ijk(q) q̇_j q̇_k + [g_i(q)] + Fc_i sign(q̇_i)",
+        "−ξ_i = (D_ii(q) − D̂_i) q̈_i + Σ_{j≠i} D_ij(q) q̈_j + Σ_jk Γ_ijk(q) q̇_j q̇_k + [g_i(q)] + Fc_i sign(q̇_i)"
+        if not box_rows else
+        "−ξ_i = (D_ii(q, p) − D̂_i) q̈_i + Σ_{j≠i} D_ij(q, p) q̈_j + Σ_jk Γ_ijk(q, p) q̇_j q̇_k + (g_i(q, p) − ĝ_i(q)) "
+        "+ (f_i(p) − f_i) q̇_i + Fc_i(p) sign(q̇_i), p anywhere in the parameter box (ĝ_i = 0 without feed-forward)",
         "slm_i' = p3 slm_i + (a2/D̂_i)(Δu_i + ξ_i) on the arm; M_i = (1 + margin) × proven sup|ξ_i|",
         "hierarchy: joint i's box takes the later joints' accelerations from their sliding motion",
         f"integration step h = {h:.4g} s",
@@ -227,7 +253,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
                zeros=(complex(sf.p3),) if form == "servo" else (), reference=ref_kind, formulas=formulas,
                notes=tuple(notes), extra=extra)
     reason = ("the law switches on slm_i = 0 (the relays M_i sign(slm_i)): no linearization describes the loop; "
-              "the relay amplitudes are certified over the workspace, velocity and acceleration box instead")
+              "the relay amplitudes are certified over the workspace, velocity and acceleration box"
+              + (" and the parameter box" if box_rows else "") + " instead")
     return with_law(d, law(d), Linearization("none", reason=reason))
 
 

@@ -27,7 +27,8 @@ from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
-__all__ = ["CERTIFICATE_RULE", "RECHECK", "RUN_RULE", "recheck", "run_perturbation", "xi_at"]
+__all__ = ["CERTIFICATE_RULE", "RECHECK", "RUN_RULE", "box_words", "in_parameter_box", "parameter_values", "recheck",
+           "run_parameters", "run_perturbation", "xi_at"]
 
 RECHECK = 4000
 """Random points per joint of the NumPy re-check of the proven bound."""
@@ -41,12 +42,17 @@ def _vec(values: Any, fmt: str = "{:.3g}") -> str:
     return "(" + ", ".join(fmt.format(float(v)) for v in values) + ")"
 
 
-def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+          P: np.ndarray | None = None) -> np.ndarray:
     """``xi`` (N*m, shape (N, n)) at the points ``(q, qd, qdd)`` by Newton--Euler: ``D^_i q_i'' + f_i q_i' - (tau_i
-    - g^_i)`` with ``tau`` the inverse dynamics (friction included) and ``g^`` the fed-forward gravity (or 0)."""
+    - g^_i)`` with ``tau`` the inverse dynamics (friction included) of the arm with the parameters ``P`` of each
+    point (N, n_p; None: the design's nominal ones) and ``g^`` the fed-forward gravity of the nominal parameters
+    (or 0)."""
+    from designkit.models.perturbation import evaluate_rows
+
     robot, p = plant.robot, plant.model_parameters()
     q, qd, qdd = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd))
-    tau = robot.inverse_dynamics(q, qd, qdd, p=p).reshape(q.shape)
+    tau = evaluate_rows(robot, "inverse_dynamics", [q, qd, qdd], P, p).reshape(q.shape)
     if info["gravity_feedforward"] == "measured":
         tau = tau - robot.gravity_torque(q, p=p).reshape(q.shape)
     Dh = np.array([lk["inertia"] for lk in info["links"]])
@@ -54,13 +60,20 @@ def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
     return Dh * qdd + f * qd - tau
 
 
+def parameter_values(info: dict, p: Any) -> dict[str, float]:
+    """The uncertain parameters' values (SI units) in a whole parameter vector ``p``, by name."""
+    return {row["name"]: float(p[row["index"]]) for row in info.get("parameter_box", [])}
+
+
 def recheck(plant: Any, info: dict, points: int = RECHECK, seed: int = 1) -> tuple[np.ndarray, list[dict]]:
-    """Per joint the largest ``|xi_i|`` at ``points`` random points of its box (half of them on the velocity and
-    acceleration vertices), and where: a NumPy re-check of the proven bound."""
+    """Per joint the largest ``|xi_i|`` at ``points`` random points of its box (half of them on the velocity,
+    acceleration and parameter vertices; the parameters drawn from ``plant.uncertainty``'s box), and where: a NumPy
+    re-check of the proven bound."""
     ws = info["workspace"]
     lo, hi = np.array(ws["low"]), np.array(ws["high"])
     V = np.array(ws["velocity"])
     rows = np.array(info["acceleration_rows"])
+    box = info.get("parameter_box", [])
     n = lo.size
     rng = np.random.default_rng(seed)
     best, where = np.zeros(n), []
@@ -71,11 +84,40 @@ def recheck(plant: Any, info: dict, points: int = RECHECK, seed: int = 1) -> tup
         half = points // 2
         qd[:half] = V * np.sign(qd[:half])
         qdd[:half] = rows[i] * np.sign(qdd[:half])
-        xi = np.abs(xi_at(plant, info, q, qd, qdd)[:, i])
+        P = None
+        if box:
+            P = np.tile(np.asarray(plant.model_parameters(), dtype=float), (points, 1))
+            u = rng.random((points, len(box)))
+            u[:half] = np.round(u[:half])
+            for r, row in enumerate(box):
+                P[:, row["index"]] = row["low"] + (row["high"] - row["low"]) * u[:, r]
+        xi = np.abs(xi_at(plant, info, q, qd, qdd, P)[:, i])
         k = int(np.argmax(xi))
         best[i] = xi[k]
-        where.append({"q": q[k].tolist(), "qd": qd[k].tolist(), "qdd": qdd[k].tolist()})
+        at = {"q": q[k].tolist(), "qd": qd[k].tolist(), "qdd": qdd[k].tolist()}
+        if P is not None:
+            at["p"] = P[k].tolist()
+        where.append(at)
     return best, where
+
+
+def _at(info: dict, at: dict) -> str:
+    """Where a value is attained, in words and units."""
+    s = f"q = {_vec(at['q'])} rad, q̇ = {_vec(at['qd'])} rad/s, q̈ = {_vec(at['qdd'])} rad/s²"
+    units = {row["name"]: row["unit"] for row in info.get("parameter_box", [])}
+    if "p" in at:
+        s += "".join(f", {k} = {v:.4g} {units[k]}" for k, v in parameter_values(info, at["p"]).items())
+    return s
+
+
+def box_words(info: dict) -> str:
+    """The parameter box in words (empty without one)."""
+    box = info.get("parameter_box", [])
+    if not box:
+        return ""
+    return ("the true arm's parameters anywhere in " + ", ".join(
+        f"{r['name']} ∈ [{r['low']:.4g}, {r['high']:.4g}] {r['unit']} ({r['meaning']}; nominal {r['nominal']:.4g})"
+        for r in box) + ", the controller designed on the nominal values")
 
 
 def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
@@ -89,9 +131,8 @@ def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
     for i in range(M.size):
         at = info["argmax"][i]
         s = (f"joint {i + 1}: M = {M[i]:.4g} N·m against the proven sup|ξ| = {bound[i]:.4g} N·m (attained "
-             f"{sampled[i]:.4g} N·m at q = {_vec(at['q'])} rad, q̇ = {_vec(at['qd'])} rad/s, q̈ = "
-             f"{_vec(at['qdd'])} rad/s²; re-check by Newton–Euler at {RECHECK} random points: largest "
-             f"{re[i]:.4g} N·m)")
+             f"{sampled[i]:.4g} N·m at {_at(info, at)}; re-check by Newton–Euler at {RECHECK} random points: "
+             f"largest {re[i]:.4g} N·m)")
         if not dominates[i]:
             s += (f" — M is below the bound by {bound[i] - M[i]:.4g} N·m ({100 * (bound[i] - M[i]) / bound[i]:.3g} %)"
                   + (", and below the attained value: the relay certainly does not dominate ξ there"
@@ -101,13 +142,17 @@ def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
         if not covered[i]:
             s += f" — the re-check found {re[i]:.4g} N·m above the proven bound: the enclosure is wrong"
         parts.append(s)
-    work = (f"{info['boxes']} configuration boxes in {info['seconds']:.3g} s (tolerance {info['tolerance']:g}, work "
+    over = box_words(info)
+    work = (("over " + over + "; " if over else "")
+            + f"{info['boxes']} {'boxes of configurations and parameters' if over else 'configuration boxes'} in "
+            f"{info['seconds']:.3g} s (tolerance {info['tolerance']:g}, work "
             f"limit {info['work_limit']} boxes per joint; converged: "
             + ", ".join("yes" if c else "no" for c in info["converged"]) + ")")
     cert = {"M": info["M"], "bound": info["bound"], "sampled": info["sampled"], "argmax": info["argmax"],
             "terms": info["terms"], "recheck_max": re.tolist(), "recheck_at": re_at, "recheck_points": RECHECK,
             "boxes": info["boxes"], "seconds": info["seconds"], "converged": info["converged"],
-            "acceleration_rows": info["acceleration_rows"], "workspace": info["workspace"]}
+            "acceleration_rows": info["acceleration_rows"], "workspace": info["workspace"],
+            "parameter_box": info.get("parameter_box", [])}
     return (Check(HIERARCHY, ok, "M_i > proven sup|ξ_i| over joint i's box, every joint", float(np.min(M - bound)),
                   float(np.min(M - bound)), "N*m", "; ".join(parts) + ". Bound: " + work + ".", cert),)
 
@@ -121,18 +166,38 @@ CERTIFICATE_RULE = CheckRule(
 )
 
 
-def run_perturbation(design: Any, sim: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(xi, inside, qdd)`` along the run: ``xi[k, i]`` (N*m, module docstring), ``inside[k, i]`` whether sample
-    ``k`` is inside joint ``i``'s box, ``qdd`` the accelerations (rad/s^2) from the forward dynamics."""
+def run_parameters(sim: Any, plant: Any) -> np.ndarray | None:
+    """The true arm's parameter vector at every sample of the run (N, n_p): ``plant``'s, changed by
+    ``simulation.plant_change`` from the sample it applies on; None for a robot without parameters."""
+    p = plant.model_parameters()
+    if p is None:
+        return None
+    t = np.asarray(sim.time, dtype=float)
+    P = np.tile(np.asarray(p, dtype=float), (t.size, 1))
+    change = (getattr(sim, "settings", None) or {}).get("plant_change")
+    if change and change.get("time_applied") is not None:
+        P[t >= change["time_applied"]] = np.asarray(plant.with_params(**change["values"]).parameter_vector)
+    return P
+
+
+def run_perturbation(design: Any, sim: Any, plant: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(xi, inside, qdd)`` along the run on the true ``plant`` (the design's when None; with
+    ``simulation.plant_change`` applied from its sample on): ``xi[k, i]`` (N*m, module docstring), ``inside[k, i]``
+    whether sample ``k`` is inside joint ``i``'s box (never where the true parameters are outside the parameter
+    box), ``qdd`` the accelerations (rad/s^2) from the true arm's forward dynamics; the gravity feed-forward is the
+    design's (nominal parameters)."""
+    from designkit.models.perturbation import evaluate_rows
+
     info = design.extra[ROBOT_EXTRA]
-    plant = design.plant
-    n = plant.n_joints
+    true = design.plant if plant is None else plant
+    n = true.n_joints
     x = np.asarray(sim.state, dtype=float)
-    q, qd = x[:, list(plant.positions)], x[:, list(plant.velocities)]
+    q, qd = x[:, list(true.positions)], x[:, list(true.velocities)]
     u = np.asarray(sim.u_command, dtype=float)[:, :n]
-    robot, p = plant.robot, plant.model_parameters()
-    qdd = robot.forward_dynamics(q, qd, u, p=p).reshape(q.shape)
-    ghat = robot.gravity_torque(q, p=p).reshape(q.shape) if info["gravity_feedforward"] == "measured" else 0.0
+    P = run_parameters(sim, true)
+    p0 = design.plant.model_parameters()
+    qdd = evaluate_rows(true.robot, "forward_dynamics", [q, qd, u], P, p0).reshape(q.shape)
+    ghat = true.robot.gravity_torque(q, p=p0).reshape(q.shape) if info["gravity_feedforward"] == "measured" else 0.0
     Dh = np.array([lk["inertia"] for lk in info["links"]])
     f = np.array([lk["damping"] for lk in info["links"]])
     xi = Dh * qdd + f * qd - (u - ghat)
@@ -141,8 +206,20 @@ def run_perturbation(design: Any, sim: Any) -> tuple[np.ndarray, np.ndarray, np.
     tol = 1e-9
     state_in = (np.all((q >= np.array(ws["low"]) - tol) & (q <= np.array(ws["high"]) + tol), axis=1)
                 & np.all(np.abs(qd) <= np.array(ws["velocity"]) + tol, axis=1))
+    if P is not None:
+        state_in &= in_parameter_box(info, design.plant, P)
     inside = np.column_stack([state_in & np.all(np.abs(qdd) <= rows[i] + tol, axis=1) for i in range(n)])
     return xi, inside, qdd
+
+
+def in_parameter_box(info: dict, nominal: Any, params: np.ndarray) -> np.ndarray:
+    """Per row of ``params`` (N, n_p), whether those parameters are ones the bound covers: in the parameter box,
+    the others at the nominal plant's values."""
+    p0 = np.asarray(nominal.model_parameters(), dtype=float)
+    lo, hi = p0.copy(), p0.copy()
+    for row in info.get("parameter_box", []):
+        lo[row["index"]], hi[row["index"]] = row["low"], row["high"]
+    return np.all((lo <= params) & (params <= hi), axis=1)
 
 
 def bands(info: dict, hold: float) -> np.ndarray:
@@ -155,12 +232,30 @@ def bands(info: dict, hold: float) -> np.ndarray:
     return float(info["epsilon"]) + hold * np.array(info["sdot_max"])
 
 
+def _arm_words(info: dict, sim: Any, true: Any) -> str:
+    """The simulated arm's uncertain parameters in words (empty without a parameter box)."""
+    box = info.get("parameter_box", [])
+    P = run_parameters(sim, true)
+    if not box or P is None:
+        return ""
+    change = (getattr(sim, "settings", None) or {}).get("plant_change")
+    words = []
+    for row in box:
+        k, unit = row["index"], row["unit"]
+        s = f"{row['name']} = {P[0, k]:.4g} {unit}"
+        if P[-1, k] != P[0, k]:
+            s += f" until {change['time_applied']:.4g} s, then {P[-1, k]:.4g} {unit}"
+        words.append(s)
+    return "The simulated arm: " + ", ".join(words) + ". "
+
+
 def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     info = design.extra[ROBOT_EXTRA]
     sim = ctx.simulation
     n = len(info["M"])
     M, bound = np.array(info["M"]), np.array(info["bound"])
-    xi, inside, qdd = run_perturbation(design, sim)
+    true = ctx.true_plant(design)
+    xi, inside, qdd = run_perturbation(design, sim, true)
     peak = np.max(np.abs(xi), axis=0)
     peak_in = np.array([np.max(np.abs(xi[inside[:, i], i]), initial=0.0) for i in range(n)])
     frac = inside.mean(axis=0)
@@ -186,8 +281,8 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
                      "motion's acceleration is 0, which the boundary layer's approximate sliding never meets)")
     qdd_peak = np.max(np.abs(qdd), axis=0)
     xi_check = Check(XI, ok_xi, "|ξ_i(t)| ≤ proven bound < M_i wherever the run is inside joint i's box",
-                     float(np.min(bound - peak_in)), float(np.min(bound - peak_in)), "N*m", "; ".join(parts)
-                     + f". Largest accelerations of the run {_vec(qdd_peak)} rad/s² (limits "
+                     float(np.min(bound - peak_in)), float(np.min(bound - peak_in)), "N*m", _arm_words(info, sim, true)
+                     + "; ".join(parts) + f". Largest accelerations of the run {_vec(qdd_peak)} rad/s² (limits "
                      f"{_vec(info['workspace']['acceleration'])} rad/s²).",
                      {"peak_xi": peak.tolist(), "peak_xi_inside": peak_in.tolist(), "inside_fraction": frac.tolist(),
                       "peak_acceleration": qdd_peak.tolist()})

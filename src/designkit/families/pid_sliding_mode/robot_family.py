@@ -12,7 +12,13 @@ from typing import Any
 
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA, law, synthesize
-from designkit.families.pid_sliding_mode.robot_checks import CERTIFICATE_RULE, RUN_RULE, run_perturbation
+from designkit.families.pid_sliding_mode.robot_checks import (
+    CERTIFICATE_RULE,
+    RUN_RULE,
+    box_words,
+    parameter_values,
+    run_perturbation,
+)
 from designkit.families.pid_sliding_mode.robot_figures import ROBOT_FIGURES
 from designkit.families.pid_sliding_mode.spec import KIND
 
@@ -24,9 +30,12 @@ def json_summary(result: Any) -> dict[str, Any]:
     info = result.design.extra[ROBOT_EXTRA]
     joints = []
     for i, M in enumerate(info["M"]):
+        at = {k: v for k, v in info["argmax"][i].items() if k != "p"}
+        if "p" in info["argmax"][i]:
+            at["parameters"] = parameter_values(info, info["argmax"][i]["p"])
         joints.append({
             "joint": i + 1, "gains": info["gains"][i], "M": M, "bound": info["bound"][i],
-            "sampled_lower_bound": info["sampled"][i], "attained_at": info["argmax"][i], "terms": info["terms"][i],
+            "sampled_lower_bound": info["sampled"][i], "attained_at": at, "terms": info["terms"][i],
             "converged": info["converged"][i], "acceleration_box": info["acceleration_rows"][i],
             "sliding_acceleration": info["sliding_acceleration"][i], "link": info["links"][i],
             "inertia_range": info["inertia_range"][i]})
@@ -34,12 +43,14 @@ def json_summary(result: Any) -> dict[str, Any]:
            "M": list(info["M"]), "M_given": info["M_given"], "margin": info["margin"],
            "bound": {"per_joint": list(info["bound"]), "sampled": list(info["sampled"]), "boxes": info["boxes"],
                      "seconds": info["seconds"], "tolerance": info["tolerance"], "work_limit": info["work_limit"],
-                     "workspace": info["workspace"], "gravity_feedforward": info["gravity_feedforward"]},
+                     "workspace": info["workspace"], "gravity_feedforward": info["gravity_feedforward"],
+                     "parameter_box": {r["name"]: {"low": r["low"], "high": r["high"], "nominal": r["nominal"],
+                                                   "unit": r["unit"]} for r in info.get("parameter_box", [])}},
            "joints": joints, "epsilon": info["epsilon"], "layer": info["layer"] if info["epsilon"] is not None
            else None, "max_step": info["max_step"]}
     sim = result.simulation
     if sim is not None and "slm1" in sim.signals:
-        xi, inside, _ = run_perturbation(result.design, sim)
+        xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
         out["run"] = {"peak_xi": [float(v) for v in abs(xi).max(axis=0)],
                       "inside_fraction": [float(v) for v in inside.mean(axis=0)]}
     return {KIND: out}
@@ -56,11 +67,14 @@ def section(result: Any) -> ReportSection | None:
     info = result.design.extra[ROBOT_EXTRA]
     n = len(info["M"])
     rows = []
+    units = {r["name"]: r["unit"] for r in info.get("parameter_box", [])}
     for i in range(n):
         t, at = info["terms"][i], info["argmax"][i]
+        named = parameter_values(info, at["p"]) if "p" in at else {}
         rows.append((f"joint {i + 1}", _fmt(info["acceleration_rows"][i]) + " rad/s²",
                      f"{info['bound'][i]:.4g} N·m", f"{info['sampled'][i]:.4g} N·m",
-                     f"q = {_fmt(at['q'])} rad, q̇ = {_fmt(at['qd'])} rad/s, q̈ = {_fmt(at['qdd'])} rad/s²",
+                     f"q = {_fmt(at['q'])} rad, q̇ = {_fmt(at['qd'])} rad/s, q̈ = {_fmt(at['qdd'])} rad/s²"
+                     + "".join(f", {k} = {v:.4g} {units[k]}" for k, v in named.items()),
                      f"{t['own_inertia']:.3g} / {t['coupling']:.3g} / {t['coriolis']:.3g} / {t['gravity']:.3g} / "
                      f"{t['friction']:.3g} N·m", f"{info['M'][i]:.4g} N·m"))
     table = Table("Per joint, from the last to the first: the acceleration box the bound covers (the later joints at "
@@ -70,18 +84,26 @@ def section(result: Any) -> ReportSection | None:
                   ("joint", "|q̈_j| ≤", "proven sup|ξ_i|", "attained", "attained at", "parts", "M_i"),
                   tuple(reversed(rows)))
     ws = info["workspace"]
+    over = box_words(info)
     sentences = [
         f"The box: q from {_fmt(ws['low'])} to {_fmt(ws['high'])} rad, |q̇| ≤ {_fmt(ws['velocity'])} rad/s, "
-        f"|q̈| ≤ {_fmt(ws['acceleration'])} rad/s² (the plant's limits); the sliding motions' largest accelerations "
-        f"are {_fmt(info['sliding_acceleration'])} rad/s².",
-        f"The bound is proven by ball arithmetic on the inertia matrix, the Christoffel symbols and the gravity "
-        f"torque over {info['boxes']} configuration boxes ({info['seconds']:.3g} s), combined with the velocity and "
+        f"|q̈| ≤ {_fmt(ws['acceleration'])} rad/s² (the plant's limits)" + (f"; {over}" if over else "")
+        + f"; the sliding motions' largest accelerations are {_fmt(info['sliding_acceleration'])} rad/s².",
+        "The bound is proven by ball arithmetic on the inertia matrix, the Christoffel symbols and the gravity "
+        + ("torque (with the feed-forward, its residual: the true arm's gravity minus the nominal model's), "
+           "the parameters bounded inputs of the enclosure like the joints, "
+           f"over {info['boxes']} boxes of configurations and parameters " if over else
+           f"torque over {info['boxes']} configuration boxes ")
+        + f"({info['seconds']:.3g} s), combined with the velocity and "
         "acceleration boxes by interval arithmetic; the attained value is the model's inverse dynamics at a point "
         "of the box, so sup|ξ_i| lies between the two.",
     ]
+    if over:
+        sentences.append("Each joint's simplified link (its D̂_i, f_i and the gravity feed-forward) is the nominal "
+                         "model's: the parameter change is part of ξ_i, in every part of the table.")
     sim = result.simulation
     if sim is not None and "slm1" in sim.signals:
-        xi, inside, _ = run_perturbation(result.design, sim)
+        xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
         sentences.append("Along the run the largest |ξ_i| were " + _fmt(abs(xi).max(axis=0)) + " N·m, the run "
                          "inside each joint's box for " + ", ".join(f"{100 * v:.3g} %" for v in inside.mean(axis=0))
                          + " of its samples.")

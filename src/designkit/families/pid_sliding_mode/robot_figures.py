@@ -65,7 +65,7 @@ def sliding_variables_figure(result: Any) -> Figure | None:
 def _draw_xi(result: Any) -> tuple[Any, dict[str, Any]]:
     info, sim = result.design.extra[ROBOT_EXTRA], result.simulation
     t = np.asarray(sim.time, float)
-    xi, inside, _ = run_perturbation(result.design, sim)
+    xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
     bound, M = np.array(info["bound"]), np.array(info["M"])
     fig, (ax,) = new_figure(6.8, 3.6)
     tag(fig, "bound", ax.axhline(1.0, color="black", lw=1.0, label="the proven bound"))
