@@ -21,7 +21,8 @@ interface, timed).  Ratios are taken in one run,
 interleaved rounds, medians.
 
 Also timed: one-state ``Robot.inverse_dynamics`` on the PUMA against ``pinocchio.rnea`` (same DH model), per call
-from Python.
+from Python (and the mass matrix, gravity and forward dynamics against ``crba``, ``computeGeneralizedGravity``,
+``aba``).
 
 Run: ``python benchmarks/bench_floor.py``; writes ``benchmarks/results/floor.json``.
 """
@@ -233,7 +234,13 @@ def simnog() -> dict[str, Any]:
 
 
 def one_state(calls: int = 2000) -> dict[str, Any]:
-    """``Robot.inverse_dynamics`` on one PUMA state against ``pinocchio.rnea`` (same DH model), per call."""
+    """One-state PUMA model calls from Python against Pinocchio on the same DH model, per call, interleaved.
+
+    ``Robot.inverse_dynamics`` against ``pinocchio.rnea`` (the goal's ratio), and ``mass_matrix``,
+    ``gravity_torque``, ``forward_dynamics`` against ``crba``, ``computeGeneralizedGravity``, ``aba``.  The
+    robot's default path: its first call loads the cached library, or compiles after
+    ``one_state.COMPILE_CALLS`` calls (inside the first round, so not in the medians); ``path`` says which runs.
+    """
     import pinocchio as pin
     from tests.models.support import pinocchio_model
 
@@ -241,20 +248,26 @@ def one_state(calls: int = 2000) -> dict[str, Any]:
     model, _ = pinocchio_model(r.description)
     data = model.createData()
     q, qd, qdd = np.random.default_rng(2).normal(size=(3, 6))
+    pairs = {"inverse_dynamics": (lambda: r.inverse_dynamics(q, qd, qdd), lambda: pin.rnea(model, data, q, qd, qdd)),
+             "mass_matrix": (lambda: r.mass_matrix(q), lambda: pin.crba(model, data, q)),
+             "gravity_torque": (lambda: r.gravity_torque(q), lambda: pin.computeGeneralizedGravity(model, data, q)),
+             "forward_dynamics": (lambda: r.forward_dynamics(q, qd, qdd), lambda: pin.aba(model, data, q, qd, qdd))}
     diff = float(np.abs(r.inverse_dynamics(q, qd, qdd) - pin.rnea(model, data, q, qd, qdd)).max())
 
-    def ours() -> None:
-        for _ in range(calls):
-            r.inverse_dynamics(q, qd, qdd)
+    def repeated(fn: Callable[[], Any]) -> Callable[[], None]:
+        def run() -> None:
+            for _ in range(calls):
+                fn()
+        return run
 
-    def theirs() -> None:
-        for _ in range(calls):
-            pin.rnea(model, data, q, qd, qdd)
-
-    timing = interleaved({"designkit": ours, "pinocchio": theirs}, REPEAT)
-    per = {k: v["median_s"] / calls for k, v in timing.items()}
-    return {"per_call_s": per, "ratio_designkit_over_pinocchio": per["designkit"] / per["pinocchio"],
-            "max_abs_diff_Nm": diff}
+    out: dict[str, Any] = {}
+    for name, (ours, theirs) in pairs.items():
+        timing = interleaved({"designkit": repeated(ours), "pinocchio": repeated(theirs)}, REPEAT)
+        per = {k: v["median_s"] / calls for k, v in timing.items()}
+        out[name] = {"per_call_s": per, "ratio_designkit_over_pinocchio": per["designkit"] / per["pinocchio"],
+                     "path": r.one_state(name).why}
+    first = out["inverse_dynamics"]
+    return {**first, "max_abs_diff_Nm": diff, "functions": out}
 
 
 def main() -> None:

@@ -14,11 +14,19 @@ of ``description.symbols``; the NumPy methods then need ``p=``.
 
 Every NumPy method accepts one state (shape ``(n,)``) or a batch (shape ``(N, n)``) and returns
 results stacked along a leading axis of length ``N``.  Units are SI (m, rad, kg, s, N, N*m).
-The plain call is the fast path (:mod:`designkit.models.batch`): NumPy arrays handed to
-CasADi's buffer interface (no ``casadi.DM`` conversions), and the function's compiled C when a
-C compiler is present -- built once for a batch of at least ``batch.COMPILE_MIN_STATES`` states,
-cached on disk, loaded from the cache by every later robot with the same function; interpreted
-otherwise, with identical results.  :meth:`Robot.evaluator` tells which path a method runs and why.
+The plain call is the fast path, with identical results on every route:
+
+* one state given as float64 arrays (``p`` too, for a symbolic robot) goes through
+  :mod:`designkit.models.one_state`: the function compiled to C on its own (loaded from the cache
+  at the first call, else built at the ``one_state.COMPILE_CALLS``-th call) and called through a
+  native binding that reads the arrays in place (:mod:`designkit.models.native`), else through
+  CasADi's buffers; :meth:`Robot.one_state` tells which route runs and why;
+* batches, and single states given otherwise (lists, other dtypes), go through
+  :mod:`designkit.models.batch`: NumPy arrays handed to CasADi's buffer interface (no
+  ``casadi.DM`` conversions) and the function's compiled block when a C compiler is present --
+  built once for a batch of at least ``batch.COMPILE_MIN_STATES`` states, cached on disk, loaded
+  from the cache by every later robot with the same function; interpreted otherwise.
+  :meth:`Robot.evaluator` tells which path runs and why.
 """
 
 from __future__ import annotations
@@ -36,11 +44,13 @@ from designkit.models import chain, regressor
 from designkit.models.batch import Evaluator, evaluate, evaluator_for, shape_output
 from designkit.models.description import ChainDescription, LinkDescription
 from designkit.models.functions import FUNCTION_SPECS, Expressions, FunctionTable
+from designkit.models.one_state import OneState, OneStateTable
 
 __all__ = ["Energy", "FunctionTable", "Robot", "robot_from_dh"]
 
 _JOINTS = ("revolute", "prismatic")
 _CONVENTIONS = ("standard", "modified")
+_KINDS = {name: spec.kinds[0] for name, spec in FUNCTION_SPECS.items()}
 
 
 @dataclass(frozen=True)
@@ -121,7 +131,7 @@ class Robot:
     parameter_names: tuple[str, ...] = field(init=False, repr=False)
     parameters: np.ndarray | None = field(init=False, repr=False)
     _evaluators: dict[str, Evaluator] = field(init=False, repr=False, default_factory=dict)
-    _single: dict[str, Any] = field(init=False, repr=False, compare=False, default_factory=dict)
+    _one_state: OneStateTable = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         _validate(self.description)
@@ -132,6 +142,7 @@ class Robot:
         values = [chain.numeric_value(v) for v in expressions.parameters]
         numeric = None if any(v is None for v in values) else np.array(values, dtype=float)
         object.__setattr__(self, "parameters", numeric)
+        object.__setattr__(self, "_one_state", OneStateTable(self.functions, 1 if self.symbol_names else 0, _KINDS))
 
     @property
     def name(self) -> str:
@@ -164,101 +175,93 @@ class Robot:
         """
         return evaluator_for(self.functions[name], self._evaluators, 1 if self.symbol_names else 0)
 
+    def one_state(self, name: str) -> OneState:
+        """The :class:`~designkit.models.one_state.OneState` behind one-state calls of function ``name``.
+
+        One state given as float64 arrays of shape ``(size,)`` (and ``p`` as a float64 array for a symbolic
+        robot) runs through it; its ``compiled`` and ``why`` say whether that is compiled C, and
+        ``one_state(name).compile()`` compiles ahead of time (else the policy of
+        :mod:`designkit.models.one_state` applies).
+        """
+        self.functions[name]  # NameNotFoundError for an unknown name
+        return self._one_state.state(name)
+
     # ---------------------------------------------------------------- kinematics
 
     def fkine(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Tool pose in the base frame: ``(4, 4)`` or ``(N, 4, 4)``."""
-        return self._call("fkine", [("q", q)], p)
+        out = self._one_state["fkine"](q, p)
+        return self._call("fkine", [("q", q)], p) if out is None else out
 
     def fkine_all(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Poses of DH frames ``1..n``: ``(n, 4, 4)`` or ``(N, n, 4, 4)``."""
-        out = self._call("fkine_all", [("q", q)], p)
+        out = self._one_state["fkine_all"](q, p)
+        if out is None:
+            out = self._call("fkine_all", [("q", q)], p)
         if out.ndim == 2:
             return out.reshape(4, self.n, 4).transpose(1, 0, 2)
         return out.reshape(out.shape[0], 4, self.n, 4).transpose(0, 2, 1, 3)
 
     def jacobian(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Geometric Jacobian of the tool origin, base frame, rows ``[v; omega]``: ``(6, n)`` or ``(N, 6, n)``."""
-        return self._call("jacobian", [("q", q)], p)
+        out = self._one_state["jacobian"](q, p)
+        return self._call("jacobian", [("q", q)], p) if out is None else out
 
     def jacobian_dot_qd(self, q: Any, qd: Any, *, p: Any = None) -> np.ndarray:
         """``Jdot qd`` (m/s^2, rad/s^2): ``(6,)`` or ``(N, 6)``."""
-        return self._call("jacobian_dot_qd", [("q", q), ("qd", qd)], p)
+        out = self._one_state["jacobian_dot_qd"](q, qd, p)
+        return self._call("jacobian_dot_qd", [("q", q), ("qd", qd)], p) if out is None else out
 
     def analytic_jacobian(self, q: Any, representation: str = "rpy", *, p: Any = None) -> np.ndarray:
         """Analytic Jacobian of ``[p; phi]`` for ``representation`` in ``chain.REPRESENTATIONS``."""
         chain.representation(representation)
-        return self._call(f"analytic_jacobian_{representation}", [("q", q)], p)
+        name = f"analytic_jacobian_{representation}"
+        out = self._one_state[name](q, p)
+        return self._call(name, [("q", q)], p) if out is None else out
 
     # ---------------------------------------------------------------- dynamics
 
     def inverse_dynamics(self, q: Any, qd: Any, qdd: Any, *, p: Any = None) -> np.ndarray:
-        """Joint torques (N*m or N) by recursive Newton--Euler: ``(n,)`` or ``(N, n)``.
-
-        One state of a numeric robot as float arrays of shape ``(n,)`` takes a fast path: the function's
-        zero-copy buffers, kept per robot (no argument parsing, no batch machinery); same numbers.
-        """
-        if p is None and not self.symbol_names:
-            out = self._one_state("inverse_dynamics", (q, qd, qdd))
-            if out is not None:
-                return out
-        return self._call("inverse_dynamics", [("q", q), ("qd", qd), ("qdd", qdd)], p)
-
-    def _one_state(self, name: str, args: tuple[Any, ...]) -> np.ndarray | None:
-        """``name`` at one state through its buffers, or None when an argument is not a float ``(n,)`` array."""
-        n = self.n
-        for a in args:
-            if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (n,)):
-                return None
-        import threading
-
-        local = self._single.get(name)
-        if local is None:
-            local = self._single.setdefault(name, threading.local())
-        state = getattr(local, "buffers", None)
-        if state is None:  # per thread: a buffer is written and read by one call at a time
-            f = self.functions[name]
-            ins = [np.zeros(f.size1_in(k)) for k in range(f.n_in())]
-            out = np.zeros(f.size1_out(0))
-            buf, evaluate = f.buffer()
-            for k, a in enumerate(ins):
-                buf.set_arg(k, memoryview(a))
-            buf.set_res(0, memoryview(out))
-            state = local.buffers = (buf, evaluate, ins, out)
-        _, evaluate, ins, out = state
-        for target, a in zip(ins, args, strict=True):
-            target[:] = a
-        evaluate()
-        return out.copy()
+        """Joint torques (N*m or N) by recursive Newton--Euler: ``(n,)`` or ``(N, n)``."""
+        out = self._one_state["inverse_dynamics"](q, qd, qdd, p)
+        return self._call("inverse_dynamics", [("q", q), ("qd", qd), ("qdd", qdd)], p) if out is None else out
 
     def mass_matrix(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Joint-space inertia matrix ``M(q)``: ``(n, n)`` or ``(N, n, n)``."""
-        return self._call("mass_matrix", [("q", q)], p)
+        out = self._one_state["mass_matrix"](q, p)
+        return self._call("mass_matrix", [("q", q)], p) if out is None else out
 
     def christoffel(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Christoffel symbols ``G[i, j, k]``: ``(n, n, n)`` or ``(N, n, n, n)``."""
-        out = self._call("christoffel", [("q", q)], p)
+        out = self._one_state["christoffel"](q, p)
+        if out is None:
+            out = self._call("christoffel", [("q", q)], p)
         return out.reshape(*out.shape[:-1], self.n, self.n)
 
     def coriolis_matrix(self, q: Any, qd: Any, *, p: Any = None) -> np.ndarray:
         """Coriolis matrix ``C(q, qd)`` (Christoffel form, ``Mdot - 2C`` skew): ``(n, n)`` or ``(N, n, n)``."""
-        return self._call("coriolis_matrix", [("q", q), ("qd", qd)], p)
+        out = self._one_state["coriolis_matrix"](q, qd, p)
+        return self._call("coriolis_matrix", [("q", q), ("qd", qd)], p) if out is None else out
 
     def gravity_torque(self, q: Any, *, p: Any = None) -> np.ndarray:
         """Gravity torque ``g(q) = dV/dq``: ``(n,)`` or ``(N, n)``."""
-        return self._call("gravity_torque", [("q", q)], p)
+        out = self._one_state["gravity_torque"](q, p)
+        return self._call("gravity_torque", [("q", q)], p) if out is None else out
 
     def friction_torque(self, qd: Any, *, p: Any = None) -> np.ndarray:
         """Joint friction torque (zero when the robot was built without friction)."""
-        return self._call("friction_torque", [("qd", qd)], p)
+        out = self._one_state["friction_torque"](qd, p)
+        return self._call("friction_torque", [("qd", qd)], p) if out is None else out
 
     def forward_dynamics(self, q: Any, qd: Any, tau: Any, *, p: Any = None) -> np.ndarray:
         """Joint accelerations for applied torques: ``(n,)`` or ``(N, n)``."""
-        return self._call("forward_dynamics", [("q", q), ("qd", qd), ("tau", tau)], p)
+        out = self._one_state["forward_dynamics"](q, qd, tau, p)
+        return self._call("forward_dynamics", [("q", q), ("qd", qd), ("tau", tau)], p) if out is None else out
 
     def regressor(self, q: Any, qd: Any, qdd: Any, *, p: Any = None) -> np.ndarray:
         """Regressor ``W`` with ``tau = W @ P``: ``(n, len(P))`` or ``(N, n, len(P))``."""
-        return self._call("regressor", [("q", q), ("qd", qd), ("qdd", qdd)], p)
+        out = self._one_state["regressor"](q, qd, qdd, p)
+        return self._call("regressor", [("q", q), ("qd", qd), ("qdd", qdd)], p) if out is None else out
 
     def parameter_values(self, p: Any = None) -> np.ndarray:
         """Numeric parameter vector ``P`` (for a symbolic robot, at symbol values ``p``)."""
@@ -266,8 +269,12 @@ class Robot:
 
     def energy(self, q: Any, qd: Any, *, p: Any = None) -> Energy:
         """Kinetic ``0.5 qd' M qd`` and potential energy (J); arrays of shape ``(N,)`` for a batch."""
-        kinetic = self._call("kinetic_energy", [("q", q), ("qd", qd)], p)
-        potential = self._call("potential_energy", [("q", q)], p)
+        kinetic = self._one_state["kinetic_energy"](q, qd, p)
+        if kinetic is None:
+            kinetic = self._call("kinetic_energy", [("q", q), ("qd", qd)], p)
+        potential = self._one_state["potential_energy"](q, p)
+        if potential is None:
+            potential = self._call("potential_energy", [("q", q)], p)
         return Energy(kinetic, potential)
 
     def replace(self, **changes: Any) -> Robot:
