@@ -308,17 +308,21 @@ class Simulation(Section):
 class Numerics(Section):
     """How the numbers are computed (not what is designed).
 
-    integrator: ``rk4`` (fixed step), ``cvodes`` (CasADi's variable-step BDF, for
-    stiff plants such as the elastic joint) or ``dopri5`` (compiled Dormand-Prince 5(4) with error control
+    integrator: ``rk4`` (fixed step), ``cvodes`` (CasADi's variable-step CVODES, for
+    stiff plants such as the elastic joint: over the whole grid in one call on a smooth loop, inside each step
+    on a held one) or ``dopri5`` (compiled Dormand-Prince 5(4) with error control
     and dense output, for smooth continuous loops; left out, the simulator picks dopri5 for a smooth loop,
     rk4 for a held, sampled or noisy one, cvodes for a stiff one) with tolerances ``rtol`` (1e-14 to 0.1)
     and ``atol`` (1e-20 to 1, state units; dopri5 defaults 1e-10 and 1e-12 when they are left out);
+    ``cvodes_method``: ``auto`` (BDF for a stiff loop, Adams for one that is not), ``adams`` or ``bdf``
+    (CVODES over the whole grid; the per-step CVODES of a held loop is BDF);
     ``compile``:
     ``auto`` (compile the simulation step to C when it is cached or pays for itself), ``always``
     or ``never``; ``solver``: the cvxpy solver of the LMIs and LPs.
     """
 
     integrator: Literal["rk4", "cvodes", "dopri5"] = "rk4"
+    cvodes_method: Literal["auto", "adams", "bdf"] = "auto"
     compile: Literal["auto", "always", "never"] = "auto"
     rtol: Ranged(1e-14, 0.1, "") = 1e-8
     atol: Ranged(1e-20, 1.0, "state units") = 1e-10
