@@ -77,10 +77,13 @@ def section(result: Any) -> ReportSection | None:
                      + "".join(f", {k} = {v:.4g} {units[k]}" for k, v in named.items()),
                      f"{t['own_inertia']:.3g} / {t['coupling']:.3g} / {t['coriolis']:.3g} / {t['gravity']:.3g} / "
                      f"{t['friction']:.3g} N·m", f"{info['M'][i]:.4g} N·m"))
+    parts = ("Coriolis and centrifugal / gravity, with the feed-forward its residual / friction: Coulomb and the "
+             "viscous change over the parameter box" if units else "Coriolis and centrifugal / gravity / Coulomb "
+             "friction")
     table = Table("Per joint, from the last to the first: the acceleration box the bound covers (the later joints at "
                   "their sliding motion's largest acceleration), the proven sup|ξ_i|, the largest |ξ_i| attained and "
                   "where, the proven parts on the box that sets the bound (own inertia variation / coupling / "
-                  "Coriolis and centrifugal / gravity / Coulomb friction) and the relay amplitude.",
+                  f"{parts}) and the relay amplitude.",
                   ("joint", "|q̈_j| ≤", "proven sup|ξ_i|", "attained", "attained at", "parts", "M_i"),
                   tuple(reversed(rows)))
     ws = info["workspace"]
