@@ -203,3 +203,48 @@ def test_an_inverted_parameter_box_is_refused_with_its_index():
     with pytest.raises(ModelError) as exc:
         perturbation_enclosure(plant.robot, gravity=False, p_box=(lo, hi), **kw)
     assert exc.value.field == f"p_box[{plant.parameter_names.index('m2')}]" and "m2" in exc.value.message
+
+
+def test_a_friction_box_on_the_one_link_covers_its_closed_form():
+    """The one-link rod with uncertain viscous and Coulomb friction and mass, gravity fed forward at the nominal
+    values: xi = -(I_O(m) - D^) q'' - (g(q, p) - g(q, p0)) - (f(p) - f0) q' - fc(p) sign(q') in closed form
+    (I_O = m l^2/4 + I about the joint, g = m g l/2 cos q, the rod's centre at l/2)."""
+    plant = zoo_plant("onelink")
+    P0 = {p.name: p.value for p in plant.parameters}
+    p_lo, p_hi = _box(plant, {"m": (0.8, 1.5), "f": (0.3, 0.7), "fc": (0.0, 0.2)})
+    Dh, f0, V, A = 0.1, P0["f"], 3.0, 10.0
+    e = perturbation_enclosure(plant.robot, q=([-1.0], [1.2]), qd_limit=[V], qdd_limits=[[A]], inertia=[Dh],
+                               damping=[f0], coulomb=[0.0], gravity=False, p=plant.model_parameters(),
+                               p_box=(p_lo, p_hi), rel_tol=1e-4, max_boxes=400)
+    rng = np.random.default_rng(2)
+    N = 200000
+    m, f, fc = (rng.uniform(a, b, N) for a, b in ((0.8, 1.5), (0.3, 0.7), (0.0, 0.2)))
+    corner = rng.random(N) < 0.5
+    for x, a, b in ((m, 0.8, 1.5), (f, 0.3, 0.7), (fc, 0.0, 0.2)):
+        x[corner] = np.where(rng.random(corner.sum()) < 0.5, a, b)
+    q = rng.uniform(-1.0, 1.2, N)
+    qd = V * rng.choice([-1.0, 1.0], N) * np.where(rng.random(N) < 0.5, 1.0, rng.random(N))
+    qdd = A * rng.choice([-1.0, 1.0], N)
+    l, g, I = P0["l"], P0["g"], P0["I"]
+    xi = ((m * l**2 / 4 + I - Dh) * qdd + (m - P0["m"]) * g * l / 2 * np.cos(q) + (f - f0) * qd
+          + fc * np.sign(qd))
+    worst = float(np.max(np.abs(xi)))
+    assert worst <= e.upper[0] and e.sampled[0] <= e.upper[0]
+    assert e.upper[0] <= 1.01 * max(worst, e.sampled[0]) and e.converged == (True,)
+    assert e.terms[0]["friction"] == pytest.approx(0.2 * V + 0.2, rel=1e-6)  # |f - f0| V + fc at the box's top
+
+
+def test_the_joints_an_entry_cannot_depend_on_stay_so_with_other_parameters():
+    """What the enclosure holds fixed (D_ij and Gamma_ijk do not depend on q_1..q_min(i,j,k)) holds for any inertial
+    parameters, not only the nominal ones: the PUMA 560 with a 2.5 kg payload and a heavier forearm."""
+    plant = zoo_plant("puma560", motor_inertia=True).with_params(m6=2.59, m3=5.3)
+    arm, p = plant.robot, plant.model_parameters()
+    rng = np.random.default_rng(8)
+    q = rng.uniform(-2, 2, size=(20, arm.n))
+    D, G = arm.mass_matrix(q, p=p), arm.christoffel(q, p=p)
+    for m in range(arm.n):
+        moved = q.copy()
+        moved[:, :m + 1] = rng.uniform(-3, 3, size=(20, m + 1))
+        D2, G2 = arm.mass_matrix(moved, p=p), arm.christoffel(moved, p=p)
+        assert np.allclose(D2[:, m:, m:], D[:, m:, m:], rtol=1e-11, atol=1e-11 * np.abs(D).max())
+        assert np.allclose(G2[:, m:, m:, m:], G[:, m:, m:, m:], rtol=1e-11, atol=1e-11 * np.abs(G).max())
