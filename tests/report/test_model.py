@@ -300,3 +300,19 @@ def test_findings_of_the_diagnosis_fill_cause_and_fix(failed_result, monkeypatch
     assert built.limit_cycle == "x1 oscillates at 3 rad/s."
     assert [(m.metric, m.linear, m.nonlinear) for m in built.linear_vs_nonlinear] == [("overshoot", "4.5", "undefined")]
     assert [s.anchor for s in built.contents][:3] == ["why", "compliance", "engineering"]
+
+
+def test_the_lattice_resolution_is_listed_only_where_a_check_ran_the_lattice():
+    """The box's intervals are always listed; its 'points per axis' only beside a robustness lattice check."""
+    from designkit.report.design_section import plant_rows
+    from designkit.schema.loader import parse_spec
+
+    loaded = parse_spec("name: b\nplant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.5, 2.5], grid: 9}}\n"
+                        "controller: {kind: pid_servo, poles: [-4, -5, -20]}\n")
+    from designkit.pipeline import plant as plant_of
+
+    p = plant_of(loaded)
+    with_lattice = [r.name for r in plant_rows(p, loaded.spec, lattice=True)]
+    without = [r.name for r in plant_rows(p, loaded.spec, lattice=False)]
+    assert with_lattice[-1] == "grid" and "grid" not in without
+    assert without.count("Km") == with_lattice.count("Km") == 2  # the nominal value and the interval

@@ -185,8 +185,21 @@ def quantity(value: float | None, unit_text: str = "", digits: int = 4) -> str:
 
 
 def fmt_percent(ratio: float) -> str:
-    """A ratio as a percentage with 3 significant digits (``0.125`` -> ``12.5 %``; ``∞`` when not finite)."""
-    return "∞" if not math.isfinite(ratio) else f"{100 * ratio:.3g} %"
+    """A ratio as a percentage with 3 significant digits (``0.125`` -> ``12.5 %``; ``∞`` when not finite); a ratio
+    below 1 never reads as 100 % (``0.9997`` -> ``99.97 %``), nor one above 0 as 0 %.
+
+    Examples
+    --------
+    >>> fmt_percent(0.125), fmt_percent(0.9997), fmt_percent(1.0), fmt_percent(0.0000123)
+    ('12.5 %', '99.97 %', '100 %', '0.00123 %')
+    """
+    if not math.isfinite(ratio):
+        return "∞"
+    for digits in range(3, 10):
+        text = f"{100 * ratio:.{digits}g}"
+        if (ratio >= 1 or float(text) < 100) and (ratio <= 0 or float(text) > 0):
+            return f"{text} %"
+    return f"{100 * ratio:.10g} %"
 
 
 def at_time(value: float) -> str:

@@ -26,8 +26,9 @@ SYMBOLS = {"tau": "τ", "tau1": "τ1", "tau2": "τ2"}
 """Plant parameter names written as symbols."""
 
 
-def plant_rows(plant: Any, spec: Any) -> tuple[ParameterRow, ...]:
-    """Nominal plant parameters, then the uncertainty box of the spec (intervals, lattice, samples)."""
+def plant_rows(plant: Any, spec: Any, lattice: bool = True) -> tuple[ParameterRow, ...]:
+    """Nominal plant parameters, then the uncertainty box of the spec (intervals, the lattice's points per axis when
+    ``lattice``: a check ran it, samples)."""
     rows = [ParameterRow(SYMBOLS.get(p.name, p.name), fmt_number(p.value, 6), unit(p.unit),
                          f"nominal {p.meaning}".strip()) for p in plant.parameters]
     unc = getattr(spec.plant, "uncertainty", None)
@@ -36,7 +37,8 @@ def plant_rows(plant: Any, spec: Any) -> tuple[ParameterRow, ...]:
             par = plant.parameter(name)
             rows.append(ParameterRow(SYMBOLS.get(name, name), f"[{fmt_number(lo, 6)}, {fmt_number(hi, 6)}]",
                                      unit(par.unit), f"uncertainty interval of the {par.meaning}"))
-        rows.append(ParameterRow("grid", str(unc.grid), "points/axis", "robustness lattice resolution"))
+        if lattice:  # only where a check runs the robustness lattice
+            rows.append(ParameterRow("grid", str(unc.grid), "points/axis", "robustness lattice resolution"))
         if unc.samples:
             rows.append(ParameterRow("samples", str(unc.samples), "plants", f"seeded random samples (seed {unc.seed})"))
     return tuple(rows)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
+from designkit.display.numbers import fmt_percent
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA, law, synthesize
 from designkit.families.pid_sliding_mode.robot_checks import (
@@ -108,7 +109,7 @@ def section(result: Any) -> ReportSection | None:
     if sim is not None and "slm1" in sim.signals:
         xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
         sentences.append("Along the run the largest |ξ_i| were " + _fmt(abs(xi).max(axis=0)) + " N·m, the run "
-                         "inside each joint's box for " + ", ".join(f"{100 * v:.3g} %" for v in inside.mean(axis=0))
+                         "inside each joint's box for " + ", ".join(fmt_percent(v) for v in inside.mean(axis=0))
                          + " of its samples.")
     q = Question("How large must each joint's relay be (the hierarchy of control, notes section 5.4)?",
                  tuple(sentences), (table,))
