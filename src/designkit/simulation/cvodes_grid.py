@@ -24,8 +24,11 @@ loop ``s' = f(s, r(t), q)`` of :func:`designkit.simulation.dopri5.loop_functions
   (:func:`designkit.cache.cache_dir` ``("codegen")``); the integrator is built on the library's ``dae`` through
   :func:`casadi.external`, whose ``factory`` takes ``daeF`` and ``jacF`` from the same library.  The right-hand
   side and the record at :data:`FLAGS`; the Jacobian, called only when CVODES sets up its linear solver and
-  about eight times the right-hand side's code on the PUMA 560 (18 s to compile at ``-O1``, 2.4 s at ``-O0``),
-  at :data:`JACOBIAN_FLAGS`.  Otherwise the same integrator runs on CasADi's interpreted functions.
+  about eight times the right-hand side's code on the PUMA 560, at :data:`JACOBIAN_FLAGS`.  Otherwise the same
+  integrator runs on CasADi's interpreted functions, to the same numbers (compiling buys 6.2 times on the PUMA,
+  2.2 times on SIMNOG, whose right-hand side is small).
+* **Stretches**: a run is one integrator call per stretch between breakpoints, CVODES started afresh at each
+  (:class:`CvodesGrid`).
 * **Failure**: CVODES giving up (``CV_TOO_MUCH_WORK`` after :data:`MAX_STEPS_PER_OUTPUT` steps in one output
   interval, an error test or convergence failing at the smallest step, a right-hand side that is not finite)
   ends the run: the records are NaN from the first grid point it did not reach, and the failure says where and
@@ -62,10 +65,12 @@ STIFF_RATIO = 100.0
 FIXED_POINT_RATIO = 10.0
 """Adams takes fixed-point iteration when ``|p|max <= FIXED_POINT_RATIO |p|med``, else Newton iteration.  Measured
 (``benchmarks/bench_cvodes.py``): on the PUMA 560 under computed torque (``|p|max = |p|med = 20 1/s``) fixed-point
-iteration costs 0.6 of Newton's time (no Jacobian: 23,500 instructions), on the SIMNOG arm under decentralized PID
-(``|p|max = 162``, ``|p|med = 5 1/s``) 2 to 5 times Newton's (seven times the steps: the fast pole bounds them)."""
-RECORD_CHUNK = 256
-"""Grid points per evaluation of the mapped record function."""
+iteration takes 0.74 of Newton's time (no Jacobian of 23,500 instructions to evaluate), on the SIMNOG arm under
+decentralized PID (``|p|max = 162``, ``|p|med = 5 1/s``) 15 times Newton's (36 times the steps: the fast pole
+bounds a fixed-point iteration's step)."""
+RECORD_CHUNK = 1024
+"""Grid points per evaluation of the mapped record function (CasADi writes the map as a loop: its code does not
+grow with the chunk; the last chunk is padded)."""
 KEPT_INTEGRATORS = 16
 """Integrators kept per run length (a run with breakpoints needs one per length of its stretches)."""
 WORK = ("nsteps", "nfevals", "nlinsetups", "netfails", "nncfails")
@@ -76,7 +81,9 @@ FLAGS = ("-O1", "-ffp-contract=off", "-fPIC")
 """Compiler flags of the right-hand side and the record (an object file; linked with ``-shared``)."""
 JACOBIAN_FLAGS = ("-O0", "-fPIC")
 """Compiler flags of the Jacobian: called only at CVODES' linear-solver setups (a few hundred times a run), so a
-fast compile pays more than fast code (PUMA 560: 2.4 s against 18 s at ``-O1``)."""
+fast compile pays more than fast code once per loop (PUMA 560, ``benchmarks/bench_cvodes.py``: 3.0 s to compile
+against 9.5 s at ``-O1``, for an Adams-Newton run of 53 ms against 27 ms; the PUMA's own choice, fixed-point
+iteration, compiles no Jacobian)."""
 
 
 @dataclass(frozen=True)
@@ -367,7 +374,7 @@ class CvodesGrid:
                 break
         self.stats.clear()
         self.stats.update(totals, segments=len(segments), failed=bool(error))
-        bad = ~np.isfinite(X[:n]).all(axis=1) | (np.abs(X[:n]).sum(axis=1) >= DIVERGED)
+        bad = ~(np.abs(X[:n]).sum(axis=1) < DIVERGED)  # NaN compares False
         stop = int(np.argmax(bad)) if bad.any() else n
         if stop < n and failure is not None:
             failure.update(step=stop, error=error or f"the state left {DIVERGED:g} in magnitude (a diverged loop)")
