@@ -277,7 +277,7 @@ def batch_simulator(simulator: Any, batch: int, *, compile: str = "auto") -> Bat
     if not 1 <= int(batch) <= 4096:
         raise ValueError(f"batch must be 1 to 4096 samples, got {batch}")
     from designkit.models.codegen import compile_function, find_compiler
-    from designkit.simulation.run import COMPILE_FLAGS
+    from designkit.simulation.compiled import COMPILE_FLAGS
 
     step = simulator.step
     if getattr(simulator, "dopri5", None) is not None:  # runs one by one through the compiled adaptive pair

@@ -54,6 +54,12 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
+from designkit.simulation.compiled import (
+    CHUNK,
+    COMPILE_BREAK_EVEN,
+    INTERPRETED_SECONDS_PER_INSTRUCTION,
+    evaluator,
+)
 from designkit.simulation.cvodes_grid import IGNORED_METHOD, cvodes_for
 from designkit.simulation.dopri5 import ATOL as DOPRI5_ATOL
 from designkit.simulation.dopri5 import FLAGS as DOPRI5_FLAGS
@@ -64,67 +70,20 @@ from designkit.simulation.nonlinear import element_for
 from designkit.simulation.reference import Reference, reference_of
 from designkit.simulation.regime import regime_of
 from designkit.simulation.result import SimulationResult
+from designkit.simulation.scenario import (
+    check_reference,
+    noise_rows_of,
+    parameter_rows,
+    perturbation_rows,
+    plant_change,
+)
 from designkit.simulation.step import layout, step_function
 from designkit.simulation.timing import grid, rates_of, resolve, sampling_of
-from designkit.spec.fields import per_joint
 from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
 
 __all__ = ["COMPILE_BREAK_EVEN", "Simulator", "build", "simulate"]
-
-CHUNK = 200
-"""Steps per ``mapaccum`` evaluation of the interpreted step (see :func:`~designkit.simulation.integrate.run_steps`:
-building an interpreted ``mapaccum`` costs more the more steps it rolls)."""
-COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS = 2000, 1 << 18
-"""Steps per evaluation of the compiled step: at most ``COMPILED_CHUNK``, and at most ``COMPILED_CHUNK_NUMBERS``
-numbers of state and record per call (a long delay line makes the state large); compiling costs the same for any
-number of steps (CasADi writes the roll as a loop), and fewer calls cost less from Python."""
-COMPILE_BREAK_EVEN = 0.25
-"""Compile (``numerics.compile: auto``) when the interpreted run is estimated above this (s): about what
-compiling the rolled two-link step costs with ``cc -O1`` (0.21-0.25 s measured, ``benchmarks/bench_simnog.py``)."""
-CACHE_LOOKUP_FLOOR = 0.01
-"""Below this estimated interpreted cost (s) the compiled cache is not even looked up (generating the C source
-to hash it costs a few milliseconds)."""
-INTERPRETED_SECONDS_PER_INSTRUCTION = 6e-9
-"""Measured cost of one CasADi virtual-machine instruction in a rolled step on a quiet machine (SIMNOG:
-56 ms for 10^4 steps of 882 instructions; -O1 C runs the same steps in 5.5 ms)."""
-COMPILE_FLAGS = ("-O1", "-ffp-contract=off", "-fPIC", "-shared")
-"""No reassociation and no fused multiply-add: the compiled step gives the interpreted step's numbers."""
-
-
-def _joint_values(value: Any, n: int, path: str) -> np.ndarray:
-    try:
-        return np.array(per_joint(value, n, path))
-    except ValueError as exc:
-        key, msg = str(exc).split(": ", 1)
-        raise SpecError(key, msg.replace("per joint", "per entry")) from None
-
-
-def _noise(spec: Any, n: int, nx: int, names: tuple[str, ...]) -> tuple[np.ndarray, dict[str, Any]]:
-    noise = spec.simulation.noise
-    if noise is None:
-        return np.zeros((nx, n)), {"std": 0.0, "seed": None}
-    std = _joint_values(noise.std, nx, "simulation.noise.std")
-    if not np.any(std > 0):
-        return np.zeros((nx, n)), {"std": 0.0, "seed": None}
-    rng = np.random.default_rng(noise.seed)
-    samples = rng.normal(0.0, 1.0, size=(n, nx)).T * std[:, None]
-    return samples, {"std": float(std[0]) if np.all(std == std[0]) else std.tolist(), "seed": int(noise.seed),
-                     "on": list(names), "samples": "one per integration step, held over the step",
-                     "generator": "numpy PCG64"}
-
-
-def _perturbation(spec: Any, t: np.ndarray, dt: float, nd: int) -> tuple[np.ndarray, dict[str, Any] | None]:
-    pert = spec.simulation.perturbation
-    if pert is None:
-        return np.zeros((nd, t.size)), None
-    value = _joint_values(pert.value, nd, "simulation.perturbation.value")
-    on = t >= pert.time - 1e-9 * dt
-    applied = float(t[on][0]) if on.any() else None
-    return np.where(on[None, :], value[:, None], 0.0), {
-        "value": float(value[0]) if nd == 1 else value.tolist(), "time": float(pert.time), "time_applied": applied}
-
 
 def _closed_loop_poles(design: Design, plant: Any) -> list[np.ndarray]:
     """Poles that set the time scales: the nominal closed loop and the closed loop on the true plant.
@@ -218,7 +177,7 @@ class Simulator:
         if parameters:
             plant = plant.with_params(**parameters)
             if npar:
-                inputs[-npar:] = _parameter_rows(plant, self.time.size, self.change)
+                inputs[-npar:] = parameter_rows(plant, self.time.size, self.change)
         failure: dict[str, Any] = {}
         settings = self.settings
         if self.dopri5 is not None:  # a feedforward changing at a step is a breakpoint the pair ends a step on
@@ -270,35 +229,6 @@ class Simulator:
         )
 
 
-def _evaluator(step: ca.Function, n_steps: int, mode: str, runs: int = 1) -> tuple[ca.Function | None, dict[str, Any]]:
-    """The compiled ``mapaccum`` to run ``step`` with, or None for the interpreted one, and why."""
-    from designkit.models.codegen import cached_library, compile_function, find_compiler
-
-    estimate = runs * n_steps * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
-    info: dict[str, Any] = {"mode": mode, "interpreted_estimate_s": round(estimate, 4)}
-    if mode == "never":
-        return None, {**info, "compiled": False, "why": "numerics.compile: never"}
-    if not step.is_a("SXFunction"):
-        return None, {**info, "compiled": False, "why": "a CVODES step is not compiled"}
-    if find_compiler() is None:
-        return None, {**info, "compiled": False, "why": "no C compiler on PATH"}
-    if mode == "auto" and estimate < CACHE_LOOKUP_FLOOR:
-        return None, {**info, "compiled": False,
-                      "why": f"interpreted run estimated at {estimate:.3g} s: nothing to gain"}
-    m = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
-    acc = step.mapaccum(f"{step.name()}_acc", m)
-    cached = cached_library(acc, flags=COMPILE_FLAGS) is not None
-    if mode == "auto" and not cached and estimate < COMPILE_BREAK_EVEN and runs <= 1:
-        return None, {**info, "compiled": False,
-                      "why": f"interpreted run estimated at {estimate:.3g} s, below the {COMPILE_BREAK_EVEN:g} s "
-                             "it costs to compile"}
-    compiled = compile_function(acc, flags=COMPILE_FLAGS)
-    if not compiled.compiled:
-        return None, {**info, "compiled": False, "why": compiled.reason}
-    return compiled.function, {**info, "compiled": True, "why": "cached library" if cached else "compiled now",
-                               "flags": " ".join(COMPILE_FLAGS)}
-
-
 RK4_WORDS = "rk4 (classical, fixed step)"
 
 
@@ -312,37 +242,6 @@ class _NoElement:
     """Sizes of the record only (an element's memory is not recorded)."""
 
     n_memory = 0
-
-
-def check_reference(ref: Reference, t: np.ndarray, plant: Any, spec: Any, kind: str) -> None:
-    """The commanded motion must stay within the robot's joint limits (``qlim``) and, when the spec gives
-    them, ``plant.limits.velocity`` and ``acceleration``; else :class:`SpecError` naming the reference."""
-    key = "simulation.trajectory" if kind == "trajectory" else "simulation.step"
-    x = ref.evaluate(t)
-    for j, lim in enumerate(getattr(plant, "joint_limits", ())):
-        if lim is None:
-            continue
-        bad = np.flatnonzero((x[:, j, 0] < lim[0] - 1e-12) | (x[:, j, 0] > lim[1] + 1e-12))
-        start = ref.start[j] if j < len(ref.start) else 0.0
-        if not lim[0] - 1e-12 <= start <= lim[1] + 1e-12:
-            raise SpecError("simulation.initial_position", f"joint {j + 1} starts at {start:.4g} rad, outside its "
-                                                           f"limits [{lim[0]:.4g}, {lim[1]:.4g}] rad")
-        if bad.size:
-            k = int(bad[0])
-            raise SpecError(key, f"joint {j + 1} leaves its limits [{lim[0]:.4g}, {lim[1]:.4g}] rad at t = "
-                                 f"{t[k]:.4g} s (qD = {x[k, j, 0]:.4g} rad)")
-    limits = getattr(spec.plant, "limits", None)
-    for name, column, unit in (("velocity", 1, "rad/s"), ("acceleration", 2, "rad/s^2")):
-        value = getattr(limits, name, None) if limits is not None else None
-        if value is None or kind != "trajectory":
-            continue
-        bound = np.broadcast_to(np.asarray(value, dtype=float), (ref.n,))
-        peak = np.max(np.abs(x[:, :, column]), axis=0)
-        j = int(np.argmax(peak / bound))
-        if peak[j] > bound[j] * (1 + 1e-9):
-            k = int(np.argmax(np.abs(x[:, j, column])))
-            raise SpecError(key, f"joint {j + 1} needs {peak[j]:.4g} {unit} at t = {t[k]:.4g} s, above "
-                                 f"plant.limits.{name} {bound[j]:g} {unit}")
 
 
 def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = None, expected_runs: int = 1,
@@ -404,14 +303,14 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         check_reference(ref, t, true_plant, spec, kind)
     N, dt = timing.n_samples, timing.dt
     nx, nd, nu = len(true_plant.states), len(true_plant.disturbances), len(true_plant.inputs)
-    noise, noise_settings = _noise(spec, N, nx, tuple(s.name for s in true_plant.states))
-    dist, pert_settings = _perturbation(spec, t, dt, nd)
+    noise, noise_settings = noise_rows_of(spec, N, nx, tuple(s.name for s in true_plant.states))
+    dist, pert_settings = perturbation_rows(spec, t, dt, nd)
     flag = np.ones((1, N))
     if timing.steps_per_sample:
         flag[:] = 0.0
         flag[0, :: timing.steps_per_sample] = 1.0
-    change, change_settings = _plant_change(sim.plant_change, true_plant, t, dt)
-    p_rows = _parameter_rows(true_plant, N, change)
+    change, change_settings = plant_change(sim.plant_change, true_plant, t, dt)
+    p_rows = parameter_rows(true_plant, N, change)
     stages = (ref.flat(t).T,) * 3 if ref.piecewise_constant else (
         ref.flat(t).T, ref.flat(t + 0.5 * dt).T, ref.flat(t + dt).T)  # a jump acts from the step it falls on
     inputs = np.vstack([*stages, noise, dist, flag, np.zeros((nu, N)), p_rows])
@@ -429,7 +328,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     if cvodes is not None:
         integrator, accumulated, compile_info = cvodes.settings_words, None, cvodes.compile_info
     elif dopri5 is None:
-        accumulated, compile_info = _evaluator(step, N, spec.numerics.compile, expected_runs)
+        accumulated, compile_info = evaluator(step, N, spec.numerics.compile, expected_runs)
     else:
         accumulated = None
         estimate = expected_runs * N * step.n_instructions() * INTERPRETED_SECONDS_PER_INSTRUCTION
@@ -527,30 +426,6 @@ def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: An
         why += (f"; the plant's {'; '.join(plant.nonsmooth())} is cancelled by the law's compensation (the closed "
                 "loop is continuous across zero velocity)")
     return runner, words, why
-
-
-def _plant_change(section: Any, plant: Any, t: np.ndarray, dt: float) -> tuple[Any, dict[str, Any] | None]:
-    """``(first step index, values)`` of ``simulation.plant_change`` (validated on ``plant``), and its settings."""
-    if section is None:
-        return None, None
-    from designkit.errors import ModelError
-
-    try:
-        plant.with_params(**section.values)
-    except ModelError as exc:
-        raise SpecError(f"simulation.plant_change.values.{exc.field}", exc.message) from None
-    on = np.flatnonzero(t >= section.time - 1e-9 * dt)
-    k = int(on[0]) if on.size else t.size
-    return (k, dict(section.values)), {"time": float(section.time), "values": dict(section.values),
-                                       "time_applied": float(t[k]) if k < t.size else None}
-
-
-def _parameter_rows(plant: Any, n: int, change: Any) -> np.ndarray:
-    """The true plant's parameter vector per step ``(np, n)``, changed from step ``change[0]`` on."""
-    rows = np.repeat(np.asarray(plant.parameter_vector, dtype=float).reshape(-1, 1), n, axis=1)
-    if change is not None and change[0] < n:
-        rows[:, change[0]:] = np.asarray(plant.with_params(**change[1]).parameter_vector, dtype=float)[:, None]
-    return rows
 
 
 def _check_anti_windup(section: Any, law: Law) -> None:
