@@ -164,10 +164,11 @@ _LOOP_NOTE = ("loop broken at the plant input with the reference and the disturb
 def equations(design: Any, display: Any, plant: Any) -> tuple[Equation, ...]:
     """Plant, control law, closed loop, design formulas and the loop transfer of the Bode plot, typeset."""
     eqs = [equation("Plant", line) for line in plant.equations()]
-    eqs += [equation("Control law", line) for line in display.law]
+    law = display.law_lines(design)
+    eqs += [equation("Control law", line) for line in law]
     for line in design.formulas:
         head = line.split("=", 1)[0].strip()
-        if head in ("u", "a*") and display.law:
+        if head in ("u", "a*") and law:
             continue  # the law, already shown in the family's notation
         kind = "Closed loop" if re.fullmatch(r"[\w']+/[\w']+", head) else "Design formula"  # x1/xD = ...
         eqs.append(equation(kind, line))

@@ -268,7 +268,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         plant_equation="\n".join(plant.equations()) + "   (" + ", ".join(
             f"{s.name} {unit(s.unit)}" for s in (*plant.states, *plant.inputs)) + ")",
         plant_parameters=plant_rows(plant, spec, lattice=any(c.name == "robust_grid" for c in checks)),
-        formulas=(*display.law, *design.formulas),
+        formulas=(*display.law_lines(design), *design.formulas),
         gains=tuple(ParameterRow(k, gain_value(v), unit(design.gains.unit(k)), design.gains.meaning(k))
                     for k, v in design.gains.items()),
         poles=pole_rows(design),

@@ -238,6 +238,10 @@ def reference_rate(traj: Any) -> tuple[float, float, str]:
         return 2 * math.pi / max(min(v / a, T / 2), 1e-12), T, "simulation.trajectory.max_acceleration"
     if kind == "square":
         return 0.0, 2 * float(traj.period), "simulation.trajectory.period"
+    if kind == "multisine":  # the highest harmonic of joint n is n K; n is not known here: that of the amplitudes
+        joints = len(traj.amplitude) if isinstance(traj.amplitude, list) else 1
+        T = float(traj.period)
+        return 2 * math.pi * joints * int(traj.harmonics) / T, 3 * T, "simulation.trajectory.harmonics"
     if kind == "prbs":
         return 0.0, (2 ** int(traj.order) - 1) * float(traj.bit), "simulation.trajectory.order"
     T = float(traj.duration)

@@ -19,6 +19,11 @@ own displacement ``A_j``; :meth:`Reference.evaluate` returns an array of shape `
 * ``via_points``: a clamped cubic spline (scipy ``CubicSpline``, zero velocity at both ends;
   continuous acceleration) through ``(0, 0), (t_1, P_1), ..., (t_k, P_k)`` per joint, held after
   ``t_k``;
+* ``multisine``: joint ``j`` of ``n`` follows ``xD = q0 + (A/K) sum_i (sin(2 pi h_i t/T + phi_i) - sin phi_i)``
+  over ``K`` harmonics ``h_i = j + i n`` (``i = 0 .. K - 1``) of ``1/T``, interleaved so that no two joints share a
+  frequency, with Schroeder's phases ``phi_i = -pi i (i - 1)/K`` (a low crest factor): it starts at ``q0`` and
+  swings within ``A`` of its centre ``q0 - (A/K) sum_i sin phi_i``.
+  A smooth, persistently exciting reference whose joints are orthogonal over a period (identification);
 * ``square`` (servos): ``xD = q0 + A`` over the first half of every period ``T``, ``q0 - A`` over the
   second, ``xD' = xD'' = 0``;
 * ``prbs`` (servos): ``xD = q0 + A (2 b_k - 1)`` on ``[k T_b, (k + 1) T_b)``, ``b_k`` the output of the
@@ -45,8 +50,8 @@ from designkit.errors import SpecError
 from designkit.spec.fields import per_joint
 from designkit.synthesis.design import freeze
 
-__all__ = ["PRBS_TAPS", "Reference", "prbs", "prbs_bits", "quintic", "reference_for", "reference_of", "sine",
-           "square", "step_reference", "trapezoidal", "via_points"]
+__all__ = ["PRBS_TAPS", "Reference", "multisine", "prbs", "prbs_bits", "quintic", "reference_for", "reference_of",
+           "sine", "square", "step_reference", "trapezoidal", "via_points"]
 
 
 @dataclass(frozen=True)
@@ -161,6 +166,35 @@ def sine(amplitude: Any, frequency: float, start: Any = 0.0, n: int | None = Non
 
     return Reference(evaluate, n, 3.0 / float(frequency), w,
                      _settings("sine", q0, amplitude=amp, frequency=float(frequency)), tuple(q0))
+
+
+def multisine(amplitude: Any, period: float, harmonics: int, start: Any = 0.0, n: int | None = None) -> Reference:
+    """A sum of ``harmonics`` sines per joint, interleaved between the joints (module docstring): rad, s.
+
+    Examples
+    --------
+    >>> x = multisine([1.0, 0.5], 10.0, 3).evaluate(np.linspace(0, 10, 2001))[:, :, 0]
+    >>> x[0].tolist(), ((x.max(axis=0) - x.min(axis=0)) / 2).round(3).tolist()
+    ([0.0, 0.0], [0.831, 0.347])
+    """
+    n = n or np.size(amplitude)
+    amp, q0, T, K = _vec(amplitude, n), _vec(start, n), float(period), int(harmonics)
+    i = np.arange(K)
+    phase = -math.pi * i * (i - 1) / K
+    w = 2.0 * math.pi * (np.arange(1, n + 1)[:, None] + n * i[None, :]) / T  # (n, K) rad/s
+
+    def evaluate(t: np.ndarray) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, float))
+        arg = w[None, :, :] * t[:, None, None] + phase[None, None, :]
+        scale = (amp / K)[None, :]
+        out = np.empty((t.size, n, 3))
+        out[:, :, 0] = q0[None, :] + scale * (np.sin(arg) - np.sin(phase)[None, None, :]).sum(axis=2)
+        out[:, :, 1] = scale * (w[None] * np.cos(arg)).sum(axis=2)
+        out[:, :, 2] = -scale * (w[None] ** 2 * np.sin(arg)).sum(axis=2)
+        return out
+
+    return Reference(evaluate, n, 3.0 * T, float(w.max()),
+                     _settings("multisine", q0, amplitude=amp, period=T, harmonics=K), tuple(q0))
 
 
 def trapezoid_timing(amplitude: Any, max_velocity: Any, max_acceleration: Any,
@@ -328,6 +362,8 @@ def _trajectory(traj: Any, start: np.ndarray, n: int) -> Reference:
                         "tracking controller needs a smooth trajectory: use quintic, sine, trapezoidal or via_points")
     if traj.kind == "quintic":
         return quintic(_joints(traj.amplitude, n, "amplitude"), traj.duration, start, n)
+    if traj.kind == "multisine":
+        return multisine(_joints(traj.amplitude, n, "amplitude"), traj.period, traj.harmonics, start, n)
     if traj.kind == "sine":
         return sine(_joints(traj.amplitude, n, "amplitude"), traj.frequency, start, n)
     if traj.kind == "trapezoidal":

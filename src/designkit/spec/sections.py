@@ -22,10 +22,10 @@ from designkit.spec.fields import NonNegativeFinite, PositiveFinite, Section
 from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
 
 __all__ = [
-    "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "Noise", "Nonlinearity",
-    "Numerics", "Perturbation", "PlantChange", "PrbsReference", "Quantizer", "QuinticTrajectory", "Relay",
-    "Requirements", "STEP_REFERENCES", "Saturation", "Simulation", "SineTrajectory", "SquareReference", "TASK_PATHS",
-    "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
+    "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "MultisineTrajectory",
+    "Noise", "Nonlinearity", "Numerics", "Perturbation", "PlantChange", "PrbsReference", "Quantizer",
+    "QuinticTrajectory", "Relay", "Requirements", "STEP_REFERENCES", "Saturation", "Simulation", "SineTrajectory",
+    "SquareReference", "TASK_PATHS", "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
 ]
 
 
@@ -164,6 +164,19 @@ class SineTrajectory(Section):
     frequency: Ranged(1e-6, 1e3, "Hz", base=PositiveFinite) = 1.0
 
 
+class MultisineTrajectory(Section):
+    """A sum of sines per joint from the initial position: joint ``j`` of ``n`` follows
+    ``q0 + (amplitude/K) sum_i (sin(2 pi (j + i n) t/period + phi_i) - sin phi_i)``, ``i = 0 .. K - 1``,
+    ``K = harmonics`` (interleaved harmonics of ``1/period``: no two joints share a frequency; Schroeder's phases
+    ``phi_i = -pi i (i - 1)/K``), swinging within ``amplitude`` of its centre (rad per joint, within 100; s, 1e-3 to
+    1e9; 1 to 50 harmonics).  A smooth persistently exciting reference (identification)."""
+
+    kind: Literal["multisine"]
+    amplitude: RangedPerJoint(*_POSITION) = 1.0
+    period: Ranged(*_MOVE, base=PositiveFinite) = 10.0
+    harmonics: RangedInt(1, 50) = 3
+
+
 class TrapezoidalTrajectory(Section):
     """Trapezoidal-velocity move of ``amplitude`` (per joint), all joints synchronised.
 
@@ -267,7 +280,7 @@ class PrbsReference(Section):
 
 
 Trajectory = Annotated[QuinticTrajectory | SineTrajectory | TrapezoidalTrajectory | ViaPointsTrajectory
-                       | LineTrajectory | CircleTrajectory | SquareReference | PrbsReference,
+                       | LineTrajectory | CircleTrajectory | SquareReference | PrbsReference | MultisineTrajectory,
                        Field(discriminator="kind")]
 
 JOINT_TRAJECTORIES = ("quintic", "sine", "trapezoidal", "via_points")

@@ -44,12 +44,22 @@ class Display:
         The loop transfer at the plant input in closed form, or ``""``.
     summary : str
         One sentence: what the family does and where it comes from (notes section).
+    law_of : callable or None
+        ``design -> tuple of str``: the law of a design when it depends on the design (a family with one form per
+        plant kind); :meth:`law_lines` falls back to ``law``.
     """
 
     label: str
     law: tuple[str, ...]
     loop_transfer: str = ""
     summary: str = ""
+    law_of: Callable[[Any], tuple[str, ...]] | None = None
+
+    def law_lines(self, design: Any) -> tuple[str, ...]:
+        """The law as the report writes it for ``design``: ``law_of(design)`` when given and not empty, else
+        ``law``."""
+        lines = self.law_of(design) if self.law_of is not None else ()
+        return tuple(lines) or self.law
 
 
 @dataclass(frozen=True)

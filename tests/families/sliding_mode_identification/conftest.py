@@ -28,3 +28,15 @@ def step_result():
 def single_step_result():
     """``specs/smid-link-single-step.yaml``: one step and nothing after it (not exciting)."""
     return run(load_spec(SPECS / "smid-link-single-step.yaml"))
+
+
+@pytest.fixture(scope="session")
+def simnog_result():
+    """``specs/smid-simnog.yaml``: the SIMNOG arm's ten base parameters, m2 3 -> 4 kg at t = 40 s."""
+    return run(load_spec(SPECS / "smid-simnog.yaml"))
+
+
+@pytest.fixture(scope="session")
+def simnog_single_step_result():
+    """``specs/smid-simnog-single-step.yaml``: one step, then the arm at rest (not exciting)."""
+    return run(load_spec(SPECS / "smid-simnog-single-step.yaml"))

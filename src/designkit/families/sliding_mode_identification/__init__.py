@@ -21,6 +21,12 @@ not increase, ``|a - ah(t)| <= sqrt(ga V(0))`` and ``|b - bh(t)| <= sqrt(gb V(0)
 along the whole run when ``c > sqrt(ga V0max)`` and ``d > sqrt(gb V0max)``; the defaults take
 :data:`SWITCHING_MARGIN` times these.
 
+**Robot form** (``plant.kind: robot``; notes section 5.5's generalisation ``x' = A phi(x, t)`` with the model
+layer's regressor as ``phi``): the arm's base parameters, ``u = Wb(q, qd, qdd) beta``, identified by one observer
+per joint and the two-time-point update on the torque equation
+(:mod:`~designkit.families.sliding_mode_identification.arm_design`, ``arm_law``, ``arm_checks``, ``arm_report``;
+docs/families/sliding_mode_identification.md, "Robot form").
+
 **Contract.**  ``Linearization("none")``: the identifier is a sampled switching observer in discrete memory; the
 servo itself is a fixed PD loop, but the family's verdict is about the identification, judged by its own checks
 (:mod:`~designkit.families.sliding_mode_identification.checks`).
@@ -29,14 +35,11 @@ servo itself is a fixed PD loop, but the family's verdict is about the identific
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
-
-from pydantic import Field
+from typing import Any
 
 from designkit.errors import SpecError
 from designkit.families.sliding_mode_identification.laws import KIND, RECORDED, Identifier, identifier_law
-from designkit.spec.fields import PositiveFinite, Section
-from designkit.spec.ranges import Ranged
+from designkit.families.sliding_mode_identification.spec import LINK_REFERENCES, ROBOT_REFERENCES, SmidSpec, validate
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -53,42 +56,6 @@ REASON = ("the identifier is a sampled switching observer (sign of the sliding v
           "signals D seconds ago in discrete memory: it has no continuous linearization; its own checks judge it")
 
 
-class Servo(Section):
-    """The PD servo driving the link while it is identified: ``K1`` (N*m/rad) and ``K2`` (N*m*s/rad), 1e-6 to 1e6."""
-
-    K1: Ranged(1e-6, 1e6, "N*m/rad", base=PositiveFinite) = 5.0
-    K2: Ranged(1e-6, 1e6, "N*m*s/rad", base=PositiveFinite) = 0.5
-
-
-class ErrorBounds(Section):
-    """Stated bounds on the initial estimation errors: ``|a - ah(0)| <= a`` (1/s), ``|b - bh(0)| <= b``
-    ((rad/s^2)/(N*m)), 1e-9 to 1e9 each."""
-
-    a: Ranged(1e-9, 1e9, "1/s", base=PositiveFinite)
-    b: Ranged(1e-9, 1e9, "rad/(s^2*N*m)", base=PositiveFinite)
-
-
-class SmidSpec(Section):
-    """Sliding-mode identification of ``a = 1/tau`` and ``b = Km/tau`` (notes section 5.5).
-
-    ``initial_estimates``: ``[ah(0), bh(0)]`` (1/s, (rad/s^2)/(N*m)).  ``error_bounds``: the bounds on their errors.
-    ``c``, ``d``: the observer's switching gains (1/s, (rad/s^2)/(N*m), > 0; default from the bounds).
-    ``window``: ``D`` (s, > 0), the distance of the two time points.  ``adaptation_gains``: ``[ga, gb]``
-    (s/rad^2, 1/(s (N*m)^2)).  ``sampling_period`` (s): the identifier's period.
-    """
-
-    kind: Literal[KIND]
-    servo: Servo = Field(default_factory=Servo)
-    initial_estimates: list[float] = Field(min_length=2, max_length=2)
-    error_bounds: ErrorBounds
-    c: Ranged(0.0, 1e9, "1/s", base=PositiveFinite, low_open=True) | None = None
-    d: Ranged(0.0, 1e9, "rad/(s^2*N*m)", base=PositiveFinite, low_open=True) | None = None
-    window: Ranged(0.0, 1e6, "s", base=PositiveFinite, low_open=True) = 0.25
-    adaptation_gains: list[Ranged(1e-12, 1e12, "")] = Field(default_factory=lambda: [1.0, 1.0], min_length=2,
-                                                            max_length=2)
-    sampling_period: Ranged(1e-5, 10.0, "s", base=PositiveFinite) = 0.002
-
-
 def switching_bounds(bounds: tuple[float, float], gamma: tuple[float, float]) -> tuple[float, float]:
     """The least ``(c, d)`` the stated error bounds ``(ea, eb)`` require: ``sqrt(g V0max)``, ``V0max = ea^2/ga +
     eb^2/gb`` (module docstring).
@@ -102,16 +69,16 @@ def switching_bounds(bounds: tuple[float, float], gamma: tuple[float, float]) ->
     return math.sqrt(gamma[0] * v0), math.sqrt(gamma[1] * v0)
 
 
-def validate(spec: Any) -> None:
-    """Cross-section rules: no anti-windup (the PD servo has no integral)."""
-    if spec.simulation.anti_windup is not None:
-        raise ValueError("simulation.anti_windup: the PD servo driving the identification has no integral to limit")
-
-
 def synthesize(spec: Any, plant: Any) -> Design:
-    """The identifier a spec asks for (module docstring)."""
+    """The identifier a spec asks for (module docstring; on a robot,
+    :func:`~designkit.families.sliding_mode_identification.arm_design.synthesize_arm`)."""
+    if plant.kind == "robot":
+        from designkit.families.sliding_mode_identification.arm_design import synthesize_arm
+
+        return synthesize_arm(spec, plant)
     cs = spec.controller
-    gamma = (float(cs.adaptation_gains[0]), float(cs.adaptation_gains[1]))
+    given = cs.adaptation_gains if cs.adaptation_gains is not None else [1.0, 1.0]
+    gamma = (float(given[0]), float(given[1]))
     bounds = (float(cs.error_bounds.a), float(cs.error_bounds.b))
     need = switching_bounds(bounds, gamma)
     notes = []
@@ -125,7 +92,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("controller.window", f"must be between one and {MAX_WINDOW_SAMPLES} sampling periods "
                         f"({Ts:g} s to {MAX_WINDOW_SAMPLES * Ts:g} s: the signals D seconds ago are kept in shift "
                         f"registers of D/Ts samples), got {cs.window:g}")
-    ident = Identifier(K1=float(cs.servo.K1), K2=float(cs.servo.K2), c=c, d=d, window=float(cs.window), gamma=gamma,
+    K1, K2 = (float(v[0]) if isinstance(v, list) else float(v) for v in (cs.servo.K1, cs.servo.K2))
+    ident = Identifier(K1=K1, K2=K2, c=c, d=d, window=float(cs.window), gamma=gamma,
                        initial=(float(cs.initial_estimates[0]), float(cs.initial_estimates[1])), Ts=Ts)
     return design(plant, ident, bounds, need, notes=tuple(notes))
 
@@ -161,16 +129,21 @@ def design(plant: Any, ident: Identifier, bounds: tuple[float, float], need: tup
 def law(design: Design, anti_windup: Any = None) -> Law:
     """The law of ``design`` rebuilt from ``design.extra`` (``anti_windup`` is refused at the spec)."""
     x = design.extra
+    if x.get("form") == "robot":
+        from designkit.families.sliding_mode_identification.arm_design import arm_law
+
+        return arm_law(design)
     return identifier_law(design.plant, Identifier(K1=x["K1"], K2=x["K2"], c=x["c"], d=x["d"], window=x["window"],
                                                    gamma=tuple(x["gamma"]), initial=tuple(x["initial"]), Ts=x["Ts"]))
 
 
 def _family() -> Family:
-    from designkit.families.sliding_mode_identification import checks, report
+    from designkit.families.sliding_mode_identification import arm_report, checks, report
+    from designkit.families.sliding_mode_identification.arm_design import law_lines
 
     return Family(
-        kind=KIND, spec=SmidSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
-        checks=checks.RULES, validate=validate, references=("square", "prbs"),
+        kind=KIND, spec=SmidSpec, plants=("link", "robot"), reference="step", synthesize=synthesize, law=law,
+        checks=checks.RULES, validate=validate, references=tuple(dict.fromkeys(LINK_REFERENCES + ROBOT_REFERENCES)),
         display=Display(
             label="Sliding-mode parameter identification",
             law=("u = −K1 (x1 − xD) − K2 x2  (the servo driving the link)",
@@ -178,8 +151,10 @@ def _family() -> Family:
                  "ε1 = x2'(t) + â x2(t) − b̂ u(t),  ε2 = x2'(t−D) + â x2(t−D) − b̂ u(t−D)",
                  "â' = −γa (ε1 x2(t) + ε2 x2(t−D)),  b̂' = γb (ε1 u(t) + ε2 u(t−D))"),
             summary="Notes §5.5: a sliding-mode observer gives the link's acceleration on line, and a gradient rule "
-                    "on two time points D apart identifies a = 1/τ and b = Km/τ while a PD servo drives the link."),
-        figures=report.FIGURES, sections=(report.section,), diagnoses=(checks.diagnose,), json=report.json,
+                    "on two time points D apart identifies a = 1/τ and b = Km/τ while a PD servo drives the link.",
+            law_of=law_lines),
+        figures=(*report.FIGURES, *arm_report.FIGURES), sections=(report.section,), diagnoses=(checks.diagnose,),
+        json=report.json,
     )
 
 

@@ -223,6 +223,10 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     if check.passed is not False:
         return None
     x = result.design.extra
+    if x.get("form") == "robot":
+        from designkit.families.sliding_mode_identification import arm_checks
+
+        return arm_checks.diagnose(result, check)
     if check.name == "switching_condition":
         need = max(check.certificate["max_error"][0], x["required"][0])
         needd = max(check.certificate["max_error"][1], x["required"][1])
@@ -248,8 +252,21 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     return None
 
 
+def _form(run: Any, name: str) -> Any:
+    """``run`` on the link; on a robot the check of the same name in
+    :mod:`~designkit.families.sliding_mode_identification.arm_checks`."""
+    def go(design: Any, ctx: Context) -> tuple[Check, ...]:
+        if design.extra.get("form") == "robot":
+            from designkit.families.sliding_mode_identification import arm_checks
+
+            return getattr(arm_checks, name)(design, ctx)
+        return run(design, ctx)
+
+    return go
+
+
 def _rule(name: str, order: int, run: Any, label: str) -> CheckRule:
-    return CheckRule(name=name, order=order, applies=_applies, run=run, label=label, diagnose=diagnose)
+    return CheckRule(name=name, order=order, applies=_applies, run=_form(run, name), label=label, diagnose=diagnose)
 
 
 RULES = (

@@ -12,6 +12,7 @@ from designkit.display.figure import EVENT_STYLE, Figure
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
 from designkit.display.svg import BLUE, GREEN, ORANGE, RED, new_figure, plot_decimated, render_tagged, tag
+from designkit.families.sliding_mode_identification import arm_report
 from designkit.families.sliding_mode_identification.checks import (
     CONVERGED_REL,
     DET_REL,
@@ -31,6 +32,8 @@ def json(result: Any) -> dict[str, Any]:
     """``{"a_hat": ..., "b_hat": ..., "identification": {...}}``: the estimates at the end of the run (1/s,
     (rad/s^2)/(N*m)), and, under ``identification``, the true values at the end and the units (convention
     ``x2' = -a x2 + b u``, ``a = 1/tau``, ``b = Km/tau``)."""
+    if result.design.extra.get("form") == "robot":
+        return arm_report.arm_json(result)
     sim = result.simulation
     if sim is None:
         return {"a_hat": None, "b_hat": None}
@@ -144,7 +147,8 @@ def _present(result: Any, name: str) -> tuple[str, ...]:
 
 
 FIGURES = (estimates_figure, sliding_figure, determinant_figure)
-"""The family's figures, in report order."""
+"""The link's figures, in report order (the family's are these and the robot form's,
+:data:`~designkit.families.sliding_mode_identification.arm_report.FIGURES`: each draws for its own form only)."""
 
 
 def _f(x: float, digits: int = 4) -> str:
@@ -161,6 +165,8 @@ def section(result: Any) -> ReportSection | None:
     sim = result.simulation
     if sim is None:
         return None
+    if result.design.extra.get("form") == "robot":
+        return arm_report.arm_section(result)
     x = result.design.extra
     t = np.asarray(sim.time, dtype=float)
     plant = result.plant if result.plant is not None else result.design.plant
