@@ -38,13 +38,19 @@ def test_every_family_has_a_case_on_every_canonical_plant_it_accepts():
         assert accepted <= set(CASES[kind]), f"{kind}: no case for {sorted(accepted - set(CASES[kind]))}"
 
 
+class _Runs(dict):
+    """Each case's parsed spec and pipeline result, run the first time a test asks for it (under pytest-xdist a
+    worker runs only the cases of the tests it is given)."""
+
+    def __missing__(self, case):
+        loaded = parse_spec(case_yaml(*case))
+        self[case] = (loaded, run(loaded))
+        return self[case]
+
+
 @pytest.fixture(scope="module")
 def results():
-    out = {}
-    for kind, plant in CASE_IDS:
-        loaded = parse_spec(case_yaml(kind, plant))
-        out[kind, plant] = (loaded, run(loaded))
-    return out
+    return _Runs()
 
 
 @pytest.mark.parametrize(("kind", "plant"), CASE_IDS, ids=[f"{k}-{p}" for k, p in CASE_IDS])
