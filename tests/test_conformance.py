@@ -48,6 +48,10 @@ class _Runs(dict):
         return self[case]
 
 
+SPREAD_UNDER_XDIST = True
+"""The runs fill lazily per case, so the tests stay spread over the workers (tests/conftest.py)."""
+
+
 @pytest.fixture(scope="module")
 def results():
     return _Runs()

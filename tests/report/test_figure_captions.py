@@ -69,8 +69,14 @@ def runs():
 
 
 @pytest.fixture(scope="module")
-def figures(runs):
-    return {name: {f.filename: f for f in design_figures(r)} for name, r in runs.items()}
+def drawn_lists(runs):
+    """Each run's figures in the order the report draws them (drawn once for the module)."""
+    return {name: design_figures(r) for name, r in runs.items()}
+
+
+@pytest.fixture(scope="module")
+def figures(drawn_lists):
+    return {name: {f.filename: f for f in figs} for name, figs in drawn_lists.items()}
 
 
 def drawn(draw, *args):
@@ -219,12 +225,12 @@ def test_sensitivity_figure_wherever_loop_margins_exist(runs, figures):
         assert ("fig-loop-sensitivity.svg" in figures[name]) == has_loop, name
 
 
-def test_evidence_links_name_present_checks_and_filenames_are_unique(runs, figures):
+def test_evidence_links_name_present_checks_and_filenames_are_unique(runs, figures, drawn_lists):
     timed = {"overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control"}
     for name, res in runs.items():
         present = {c.name for c in res.checks}
         figs = list(figures[name].values())
-        assert len({f.filename for f in design_figures(res)}) == len(design_figures(res))
+        assert len({f.filename for f in drawn_lists[name]}) == len(drawn_lists[name])
         for f in figs:
             assert set(f.evidence) <= present and f.anchor == f.filename[:-4] and f.anchor.startswith("fig-")
         assert set(figures[name]["fig-simulation.svg"].evidence) == timed & present

@@ -66,6 +66,10 @@ def _specs_of(kind: str) -> list[Path]:
     return sorted(one.values(), key=lambda p: (_plant_of(p)[1] == "puma560", _plant_of(p)[0] != "link", p.name))
 
 
+SPREAD_UNDER_XDIST = True
+"""The module fixture is the compiler's name (cheap): the tests stay spread over the workers (tests/conftest.py)."""
+
+
 @pytest.fixture(scope="module")
 def cc() -> str:
     compiler = find_compiler()
