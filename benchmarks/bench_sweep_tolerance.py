@@ -6,7 +6,8 @@ kernel (``designkit.sweep.kernel``: the Dormand--Prince pair integrates each sam
 the 20,001 grid points to the requirements' metrics).  The same batch of samples is run at the default tolerance
 (rtol 1e-10, atol 1e-12) and at looser ones (``numerics.rtol``/``atol``), rounds interleaved, best round of each;
 reported per tolerance: CPU per sample, right-hand-side evaluations and accepted steps per sample, and the largest
-difference of any requirement's margin from the default's.
+difference of any requirement's margin from the default's; and the least-squares line CPU = fixed + slope x
+evaluations through the rows (the fixed part is what no tolerance removes).
 
 The question it answers: would a looser tolerance put 10^6 samples inside the issue's 5 minutes on two cores
 (about 0.6 ms of CPU a sample with the engine's overhead)?  The integration shrinks with the tolerance; the grid
@@ -68,7 +69,15 @@ def main(b: int = 256, rounds: int = 3) -> dict:
                      "evaluations_per_sample": round(float(stats[:, 0].mean()), 1),
                      "accepted_steps_per_sample": round(float(stats[:, 1].mean()), 1),
                      "largest_margin_difference": diff})
+    evals = np.array([r["evaluations_per_sample"] for r in rows])
+    cpu = np.array([r["cpu_ms_per_sample"] for r in rows])
+    slope, fixed = np.polyfit(evals, cpu, 1)  # CPU = fixed + slope * evaluations
+    n_grid = preps[LADDER[0][0]].simulator.time.size
+    fit = {"us_per_evaluation": round(1e3 * slope, 4), "fixed_ms_per_sample": round(fixed, 4),
+           "grid_points": int(n_grid), "fixed_ns_per_grid_point": round(1e6 * fixed / n_grid, 1),
+           "largest_residual_ms": round(float(np.max(np.abs(np.polyval([slope, fixed], evals) - cpu))), 4)}
     out = {"benchmark": "bench_sweep_tolerance", "samples_per_batch": b, "rounds": rounds, "rows": rows,
+           "linear_fit": fit,
            "floor_ms_per_sample_for_1e6_in_5_min_on_2_cores": round(1e3 * 300 * 2 / 1e6, 3),
            "load_average": {"before": [round(x, 2) for x in load_before],
                             "after": [round(x, 2) for x in os.getloadavg()]}}
