@@ -97,3 +97,16 @@ def test_servo_without_zero_sets_K4_zero_and_reports_the_zero():
     tf = _servo_by_interconnection(design.plant, dict(design.gains))
     _assert_same_roots(control.zeros(tf), design.zeros)
     assert any("K4 = 0" in n for n in design.notes)
+
+
+@pytest.mark.parametrize("Km", [2.0, -0.7])
+def test_bare_number_gains_place_the_loop_for_either_sign_of_Km(Km):
+    """servo_pid_gains (used by the self-tuning family on a running estimate) against python-control's closed
+    loop u = -(K1 + K2 s + K3/s) x1 on Km / (s (tau s + 1)), a negative Km included (LinkPlant refuses it)."""
+    tau, poles = 0.5, (-4.0, -5.0, -20.0)
+    K1, K2, K3 = pid.servo_pid_gains(Km, tau, poles)
+    L = control.tf([Km * K2, Km * K1, Km * K3], [tau, 1.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.sort(control.poles(control.feedback(L, 1)).real), sorted(poles), rtol=1e-8)
+    if Km > 0:
+        gains = pid.servo_gains(LinkPlant(Km=Km, tau=tau), poles, None)
+        assert (gains["K1"], gains["K2"], gains["K3"]) == (K1, K2, K3)

@@ -43,6 +43,32 @@ def _symmetric_functions(poles: Sequence[complex]) -> tuple[float, float, float]
     return s1.real, s2.real, s3.real
 
 
+def servo_pid_gains(Km: float, tau: float, poles: Sequence[complex]) -> tuple[float, float, float]:
+    """``(K1, K2, K3)`` of the PID position servo placing the three continuous ``poles`` (1/s) on the
+    link ``(Km, tau)`` (module docstring), for any nonzero ``Km``.
+
+    Unlike :func:`servo_gains` this takes bare numbers, not a validated :class:`LinkPlant`: an
+    adaptive law (the self-tuning family) calls it on a running estimate whose ``Km`` may be
+    negative early in a run.
+
+    Parameters
+    ----------
+    Km : float
+        Link gain, (rad/s)/(N*m); nonzero.
+    tau : float
+        Link time constant, s.
+    poles : sequence of 3 complex
+        Closed-loop poles; complex ones in conjugate pairs.
+
+    Returns
+    -------
+    tuple of float
+        ``K1`` (N*m/rad), ``K2`` (N*m*s/rad), ``K3`` (N*m/(rad*s)).
+    """
+    s1, s2, s3 = _symmetric_functions(poles)
+    return tau * s2 / Km, -(tau * s1 + 1.0) / Km, -tau * s3 / Km
+
+
 def servo_gains(plant: LinkPlant, poles: Sequence[complex], zero: float | None) -> dict[str, float]:
     """Gains K1..K4 of the PID position servo placing ``poles`` (1/s) and ``zero`` (1/s).
 
@@ -60,11 +86,7 @@ def servo_gains(plant: LinkPlant, poles: Sequence[complex], zero: float | None) 
     dict
         ``K1`` (N*m/rad), ``K2`` (N*m*s/rad), ``K3`` (N*m/(rad*s)), ``K4`` (s).
     """
-    s1, s2, s3 = _symmetric_functions(poles)
-    Km, tau = plant.Km, plant.tau
-    K1 = tau * s2 / Km
-    K2 = -(tau * s1 + 1.0) / Km
-    K3 = -tau * s3 / Km
+    K1, K2, K3 = servo_pid_gains(plant.Km, plant.tau, poles)
     K4 = 0.0 if zero is None else -(K3 + K1 * zero) / (K3 * zero)
     return {"K1": K1, "K2": K2, "K3": K3, "K4": K4}
 

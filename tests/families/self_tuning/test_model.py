@@ -13,7 +13,6 @@ from designkit.families.self_tuning.model import (
     diophantine,
     discretize,
     link_of,
-    pid_gains,
     position_model,
     sylvester,
     theta_of,
@@ -107,16 +106,6 @@ def test_diophantine_for_random_coprime_models(a, b0, zb, p):
     poles = closed_loop_poles(np.array([b0, b1]), np.array([1.0, a1, a2]), np.array([1.0, r1]), np.array([s0, s1]),
                               1.0)
     assert np.max(np.abs(np.sort(poles.real) - np.sort(p))) < 1e-4 + 1e-9 * np.linalg.cond(sylvester(a1, a2, b0, b1))
-
-
-def test_pid_gains_place_the_continuous_loop():
-    import control
-
-    Km, tau, poles = 2.0, 0.5, (-4.0, -5.0, -20.0)
-    K1, K2, K3 = pid_gains(Km, tau, poles)
-    # u = -(K1 + K2 s + K3/s) x1 + ...: loop Km (K2 s^2 + K1 s + K3) / (s^2 (tau s + 1))
-    L = control.tf([Km * K2, Km * K1, Km * K3], [tau, 1.0, 0.0, 0.0])
-    np.testing.assert_allclose(np.sort(control.poles(control.feedback(L, 1)).real), sorted(poles), rtol=1e-8)
 
 
 def test_designed_response_is_python_controls_forced_response(speed_result):

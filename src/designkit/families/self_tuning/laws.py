@@ -36,8 +36,9 @@ from typing import Any
 
 import casadi as ca
 
-from designkit.families.self_tuning.model import desired_polynomial, diophantine, pid_gains, position_model
+from designkit.families.self_tuning.model import desired_polynomial, diophantine, position_model
 from designkit.synthesis.law import Law, LawSymbols, Memory, dynamic_law
+from designkit.synthesis.pid import servo_pid_gains
 
 __all__ = ["KIND", "MIN_DETERMINANT", "Settings", "controller_names", "memory_names", "self_tuning_law"]
 
@@ -126,7 +127,7 @@ def initial_controller(st: Settings) -> tuple[float, float, float, float]:
         return r1, s0, s1, am1 / (model[2] + model[3])
     a22 = st.theta0[0]
     Km, tau = _link_numeric(model, a22, st.Ts)
-    K1, K2, K3 = pid_gains(Km, tau, st.poles)
+    K1, K2, K3 = servo_pid_gains(Km, tau, st.poles)
     return K1, K2, K3, 0.0
 
 

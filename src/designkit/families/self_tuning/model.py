@@ -1,4 +1,4 @@
-"""The sampled link and its ARX models, the pole-placement (Diophantine) design and the one-link PID: NumPy.
+"""The sampled link and its ARX models, and the pole-placement (Diophantine) design: NumPy.
 
 **Exact zero-order-hold model.**  The link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau) u`` sampled at ``Ts``
 with ``u`` held over each period is ``x(k+1) = A x(k) + B u(k)`` with ``A = expm(F Ts)``,
@@ -37,10 +37,9 @@ with ``A = z^2 + a1 z + a2`` and ``Acl = z^3 + c1 z^2 + c2 z + c3``.  Its determ
 ``b1^2 - a1 b0 b1 + a2 b0^2 = b0^2 A(-b1/b0)``, the resultant of ``A`` and ``B``: zero exactly when
 they share a root, which is why a near-common factor shows as ill-conditioning.
 
-**One-link PID** (``design: pid``): ``u = -K1 (x1 - xD) - K2 x2 - K3 int (x1 - xD)`` on the estimated
-link places the continuous loop ``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3`` at three poles:
-``K2 = (tau c1 - 1)/Km``, ``K1 = tau c2/Km``, ``K3 = tau c3/Km`` with ``prod (s - p_i) = s^3 + c1 s^2 +
-c2 s + c3``.
+**One-link PID** (``design: pid``): the estimate is turned into the link's ``(Km, tau)`` and the PID
+servo's gains placing the three continuous poles come from
+:func:`designkit.synthesis.pid.servo_pid_gains` (bare numbers: an early estimate's ``Km`` may be negative).
 """
 
 from __future__ import annotations
@@ -51,7 +50,7 @@ from collections.abc import Sequence
 import numpy as np
 
 __all__ = ["FORMS", "PARAMETER_NAMES", "PARAMETER_UNITS", "desired_polynomial", "diophantine", "discretize",
-           "link_of", "pid_gains", "position_model", "sylvester", "theta_of"]
+           "link_of", "position_model", "sylvester", "theta_of"]
 
 FORMS = ("speed", "position")
 """The estimator forms: speed measured (fig. 4.1), speed not measured (fig. 4.2)."""
@@ -114,9 +113,3 @@ def diophantine(model: Sequence[float], c: Sequence[float]) -> tuple[float, floa
     rhs = np.array([c[0] - a1, c[1] - a2, c[2]])
     r1, s0, s1 = np.linalg.solve(sylvester(a1, a2, b0, b1), rhs)
     return float(r1), float(s0), float(s1)
-
-
-def pid_gains(Km: float, tau: float, poles: Sequence[complex]) -> tuple[float, float, float]:
-    """``(K1, K2, K3)`` of the one-link PID placing the three continuous ``poles`` (1/s) on ``(Km, tau)``."""
-    c = np.real(np.poly([complex(p) for p in poles]))
-    return tau * c[2] / Km, (tau * c[1] - 1.0) / Km, tau * c[3] / Km
