@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from designkit.cli import main
+from tests.marks import slow_cases
 from tests.problems import POSSPEED_GAINS, POSSPEED_YAML, discovered
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,7 +52,12 @@ def test_every_spec_has_an_expected_outcome():
     assert {p.stem for p in SPECS} == set(EXPECTED_EXIT)
 
 
-@pytest.mark.parametrize("spec", SPECS, ids=lambda p: p.stem)
+SLOW_SPECS = {"hierarchy-puma560", "hierarchy-puma560-payload", "robel", "puma560-computed-torque-payload",
+              "mrac-vs-selftune"}
+"""Examples of 20-30 s each whose families run end to end on a smaller example in the default run."""
+
+
+@pytest.mark.parametrize("spec", slow_cases(SPECS, SLOW_SPECS, lambda p: p.stem))
 def test_example_specs_through_designkit_synth(spec, tmp_path, capsys):
     code = main(["synth", str(spec), "--out", str(tmp_path), "--json"])
     payload = json.loads(capsys.readouterr().out)

@@ -24,6 +24,7 @@ from designkit.schema.spec import Spec
 from designkit.spec.plants import PlantSpec
 from designkit.verification.lmi import lyapunov_recheck
 from designkit.verification.suite import Context
+from tests.marks import slow_cases
 from tests.problems import CASES, PLANTS, case_yaml
 
 CASE_IDS = [(kind, plant) for kind, plants in CASES.items() for plant in plants]
@@ -65,7 +66,7 @@ def test_spec_round_trips_through_the_json_schema(kind, plant):
     assert Spec.model_validate(data) == loaded.spec
 
 
-@pytest.mark.parametrize(("kind", "plant"), CASE_IDS, ids=[f"{k}-{p}" for k, p in CASE_IDS])
+@pytest.mark.parametrize(("kind", "plant"), slow_cases(CASE_IDS, {"pid_sliding_mode-puma560"}, lambda c: "-".join(c)))
 def test_pipeline_runs_offered_checks_and_their_evidence_rechecks(kind, plant, results, tmp_path):
     loaded, result = results[kind, plant]
     design, checks = result.design, result.checks

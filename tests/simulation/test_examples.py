@@ -11,12 +11,17 @@ import pytest
 from designkit.families import synthesize
 from designkit.schema.loader import load_spec
 from designkit.simulation.run import simulate
+from tests.marks import slow_cases
 
 SPECS = sorted(p for p in (Path(__file__).resolve().parents[2] / "specs").glob("*.yaml")
                if "\ncontrollers:" not in p.read_text())  # a comparison is its controllers' runs (tests/comparison)
 
 
-@pytest.mark.parametrize("path", SPECS, ids=lambda p: p.stem)
+SLOW = {"hierarchy-puma560", "hierarchy-puma560-payload"}
+"""The PUMA 560 hierarchies (18-24 s each); the SIMNOG hierarchy runs in the default run."""
+
+
+@pytest.mark.parametrize("path", slow_cases(SPECS, SLOW, lambda p: p.stem))
 def test_example_spec_simulates(path):
     spec = load_spec(path).spec
     res = simulate(spec, synthesize(spec))

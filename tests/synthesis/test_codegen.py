@@ -34,6 +34,7 @@ from designkit.synthesis.codegen import (
     c_identifier,
     generate_law_code,
 )
+from tests.marks import slow_cases
 from tests.tolerances import TOL
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -142,7 +143,7 @@ def _check_compiled(cc: str, code: LawCode, dsn, law, seed: int) -> int:
     return count
 
 
-@pytest.mark.parametrize("kind", sorted(FAMILIES))
+@pytest.mark.parametrize("kind", slow_cases(sorted(FAMILIES), {"pid_sliding_mode"}, str))
 def test_compiled_c_matches_python_law(kind, cc, tmp_path):
     for k, spec in enumerate(_specs_of(kind)):
         loaded = load_spec(spec)
