@@ -154,7 +154,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
         except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
             raise OutputError("--out", f"cannot write the report: {exc.strerror or exc}") from None
     if args.json:
-        payload = result.to_json()
+        payload = result.to_json(studies=True) if not comparison else result.to_json()
         if files is not None:
             payload["report"] = {"html": str(files.html), "pdf": str(files.pdf)}
         print(json.dumps(payload, indent=2))

@@ -56,6 +56,8 @@ class PipelineResult:
         differ when the spec gives ``controller.model``).  None means the design's.
     trials : TrialsResult or None
         Every trial of a learning design (``design.learning``), None for a design run once.
+    seconds : float
+        Wall time of the design, the run and the checks (s): what a study expects one variant to cost.
     """
 
     loaded: LoadedSpec
@@ -65,6 +67,7 @@ class PipelineResult:
     versions: Mapping[str, str] = field(default_factory=dict)
     plant: Any = None
     trials: Any = None
+    seconds: float = 0.0
 
     @property
     def verified(self) -> bool:
@@ -82,6 +85,27 @@ class PipelineResult:
         from designkit.families import family
 
         return family(self.design.kind).display
+
+    @cached_property
+    def studies(self) -> tuple[Any, ...]:
+        """Every study that applies to this run (:func:`designkit.studies.run_studies`), run on first access:
+        gain studies, boundaries, lab answers, each through the family's own run."""
+        from designkit.studies import run_studies
+
+        return run_studies(self)
+
+    @cached_property
+    def diagnosis(self) -> Any:
+        """Why the run failed and the re-simulated fixes (:func:`designkit.analysis.diagnosis.diagnose`), on first
+        access; None for a verified run, the exception itself when the diagnosis failed."""
+        if self.verified:
+            return None
+        from designkit.analysis.diagnosis import diagnose
+
+        try:
+            return diagnose(self)
+        except Exception as exc:  # noqa: BLE001 - a failed diagnosis is reported, never costs the verdict
+            return exc
 
     @cached_property
     def _report_model(self) -> Any:
@@ -114,8 +138,10 @@ class PipelineResult:
                 out.append(consistency.sentences()[0])
         return tuple(dict.fromkeys(out))
 
-    def to_json(self) -> dict[str, Any]:
-        """The JSON object printed by ``designkit synth --json``."""
+    def to_json(self, *, studies: bool = False) -> dict[str, Any]:
+        """The JSON object printed by ``designkit verify --json``; with ``studies`` (``synth --json``) also
+        ``"studies"`` (:meth:`designkit.studies.core.study.StudyResult.to_json`, one object per study and
+        parameter) and ``"fixes"`` (each proposed fix's changed spec fields and its re-run verdict)."""
         from designkit.families import family
 
         d = self.design
@@ -139,7 +165,22 @@ class PipelineResult:
             "notes": list(d.notes),
             "versions": dict(self.versions),
             **extra,
+            **({"studies": [e for st in self.studies for e in st.to_json()], "fixes": self._fixes_json()}
+               if studies else {}),
         }
+
+    def _fixes_json(self) -> list[dict[str, Any]]:
+        """Each re-simulated fix: its title, the spec fields it changes, whether every required check then passes,
+        and the re-run's verdict in words."""
+        diagnosis = self.diagnosis
+        if diagnosis is None or isinstance(diagnosis, Exception):
+            return []
+        return [{"fix": p.sentence, "note": p.note, "runs": [
+            {"title": t.remedy.title, "changes": [{"path": k, "value": _jsonable(v)} for k, v in t.remedy.changes],
+             "requirement": t.remedy.requirement, "passed": t.passed, "verdict": t.verdict, "error": t.error,
+             "checks": [{"name": o.name, "status": o.status, "measured": o.measured, "requirement": o.requirement}
+                        for o in t.outcomes]} for t in p.trials]}
+            for p in diagnosis.proposed]
 
 
 @dataclass(frozen=True, eq=False)
@@ -218,6 +259,19 @@ class ComparisonResult:
         }
 
 
+def _jsonable(value: Any) -> Any:
+    """A spec value for JSON (complex poles as ``[re, im]``, arrays as lists)."""
+    import numpy as np
+
+    if isinstance(value, complex):
+        return [value.real, value.imag]
+    if isinstance(value, np.ndarray | list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
 def _finite(x: float) -> bool:
     import math
 
@@ -226,7 +280,9 @@ def _finite(x: float) -> bool:
 
 def base_dir(loaded: LoadedSpec) -> Path | None:
     """Folder of the spec file (relative model paths are resolved against it), or None for text."""
-    return None if loaded.path.startswith("<") else Path(loaded.path).resolve().parent
+    from designkit.runner.run import base_dir as of
+
+    return of(loaded)
 
 
 def plant(loaded: LoadedSpec) -> Any:
@@ -292,11 +348,8 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True,
         ``loaded`` is neither a :class:`LoadedSpec` nor a :class:`Spec`, or the spec cannot be
         designed as given (a :class:`~designkit.errors.DesignkitError` names the key path).
     """
-    from designkit.families import check_rules
+    from designkit.runner.run import run_spec
     from designkit.schema.budget import check_budget
-    from designkit.simulation.run import build
-    from designkit.simulation.trials import run_trials
-    from designkit.verification.suite import run_checks
 
     if isinstance(loaded, Spec | ComparisonSpec):
         loaded = LoadedSpec.from_spec(loaded)
@@ -307,21 +360,36 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True,
         return run_comparison(loaded, simulate=simulate, budget=budget)
     spec = loaded.spec
     check_budget(spec, base_dir(loaded), budget)
+    check_studies(spec, base_dir(loaded))
     true_plant = plant(loaded)
     _check_per_input(spec, true_plant)
-    dsn = design(loaded, true_plant)
-    sim = trials = None
-    if simulate:
-        learning = dsn.learning
-        simulator = build(spec, dsn, plant=true_plant, expected_runs=learning.trials if learning else 1)
-        if learning is not None:
-            trials = run_trials(simulator, learning.trials, learning.update)
-            sim = trials.results[-1]
-        else:
-            sim = simulator.run()
-    checks = run_checks(spec, dsn, sim, plant=true_plant, rules=check_rules(dsn.kind), trials=trials)
-    return PipelineResult(loaded=loaded, design=dsn, checks=tuple(checks), simulation=sim, versions=versions(),
-                          plant=true_plant, trials=trials)
+    done = run_spec(loaded, plant=true_plant, simulate=simulate)
+    return PipelineResult(loaded=loaded, design=done.design, checks=done.checks, simulation=done.simulation,
+                          versions=versions(), plant=true_plant, trials=done.trials, seconds=done.seconds)
+
+
+def check_studies(spec: Spec, folder: Path | None = None) -> None:
+    """Refuse, before anything runs, a ``studies`` section the studies cannot honour
+    (:func:`designkit.studies.validate`) or a ``studies.budget`` below one variant's estimated cost.
+
+    Raises
+    ------
+    SpecError
+        With the key path (``studies.budget``, ``studies.gains.knobs[0]``, ...).
+    """
+    section = getattr(spec, "studies", None)
+    if section is None:
+        return
+    from designkit.families import family
+    from designkit.studies import validate
+    from designkit.studies.core.budget import variant_estimate
+
+    validate(spec, family(spec.controller.kind))
+    if section.budget is not None:
+        one = variant_estimate(spec, folder)
+        if one > section.budget:
+            raise SpecError("studies.budget", f"one variant of this spec is estimated at {one:.2g} s, more than the "
+                            f"{section.budget:g} s given: no study could run a variant (give at least {one:.2g})")
 
 
 def run_comparison(loaded: LoadedSpec, *, simulate: bool = True, budget: float | None = None) -> ComparisonResult:

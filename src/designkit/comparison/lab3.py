@@ -7,7 +7,7 @@ sliding-mode state regulator (``vsc``) and the linear state regulator (``state_r
 the runs or on re-simulations of them:
 
 * **robustness**: each controller's designed law re-simulated on the true plant at every corner of
-  ``plant.uncertainty`` (each corner starting at rest, as :mod:`designkit.analysis.lab.mass` does);
+  ``plant.uncertainty`` (each corner starting at rest, as :mod:`designkit.studies.arm.mass` does);
 * **chattering**: the total variation ``TV(u) = sum |u[k+1] - u[k]|`` of the command and its reversals per second
   (sign changes of ``u[k+1] - u[k]``, steps below ``1e-9 max|u|`` ignored);
 * **perturbation sensitivity**: the run without ``simulation.perturbation`` against the run with it: the largest

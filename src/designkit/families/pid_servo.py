@@ -24,6 +24,7 @@ from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
@@ -201,4 +202,6 @@ FAMILY = Family(
                 "closed-loop poles and the zero of x1/xD.",
     ),
     validate=poles_or_requirements,
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    traits=("pid",),
 )

@@ -20,6 +20,7 @@ from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
@@ -99,4 +100,6 @@ FAMILY = Family(
                 "error dynamics have the requested poles and x1/xD = 1 on the nominal link.",
     ),
     validate=poles_or_requirements,
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3")),
+    traits=("pid",),
 )

@@ -50,6 +50,7 @@ from designkit.spec.ranges import Ranged
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, stateless_law
 from designkit.synthesis.model import controller_model
 
@@ -232,4 +233,7 @@ FAMILY = Family(
     ),
     references=("line", "circle"),
     motion=motion,
+    knobs=gain_knobs({"K1": ("1/s^2", "task position error gain (wn^2)"),
+                      "K2": ("1/s", "task velocity error gain (2 zeta wn)")}, ("K1", "K2")),
+    traits=("model_based",),
 )

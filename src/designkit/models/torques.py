@@ -1,7 +1,7 @@
 """Torques of a robot's dynamics along a path: the coupled terms the joint loops leave to feedback, and the
 model-error torque a controller that cancels its model's dynamics leaves uncancelled.
 
-Both the lab answers (:mod:`designkit.analysis.lab`) and the diagnosis of a model mismatch
+Both the arm study (:mod:`designkit.studies.arm`) and the diagnosis of a model mismatch
 (:mod:`designkit.families.computed_torque.model_error`) read them.
 """
 

@@ -4,7 +4,7 @@
 package, which decide wording, number formats and order: :mod:`~designkit.report.verdict`,
 :mod:`~designkit.report.compliance`, :mod:`~designkit.report.why`, :mod:`~designkit.report.design_section`,
 :mod:`~designkit.report.check_rows`, :mod:`~designkit.report.simulation_rows`,
-:mod:`~designkit.report.lab_section` and the figures of :mod:`designkit.report.figures`.  The HTML and
+the studies' sections (:mod:`designkit.studies`) and the figures of :mod:`designkit.report.figures`.  The HTML and
 the PDF renderers only lay the model out, so the two formats always say the same thing.  Numbers are
 formatted with :mod:`designkit.display.numbers` (gains with 6 significant digits, check values and
 certificates with 4).
@@ -17,7 +17,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from designkit.analysis.lab.section import lab_section
 from designkit.display.figure import Figure
 from designkit.display.numbers import plain_complex, sentence_units, unit
 from designkit.display.typeset import Equation
@@ -98,9 +97,9 @@ class ReportModel:
     figures : tuple of Figure
         Figures in report order.
     sections : tuple of ReportSection
-        Sections contributed by the modules that own them, laid out after the figures: the notes' lab
-        questions of experiment 1 answered from a robot run (:func:`designkit.analysis.lab.section.lab_section`),
-        then the family's own (``Family.sections``: e.g. the MRAC simulator's questions).
+        Sections contributed by the modules that own them, laid out after the figures: the family's own
+        (``Family.sections``: e.g. the MRAC simulator's questions), then the studies' (:mod:`designkit.studies`:
+        the arm's questions, the gain study, the boundary, the lab experiments), in report order.
     linearization : str
         What the design's closed loop is, when it is not simply the law linearized (``frozen``: with the
         adaptation held at its initial values; ``none``: no linear loop, and why), with the requested poles.
@@ -201,6 +200,17 @@ def _divergence(diagnosis: Any) -> str:
     return unit(" ".join(p for p in parts if p))
 
 
+def _studies(result: Any) -> tuple[Any, ...]:
+    """The run's studies: those the pipeline's result carries (computed once for the report and ``--json``), or run
+    here for a result that does not carry them."""
+    studies = getattr(result, "studies", None)
+    if studies is None:
+        from designkit.studies import run_studies
+
+        studies = run_studies(result)
+    return tuple(studies)
+
+
 def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
                        processes: int = 1) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
@@ -228,14 +238,12 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     label = display.label
     plant = design.plant
     fam = family(design.kind)
-    sections = tuple(s for s in (lab_section(result), *(make(result) for make in fam.sections)) if s is not None)
+    studies = _studies(result)
+    sections = tuple(s for s in (*(make(result) for make in fam.sections), *(st.section for st in studies))
+                     if s is not None)
     figures = design_figures(result, processes=processes)
-    if any(s.anchor == "lab" for s in sections):  # the gain study's root locus, beside the other figures
-        from designkit.report.figures.root_locus import root_locus_figure
-
-        locus = root_locus_figure(result, sections)
-        figures = (*figures, locus) if locus is not None else figures
-    diagnosis = diagnose_run(result) if checks else None
+    figures = (*figures, *(f for st in studies for f in st.figures))
+    diagnosis = (result.diagnosis if hasattr(result, "diagnosis") else diagnose_run(result)) if checks else None
     why, why_note, why_fixes = why_section(result, diagnosis)
     if isinstance(diagnosis, Exception):
         diagnosis = None

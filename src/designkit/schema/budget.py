@@ -25,8 +25,9 @@ The terms (each a :class:`Term` with the key path that drives it):
   ``x (1e-8 / rtol)^(1/6)`` (a BDF of order 5 shrinks its step as the tolerance's sixth root); for any
   other (adaptive) integrator, conservatively :data:`ADAPTIVE_STEP` (seven stages, rejected steps).
   Runs: the nominal run, the small-signal run of ``designed_loop``, the trials of a learning law, the
-  corners (``2^k`` for ``k`` uncertain parameters) and samples of ``tracking_bounds``, the corners the lab
-  answers re-simulate, and the gain study (bounded by its own budget);
+  corners (``2^k`` for ``k`` uncertain parameters) and samples of ``tracking_bounds``, and the corners the
+  arm's answers re-simulate (the studies of ``synth`` are bounded by their own budget, ``studies.budget``,
+  :mod:`designkit.studies`, and not counted here);
 * **task path** -- a line or circle of the end effector is solved by inverse kinematics at 401 instants
   (:data:`IK_EVALUATIONS` each);
 * **lattice** -- the robustness checks linearize the loop at every plant of the uncertainty lattice
@@ -80,8 +81,6 @@ PATH_SAMPLES, IK_EVALUATIONS = 401, 100.0
 """A task-space path is solved by inverse kinematics at 401 instants
 (:data:`designkit.families.resolved_acceleration.PATH_SAMPLES`), a few Newton iterations with the Jacobian
 each: about 100 evaluations per instant."""
-GAIN_STUDY_SECONDS = 6.0
-"""The gain study's own time bound (:data:`designkit.analysis.lab.gains.STUDY_BUDGET_S`)."""
 OVERHEAD = 1.2e7
 """Evaluations of the fixed work of a run (imports, checks, certificates, the solver): about 1.5 s."""
 STIFF_RATIO = 100.0
@@ -392,8 +391,6 @@ def estimate(spec: Any, base_dir: Path | None = None, *, joints: int | None = No
                       f"{runs:.0f} runs ({runs_words}) of {steps.count:.3g} steps of {steps.dt:.3g} s over "
                       f"{steps.duration:.4g} s with {integrator}, {runs * steps.count * per_step:.2g} model evaluations"
                       + (f" of the {n}-joint model" if n and n > 1 else "")))
-    terms.append(Term("gain study", min(8 * per_run, GAIN_STUDY_SECONDS / SECONDS_PER_EVALUATION), sim_key,
-                      "the gain study's re-simulations (bounded by its own 6 s)"))
     traj = spec.simulation.trajectory
     if traj is not None and traj.kind in ("line", "circle"):
         terms.append(Term("task path", PATH_SAMPLES * IK_EVALUATIONS * size(n), "simulation.trajectory",

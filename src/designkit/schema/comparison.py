@@ -19,7 +19,7 @@ from designkit.families import FAMILIES
 from designkit.schema.spec import Spec
 from designkit.spec.fields import Section
 from designkit.spec.plants import PlantSpec
-from designkit.spec.sections import Numerics, Requirements, Simulation
+from designkit.spec.sections import Numerics, Requirements, Simulation, Studies
 
 __all__ = ["MAX_CONTROLLERS", "ComparisonSpec", "ControllerEntry", "entry_models", "member_name"]
 
@@ -90,6 +90,7 @@ class ComparisonSpec(Section):
     requirements: Requirements | None = None
     simulation: Simulation = Simulation()
     numerics: Numerics = Numerics()
+    studies: Studies | None = None
 
     @property
     def labels(self) -> tuple[str, ...]:
@@ -108,7 +109,7 @@ class ComparisonSpec(Section):
         return Spec.model_validate({
             "name": member_name(self.labels[index]), "description": self.description, "plant": self.plant,
             "controller": controller, "requirements": self.requirements, "simulation": self.simulation,
-            "numerics": self.numerics,
+            "numerics": self.numerics, "studies": self.studies,
         })
 
     def members(self) -> tuple[tuple[str, Spec], ...]:

@@ -434,6 +434,16 @@ def _message(err: dict) -> str:
     return msg
 
 
+def key_path(loc: tuple[int | str, ...]) -> str:
+    """The spec key path of a pydantic error location (``("controller", "poles", 2)`` -> ``controller.poles[2]``)."""
+    return _key_path(loc)
+
+
+def message(err: dict) -> str:
+    """The one-line message of a pydantic error (:func:`parse_spec`'s wording)."""
+    return _message(err)
+
+
 def _check_size(size: int, what: str, *, at_least: bool = False) -> None:
     if size > MAX_SPEC_BYTES:
         amount = "more than 1 MiB" if at_least else f"{size / 2**20:.1f} MiB"

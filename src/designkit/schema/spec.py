@@ -30,6 +30,7 @@ from designkit.spec.sections import (
     Saturation,
     Simulation,
     SineTrajectory,
+    Studies,
     Trajectory,
     TrapezoidalTrajectory,
     ViaPointsTrajectory,
@@ -38,7 +39,7 @@ from designkit.spec.sections import (
 __all__ = [
     "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "LinkPlantSpec", "Noise", "Numerics",
     "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory", "Relay",
-    "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Trajectory",
+    "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Studies", "Trajectory",
     "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "check_conjugates", "controller_models",
 ]
 
@@ -62,6 +63,7 @@ class Spec(Section):
     requirements: Requirements | None = None
     simulation: Simulation = Simulation()
     numerics: Numerics = Numerics()
+    studies: Studies | None = None
 
     @model_validator(mode="after")
     def _family_rules(self) -> Spec:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_validator
 
 from designkit.spec.fields import NonNegativeFinite, PositiveFinite, Section
 from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
@@ -341,3 +341,16 @@ class Numerics(Section):
     atol: Ranged(1e-20, 1.0, "state units") = 1e-10
     solver: Literal["CLARABEL", "SCS"] = "CLARABEL"
 
+
+
+class Studies(Section):
+    """The ``studies`` section: the work each study may spend (``budget``, s, 0.01 to 3600; default 15) and, under
+    a study's name, that study's settings (``gains: {knobs: [K1], factors: [0.5, 2]}``).
+
+    The studies are discovered above this layer (:mod:`designkit.studies`), so their settings are kept as given
+    here and validated, with their key paths, by :func:`designkit.studies.validate` before anything is run.
+    """
+
+    model_config = ConfigDict(extra="allow", frozen=True, allow_inf_nan=False, str_strip_whitespace=True)
+
+    budget: Ranged(0.01, 3600, "s", base=PositiveFinite) | None = None

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from designkit.synthesis.design import Design
+from designkit.synthesis.knobs import Knob, Metric
 from designkit.synthesis.law import Law
 
 __all__ = ["Display", "Family", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
@@ -108,6 +109,19 @@ class Family:
         ``result -> Mapping``: top-level fields it adds to ``synth --json`` / ``verify --json`` (what its
         results are, for checking from outside: an adaptive law's initial and final parameters, a learning
         law's error per trial), JSON types only.
+    knobs : tuple of Knob
+        What a study may vary (:class:`~designkit.synthesis.knobs.Knob`): its gains and settings with their
+        ranges and roles, most telling first.
+    metrics : tuple of Metric
+        The numbers meaningful for its law (:class:`~designkit.synthesis.knobs.Metric`), the first the one a
+        study ranks by; empty: a study measures the tracking error and the command.
+    traits : frozenset of str
+        What a study may match it on (``"pid"``: a classical PID, the notes' experiment 1; ``"adaptive"``,
+        ``"switching"``, ``"learning"``, ``"model_based"``).
+    regain : callable or None
+        ``(design, gains, anti_windup) -> Design``: the design with other gains (its law, its closed loop and
+        its per-joint loops rebuilt), for a family whose design the generic rebuild
+        (:func:`designkit.runner.variants.with_gains`) cannot redo, e.g. one with per-joint loops.
     """
 
     kind: str
@@ -125,6 +139,10 @@ class Family:
     diagnoses: tuple[Callable[[Any, Any], Any], ...] = ()
     motion: Callable[[Any, Design], Any] | None = None
     json: Callable[[Any], Any] | None = None
+    knobs: tuple[Knob, ...] = ()
+    metrics: tuple[Metric, ...] = ()
+    traits: frozenset[str] = frozenset()
+    regain: Callable[[Design, Any, Any], Design] | None = None
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):
@@ -132,8 +150,16 @@ class Family:
         if not self.references:
             default = STEP_REFERENCES if self.reference == "step" else TRAJECTORY_REFERENCES
             object.__setattr__(self, "references", default)
-        for name in ("checks", "references", "figures", "sections", "diagnoses"):
+        for name in ("checks", "references", "figures", "sections", "diagnoses", "knobs", "metrics"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
+        object.__setattr__(self, "traits", frozenset(self.traits))
+        keys = [k.key for k in self.knobs]
+        if len(set(keys)) != len(keys):
+            raise ValueError(f"family {self.kind!r}: two knobs share a name ({keys})")
+
+    def knob(self, key: str) -> Knob | None:
+        """The knob named ``key`` (:attr:`Knob.key`), or None."""
+        return next((k for k in self.knobs if k.key == key), None)
 
     @property
     def check_names(self) -> tuple[str, ...]:

@@ -171,8 +171,8 @@ def _linear_peak(result: Any, changes: Sequence[tuple[str, Any]]) -> float | Non
     from types import SimpleNamespace
 
     from designkit.analysis.diagnosis.comparison import _linear_run
-    from designkit.analysis.diagnosis.resimulate import changed_spec
     from designkit.families import synthesize
+    from designkit.runner.variants import changed_spec
 
     try:
         loaded = changed_spec(result.loaded, changes)

@@ -1,13 +1,13 @@
 """A proposed fix run again through the whole pipeline: design, checks, simulation on the true plant.
 
 :func:`try_remedy` applies a :class:`~designkit.analysis.diagnosis.remedies.Remedy` to the spec's own YAML
-(:func:`changed_spec`: the key paths set, validated by the same loader), runs it as the pipeline does
-(:func:`rerun`: the true plant, the family's design, the simulation with its duration and settings, the
-trials of a learning law, every check the family offers) and returns a :class:`FixTrial`: whether every
-required check passes, the checks that failed before with their measured value against the requirement
-now, any required check the fix breaks, and the loop margins of the fixed design (the ``loop_margins``
-check's certificate: gain, phase and modulus margin per plant input).  At most :data:`MAX_FIX_RUNS` fixes
-are re-run per diagnosis, each with the spec's own duration.
+(:func:`designkit.runner.variants.changed_spec`: the key paths set, validated by the same loader), runs it as
+the pipeline does (:func:`designkit.runner.run.run_spec`: the true plant, the family's design, the simulation
+with its duration and settings, the trials of a learning law, every check the family offers) and returns a
+:class:`FixTrial`: whether every required check passes, the checks that failed before with their measured value
+against the requirement now, any required check the fix breaks, and the loop margins of the fixed design (the
+``loop_margins`` check's certificate: gain, phase and modulus margin per plant input).  At most
+:data:`MAX_FIX_RUNS` fixes are re-run per diagnosis, each with the spec's own duration.
 """
 
 from __future__ import annotations
@@ -15,13 +15,12 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from designkit.analysis.diagnosis.remedies import Remedy
 from designkit.display.numbers import fmt_number, plain_complex, quantity, unit
 
-__all__ = ["MAX_FIX_RUNS", "CheckOutcome", "FixTrial", "LoopMargin", "Rerun", "changed_spec", "rerun", "try_remedy"]
+__all__ = ["MAX_FIX_RUNS", "CheckOutcome", "FixTrial", "LoopMargin", "rerun", "try_remedy"]
 
 MAX_FIX_RUNS = 6
 """At most this many proposed fixes are re-run per diagnosis (each a whole pipeline run of the spec's duration);
@@ -107,71 +106,12 @@ class FixTrial:
                                            + ("" if o.failed_before else " (passed before)") for o in failing)
 
 
-@dataclass(frozen=True)
-class Rerun:
-    """What :func:`rerun` returns: the pipeline's values for the changed spec."""
 
-    loaded: Any
-    plant: Any
-    design: Any
-    simulation: Any
-    checks: tuple[Any, ...]
+def rerun(loaded: Any) -> Any:
+    """Run a spec as :func:`designkit.pipeline.run` does (:func:`designkit.runner.run.run_spec`)."""
+    from designkit.runner.run import run_spec
 
-
-def _set(data: dict[str, Any], path: str, value: Any) -> None:
-    keys = path.split(".")
-    node = data
-    for key in keys[:-1]:
-        child = node.get(key)
-        if not isinstance(child, dict):
-            child = node[key] = {}
-        node = child
-    if value is None:
-        node.pop(keys[-1], None)
-    else:
-        node[keys[-1]] = value
-
-
-def changed_spec(loaded: Any, changes: Sequence[tuple[str, Any]]) -> Any:
-    """The spec of ``loaded`` with ``changes`` (key path, value; None removes the key), validated as a file is.
-
-    Raises
-    ------
-    SpecError
-        The changed spec is not valid (its message names the key path).
-    """
-    import yaml
-
-    from designkit.schema.loader import parse_spec
-
-    data = yaml.safe_load(loaded.text)
-    for path, value in changes:
-        _set(data, path, value)
-    return parse_spec(yaml.safe_dump(data, sort_keys=False, allow_unicode=True), path=loaded.path)
-
-
-def rerun(loaded: Any) -> Rerun:
-    """Run a spec as :func:`designkit.pipeline.run` does (true plant, design, simulation or trials, checks)."""
-    from designkit.families import check_rules, synthesize
-    from designkit.simulation.run import build
-    from designkit.simulation.trials import run_trials
-    from designkit.spec.plant_builder import plant_from_spec
-    from designkit.verification.suite import run_checks
-
-    spec = loaded.spec
-    base = None if str(loaded.path).startswith("<") else Path(loaded.path).resolve().parent
-    plant = plant_from_spec(spec.plant, base)
-    design = synthesize(spec, plant)
-    learning = design.learning
-    simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
-    trials = None
-    if learning is not None:
-        trials = run_trials(simulator, learning.trials, learning.update)
-        sim = trials.results[-1]
-    else:
-        sim = simulator.run()
-    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials)
-    return Rerun(loaded, plant, design, sim, tuple(checks))
+    return run_spec(loaded)
 
 
 def _measured(check: Any) -> str:
@@ -220,6 +160,8 @@ def try_remedy(result: Any, remedy: Remedy) -> FixTrial:
     failed_before = {c.name for c in result.checks if c.required and c.passed is not True}
     start = time.perf_counter()
     try:
+        from designkit.runner.variants import changed_spec
+
         fixed = rerun(changed_spec(result.loaded, remedy.changes))
     except (DesignkitError, ValueError, RuntimeError, ArithmeticError) as exc:
         message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

@@ -41,6 +41,7 @@ from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.linearization import Linearization
 
 GAIN_RANGE = (1e-12, 1e12)
@@ -315,6 +316,11 @@ def _family() -> Family:
                     "filtered tracking error e + ψ ė, the filter (1 + ψ s)/(s² + K2 s + K1) strictly positive "
                     "real; or the Slotine–Li passivity-based law, which needs neither the acceleration nor D̂⁻¹."),
         validate=validate, figures=figures.FIGURES, sections=(report.section,), json=report.json,
+        knobs=(Knob("gain", "", "adaptation gain K of the parameter update", 1e-9, 1e9, path="controller.gain",
+                    role="adaptation", boundary=True),
+               Knob("psi", "s", "ψ of the error filter e + ψ ė (strictly positive real when ψ K2 > 1)", 1e-9, 1e9,
+                    path="controller.psi", current=lambda d: d.gains["psi"], when=lambda d: "psi" in d.gains)),
+        traits=("adaptive", "model_based"),
     )
 
 

@@ -39,6 +39,7 @@ from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, stateless_law
 from designkit.synthesis.model import controller_model
 
@@ -262,4 +263,7 @@ FAMILY = Family(
         summary="Notes §2.2: the model's inverse dynamics at the desired acceleration plus a PD correction; on an "
                 "exact model every joint's error obeys ë + K2 ė + K1 e = 0, decoupled, at every configuration.",
     ),
+    knobs=gain_knobs({"K1": ("1/s^2", "position error gain (wn^2)"), "K2": ("1/s", "velocity error gain (2 zeta wn)")},
+                     ("K1", "K2")),
+    traits=("model_based",),
 )

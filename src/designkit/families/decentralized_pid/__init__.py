@@ -27,6 +27,7 @@ the joint velocities (the velocity-dependent torques are part of ``xi``).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Literal
 
 import casadi as ca
@@ -43,8 +44,10 @@ from designkit.spec.ranges import Ranged, RangedInt, RangedPerJoint, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
+from designkit.synthesis.variation import with_gains
 
 KIND = "decentralized_pid"
 
@@ -299,6 +302,17 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return with_closed_loop(design, law(design), r0, field="controller.configuration")
 
 
+def regain(design: Design, gains: Gains, anti_windup: Any = None) -> Design:
+    """``design`` with other per-joint gains: each joint's loop (the servo on its simplified link) and the arm's law
+    and closed loop rebuilt from them (:func:`designkit.synthesis.variation.with_gains`)."""
+    loops = []
+    for i, loop in enumerate(design.loops):
+        own = loop.gains.replace(**{k: float(np.asarray(gains[k], dtype=float)[i]) for k in ("K1", "K2", "K3", "K4")})
+        loops.append(with_gains(loop, own, pid_servo.law))
+    arm = with_gains(dataclasses.replace(design, loops=()), gains, law, anti_windup)
+    return dataclasses.replace(arm, loops=tuple(loops))
+
+
 FAMILY = Family(
     kind=KIND,
     spec=DecentralizedPidSpec,
@@ -317,4 +331,7 @@ FAMILY = Family(
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
     validate=poles_or_requirements,
+    knobs=gain_knobs(pid_servo.GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    traits=("pid",),
+    regain=regain,
 )

@@ -37,6 +37,7 @@ from designkit.families import computed_torque as ct
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
 from designkit.families.ilc.figures import error_norm_figure, learned_figure, tracking_error_figure
+from designkit.families.ilc.knobs import KNOBS, METRICS
 from designkit.families.ilc.learning import check_size, lifted_of, operator_of, trial_grid, update_rule
 from designkit.families.ilc.lifted import lifted_model
 from designkit.families.ilc.operators import contraction, learning_operator
@@ -217,6 +218,9 @@ FAMILY = Family(
     figures=(error_norm_figure, tracking_error_figure, learned_figure),
     diagnoses=(diagnose,),
     json=_json,
+    knobs=KNOBS,
+    metrics=METRICS,
+    traits=("learning", "model_based"),
 )
 
 __all__ = ["FAMILY", "ILCSpec", "law", "synthesize"]

@@ -322,7 +322,7 @@ def law(design: Design, anti_windup: Any = None) -> Any:
 
 
 def _family() -> Family:
-    from designkit.families.mrac import checks, figures, report
+    from designkit.families.mrac import checks, figures, knobs, report
 
     return Family(
         kind=KIND, spec=MracSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
@@ -339,6 +339,7 @@ def _family() -> Family:
                     "adjusted by the gradient rule so that the link follows a reference model."),
         validate=validate, references=("step", "square", "prbs"),
         figures=figures.FIGURES, sections=(report.section,), diagnoses=(checks.diagnose,), json=report.json,
+        knobs=knobs.KNOBS, metrics=knobs.METRICS, traits=("adaptive",),
     )
 
 

@@ -9,9 +9,12 @@
   ``simulation.plant_change``) and the parameters that put it exactly on the model
   (:func:`~designkit.families.mrac.model.matching_parameters`);
 * :func:`assess` -- is the adaptive run bounded?  Finite, its output error ``e = ym - x1`` never beyond
-  :data:`BOUND_FACTOR` times the reference's swing, and not growing: the RMS of ``e`` over the last
+  :data:`BOUND_FACTOR` times the reference's swing, its adapted parameters never beyond
+  :data:`PARAMETER_FACTOR` times their initial size, and not growing: the RMS of ``e`` over the last
   window of the run at most :data:`GROWTH_LIMIT` times the RMS over the window before (windows after
-  the last change of the plant or perturbation, a whole number of reference periods);
+  the last change of the plant or perturbation, a whole number of reference periods) -- growth judged only
+  when the last window's RMS is above :data:`SETTLED` of the swing (below it the run has converged, and a
+  ratio of two such small numbers says nothing);
 * :func:`gram` -- the windowed Gram matrix ``mean(S' Q S)`` of the sensitivities, the
   persistent-excitation indicator.
 """
@@ -35,8 +38,11 @@ BOUND_FACTOR = 10.0
 """A run whose output error exceeds this many times the reference's swing has diverged."""
 GROWTH_LIMIT = 1.1
 """A run whose output error's RMS grows by more than this factor from one window to the next is unstable."""
-FLOOR = 1e-9
-"""Errors below this fraction of the reference's swing are rounding: no growth is measured on them."""
+SETTLED = 1e-3
+"""An output error whose RMS over the last window is below this fraction of the reference's swing has converged:
+its growth from the window before is not judged (two such small RMS values have no meaningful ratio)."""
+PARAMETER_FACTOR = 100.0
+"""Adapted parameters beyond this many times the size of their initial values have drifted without bound."""
 
 
 def rms(x: np.ndarray) -> float:
@@ -193,8 +199,11 @@ def assess(sim: Any, spec: Any) -> Assessment:
     bound = BOUND_FACTOR * max(swing(sim), 1e-12)
     not_finite = ~np.all(np.isfinite(states), axis=1) | ~np.isfinite(e)
     beyond = np.abs(np.where(np.isfinite(e), e, 0.0)) > bound
+    alpha = adapted(sim)
+    limit = PARAMETER_FACTOR * max(float(np.max(np.abs(alpha[0]))), 1e-12)
+    drifted = np.max(np.abs(np.where(np.isfinite(alpha), alpha, 0.0)), axis=1) > limit
     finite = bool(not not_finite.any() and "integrator_failure" not in sim.settings)
-    first = np.flatnonzero(not_finite | beyond)
+    first = np.flatnonzero(not_finite | beyond | drifted)
     diverged_at = float(t[first[0]]) if first.size else None
     peak = float(np.max(np.abs(e))) if np.all(np.isfinite(e)) else math.inf
     if not finite or diverged_at is not None:
@@ -202,6 +211,9 @@ def assess(sim: Any, spec: Any) -> Assessment:
         if beyond.any():
             parts.append(f"exceeded {bound:.3g} rad ({BOUND_FACTOR:g} times the reference swing) at "
                          f"t = {t[beyond][0]:.4g} s")
+        if drifted.any():
+            parts.append(f"left the adapted parameters beyond {limit:.3g} ({PARAMETER_FACTOR:g} times their initial "
+                         f"size) at t = {t[drifted][0]:.4g} s")
         if not_finite.any():
             parts.append(f"stopped being finite at t = {t[not_finite][0]:.4g} s")
         elif not finite:
@@ -215,14 +227,15 @@ def assess(sim: Any, spec: Any) -> Assessment:
                           "windows after the last change: growth not measured)")
     last, prev, width = masks
     r_last, r_prev = rms(e[last]), rms(e[prev])
-    floor = FLOOR * swing(sim)
-    growth = r_last / r_prev if r_prev > 0 else (math.inf if r_last > floor else 1.0)
-    if r_last <= floor:
-        growth = min(growth, 1.0)
-    stable = bool(growth <= GROWTH_LIMIT)
+    settled = SETTLED * swing(sim)
+    growth = r_last / r_prev if r_prev > 0 else (math.inf if r_last > settled else 1.0)
+    stable = bool(growth <= GROWTH_LIMIT or r_last <= settled)
     words = (f"peak |e| = {peak:.3g} rad within {bound:.3g} rad; RMS of e over the last {width:.4g} s is {growth:.3g} "
              f"times the RMS over the {width:.4g} s before")
-    if not stable:
+    if r_last <= settled:
+        words += (f" (the last window's RMS, {r_last:.3g} rad, is below {settled:.3g} rad, {SETTLED:g} of the swing: "
+                  "converged, growth not judged)")
+    elif not stable:
         words += f" (more than {GROWTH_LIMIT:g}: the error grows)"
     return Assessment(stable, True, peak, bound, float(growth), float(width), None, words)
 

@@ -65,6 +65,7 @@ from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, State, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -257,6 +258,14 @@ FAMILY = Family(
     validate=validate,
     figures=FIGURES,
     json=json_summary,
+    knobs=(Knob("M", "N*m", "amplitude of the relay on the sliding variable", 1e-6, 1e6, path="controller.M",
+                role="switching", boundary=True, current=lambda d: d.gains["M"],
+                when=lambda d: np.ndim(d.gains["M"]) == 0),
+           Knob("poles", "1/s", "closed-loop poles of the PID part (the sliding motion keeps two)", 1e-3, 1e6,
+                path="controller.poles"),
+           Knob("epsilon", "rad*s", "boundary layer |slm| ≤ ε replacing the relay's sign", 1e-9, 1e6,
+                path="controller.epsilon")),
+    traits=("pid", "switching"),
 )
 
 from designkit.families.pid_sliding_mode.elastic import extend as _with_elastic_joint  # noqa: E402

@@ -36,6 +36,7 @@ from designkit.spec.ranges import Ranged, check_poles
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.linearization import Linearization
 
 __all__ = ["FAMILY", "SelfTuningSpec", "law", "synthesize"]
@@ -243,6 +244,13 @@ def _family() -> Family:
                     "model by recursive least squares and redesigns itself for the estimate at every sample."),
         validate=validate, references=("step", "square", "prbs"),
         figures=figures.FIGURES, sections=(report.section,), diagnoses=(checks.diagnose,), json=report.json,
+        knobs=(Knob("forgetting", "", "forgetting factor λ of the least squares (1 − λ sets its memory)", 0.5, 1.0,
+                    path="controller.forgetting", role="forgetting", boundary=True),
+               Knob("poles", "1/s", "requested closed-loop poles of the certainty-equivalence design", 1e-3, 1e6,
+                    path="controller.poles"),
+               Knob("sampling_period", "s", "the regulator's sampling period", 1e-5, 10.0,
+                    path="controller.sampling_period")),
+        traits=("adaptive",),
     )
 
 

@@ -82,6 +82,7 @@ from designkit.families.sliding_mode.spec import (
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -255,4 +256,11 @@ FAMILY = Family(
     figures=FIGURES,
     diagnoses=(diagnose,),
     json=json_summary,
+    knobs=(Knob("M", "N*m", "switching amplitude of the relay", 1e-6, 1e6, path="controller.M", role="switching",
+                boundary=True, current=lambda d: float(d.gains["M"])),
+           Knob("sliding_poles", "1/s", "pole −c of the motion on the sliding line", 1e-3, 1e6,
+                path="controller.sliding_poles"),
+           Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
+                path="controller.margin")),
+    traits=("switching",),
 )

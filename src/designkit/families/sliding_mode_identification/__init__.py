@@ -43,6 +43,7 @@ from designkit.families.sliding_mode_identification.spec import LINK_REFERENCES,
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law
 from designkit.synthesis.linearization import Linearization
 
@@ -155,6 +156,16 @@ def _family() -> Family:
             law_of=law_lines),
         figures=(*report.FIGURES, *arm_report.FIGURES), sections=(report.section,), diagnoses=(checks.diagnose,),
         json=report.json,
+        knobs=(Knob("c", "1/s", "observer gain c of the sliding-mode observer", 1e-9, 1e9, path="controller.c",
+                    current=lambda d: float(d.gains["c"]), when=lambda d: "c" in d.gains),
+               Knob("d", "rad/(s^2*N*m)", "switching gain d of the observer", 1e-9, 1e9, path="controller.d",
+                    role="switching", boundary=True, current=lambda d: float(d.gains["d"]),
+                    when=lambda d: "d" in d.gains),
+               Knob("switching_gain", "rad/s^2", "switching gain k of the arm's observers", 1e-9, 1e9,
+                    path="controller.switching_gain", role="switching", boundary=True,
+                    current=lambda d: d.gains["k"], when=lambda d: "k" in d.gains),
+               Knob("window", "s", "time D between the two points of the update", 1e-6, 1e6, path="controller.window")),
+        traits=("adaptive", "switching"),
     )
 
 

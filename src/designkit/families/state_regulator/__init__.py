@@ -26,6 +26,7 @@ from designkit.families.vsc.surface import linear_model
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
 
 __all__ = ["FAMILY", "KIND", "StateRegulatorSpec", "law", "synthesize"]
@@ -105,4 +106,6 @@ FAMILY = Family(
     ),
     validate=validate,
     json=json_summary,
+    knobs=(Knob("poles", "1/s", "closed-loop poles of x' = (A − B K) x: the regulator's speed", 1e-3, 1e6,
+                path="controller.poles"),),
 )

@@ -63,6 +63,7 @@ from designkit.families.vsc.surface import (
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -282,4 +283,12 @@ FAMILY = Family(
     sections=(section,),
     diagnoses=(diagnose,),
     json=json_summary,
+    knobs=(Knob("relay_amplitude", "input", "relay amplitude δ of the switching term", 1e-6, 1e6,
+                path="controller.relay_amplitude", role="switching", boundary=True,
+                current=lambda d: float(d.gains["delta"])),
+           Knob("sliding_poles", "1/s", "poles of the sliding motion on σ = c x = 0", 1e-3, 1e6,
+                path="controller.sliding_poles"),
+           Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
+                path="controller.margin")),
+    traits=("switching",),
 )

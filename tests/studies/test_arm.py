@@ -1,8 +1,7 @@
-"""The lab questions of experiment 1 answered from a run (designkit.analysis.lab).
+"""The arm's questions answered from a run (designkit.studies.arm).
 
 Independent routes: the two-link arm's dynamics derived here by Lagrange with sympy (coupling and
-Coriolis torques), the payload's weight written by hand (model error torque), the static error of
-computed torque under a model error solved with scipy (the gain study's runs), and synthetic numbers
+Coriolis torques), the payload's weight written by hand (model error torque), and synthetic numbers
 for the generated sentences.
 """
 
@@ -16,11 +15,9 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from designkit.analysis.lab import gains as lab_gains
-from designkit.analysis.lab import lab_answers
-from designkit.analysis.lab.coupling import JointCoupling, coupling_level, coupling_sentences
-from designkit.analysis.lab.gains import GainEffect, GainRun, gain_sentence, study_sentences
-from designkit.analysis.lab.tracking import CoordinateError, tracking_sentences
+from designkit.studies.arm import lab_answers
+from designkit.studies.arm.coupling import JointCoupling, coupling_level, coupling_sentences
+from designkit.studies.arm.tracking import CoordinateError, tracking_sentences
 from designkit.models.robot_plant import zoo_plant
 from designkit.models.torques import coupling_torques, model_error_torque
 from designkit.pipeline import run
@@ -167,75 +164,6 @@ def test_mismatch_reports_the_model_error_and_the_differing_parameter(mismatch):
     assert any("m2 2.5 against 3 kg" in s for s in answers.mass)
 
 
-# ----------------------------------------------------------------------------- gain study
-
-
-def test_unit_row_of_the_gain_table_is_the_main_run(mismatch):
-    result, answers = mismatch
-    err = np.abs(np.asarray(result.simulation.tracking_errors))
-    assert answers.gains.measure.startswith("peak |e|")
-    for effect in answers.gains.effects:
-        nominal = next(r for r in effect.runs if r.scale == 1.0)
-        assert [r.scale for r in effect.runs] == [0.5, 1.0, 2.0]
-        assert nominal.peak_error == tuple(np.max(err, axis=0))
-        assert nominal.final_error == tuple(err[-1])
-    assert answers.tracking.coordinates[0].peak == float(np.max(err[:, 0]))
-
-
-def test_scaled_K1_runs_end_at_the_static_error_of_the_scaled_gain(mismatch):
-    """At rest computed torque gives ``M^(q) K1 (qD - q) + g^(q) = g(q)``: solved here for each scale of K1."""
-    result, answers = mismatch
-    plant, model = result.plant, result.design.plant
-    qD = np.asarray(result.simulation.desired)[-1]
-    K1 = np.asarray(result.design.gains["K1"], dtype=float)
-    effect = next(e for e in answers.gains.effects if e.name == "K1")
-    for r in effect.runs:
-        assert r.ok
-
-        def residual(q, k1=r.scale * K1):
-            M = model.robot.mass_matrix(q, p=model.model_parameters())
-            gm = model.robot.gravity_torque(q, p=model.model_parameters())
-            g = plant.robot.gravity_torque(q, p=plant.model_parameters())
-            return M @ (k1 * (qD - q)) + gm - g
-
-        q = scipy.optimize.fsolve(residual, qD, xtol=1e-13)
-        assert np.allclose(r.final_error, np.abs(qD - q), rtol=1e-4, atol=1e-9), (r.scale, r.final_error, qD - q)
-    ratios = dict(effect.ratios)
-    assert ratios[0.5] > 1.5 and ratios[2.0] < 0.7  # the static error scales with 1/K1
-    assert answers.gains.most_sensitive == "K1"
-    assert "so raising K1 lowers the peak |e|" in effect.sentence
-
-
-def test_exact_model_gain_study_says_the_error_stays_at_integrator_precision(exact):
-    _, answers = exact
-    assert answers.gains.most_sensitive is None
-    assert any("integrator's precision" in s for s in answers.gains.sentences)
-
-
-def test_a_destabilizing_gain_is_reported_not_raised():
-    result = run(parse_spec(PID_FRAGILE))
-    answers = lab_answers(result)
-    assert answers.nature == "per-joint loops"
-    k2 = next(e for e in answers.gains.effects if e.name == "K2")
-    doubled = next(r for r in k2.runs if r.scale == 2.0)
-    assert doubled.status in ("unstable", "non-finite", "diverging") and doubled.abscissa > 0
-    assert dict(k2.ratios)[2.0] is None and math.isinf(k2.sensitivity)
-    assert "doubling it destabilizes the loop" in k2.sentence
-    assert "Doubling K2 destabilizes the loop." in answers.gains.sentences
-    assert all(r.ok for e in answers.gains.effects if e.name != "K2" for r in e.runs)
-
-
-def test_gain_study_is_skipped_beyond_its_bounds(mismatch, monkeypatch):
-    result, _ = mismatch
-    monkeypatch.setattr(lab_gains, "MAX_JOINTS", 1)
-    study = lab_answers(result).gains
-    assert study.effects == () and "2 joints" in study.skipped and study.sentences[0].startswith("Gain study skipped")
-    monkeypatch.setattr(lab_gains, "MAX_JOINTS", 6)
-    monkeypatch.setattr(lab_gains, "STUDY_BUDGET_S", 0.0)
-    study = lab_answers(result).gains
-    assert study.effects == () and "budget" in study.skipped
-
-
 # ----------------------------------------------------------------------------- configuration
 
 
@@ -277,30 +205,6 @@ def test_model_error_wording_follows_its_size():
     assert "the model mismatch, not the coupling" in words[3]
 
 
-def test_gain_sentence_follows_the_direction_of_the_ratios():
-    runs = (GainRun(0.5, "ok"), GainRun(1.0, "ok"), GainRun(2.0, "ok"))
-    raise_it = gain_sentence("K1", "proportional", "peak |e|", runs, [(0.5, 3.1), (2.0, 0.4)])
-    assert "halving it multiplies the peak |e| by 3.1; doubling it multiplies it by 0.4" in raise_it
-    assert raise_it.endswith("so raising K1 lowers the peak |e|.")
-    assert gain_sentence("K1", "p", "e", runs, [(0.5, 0.5), (2.0, 2.0)]).endswith("so lowering K1 lowers the e.")
-    assert gain_sentence("K1", "p", "e", runs, [(0.5, 1.5), (2.0, 1.3)]).endswith(
-        "the designed value gives the smallest e of the three.")
-    assert "practically unchanged" in gain_sentence("K1", "p", "e", runs, [(0.5, 1.001), (2.0, 0.999)])
-
-
-def test_the_most_sensitive_gain_is_decided_by_the_numbers():
-    def effect(name: str, lo: float, hi: float) -> GainEffect:
-        return GainEffect(name, "", "", (), ((0.5, lo), (2.0, hi)), max(abs(math.log(lo)), abs(math.log(hi))), "")
-
-    for strength in np.linspace(1.1, 3.0, 8):  # K2's effect grows; K1's stays at x1.5
-        text = study_sentences("peak |e|", [effect("K1", 1.5, 0.7), effect("K2", strength, 1 / strength)])[0]
-        top = "K2" if math.log(strength) > math.log(1.5) else "K1"
-        assert text.startswith(f"The peak |e| is most sensitive to {top} ")
-    unstable = GainEffect("K3", "", "", (), ((0.5, 1.2), (2.0, None)), math.inf, "")
-    out = study_sentences("peak |e|", [effect("K1", 1.5, 0.7), unstable])
-    assert out[0] == "Doubling K3 destabilizes the loop." and out[1].startswith("Of the gains that keep")
-
-
 def test_tracking_sentence_tells_a_static_error_from_a_decaying_one():
     def coords(final: float):
         return [CoordinateError("q1", "rad", 1.0, 0.01, 0.5, 0.005, final)]
@@ -322,24 +226,23 @@ def test_none_for_a_link_plant_or_without_simulation(exact):
     assert build_report_model(link).sections == ()
 
 
-def test_report_of_a_robot_spec_has_the_lab_section(exact):
+def test_report_of_a_robot_spec_has_the_arm_section_without_an_experiment_number(exact):
     result, answers = exact
     model = build_report_model(result)
-    (lab,) = model.sections
-    questions = [s.question for s in lab.questions]
-    assert len(questions) == 5 and questions[0].startswith("How well does the controller perform")
+    arm = next(s for s in model.sections if s.anchor == "arm")
+    questions = [s.question for s in arm.questions]
+    assert len(questions) == 4 and questions[0].startswith("How well does the controller perform")
     html = render_html(model)
-    assert '<h2 id="lab">Lab questions (notes, experiment 1)</h2>' in html
+    assert '<h2 id="arm">The arm: tracking, configuration, mass parameters and coupling</h2>' in html
+    assert "experiment 1" not in arm.title + arm.intro  # computed torque is not the notes' PID experiment
     assert answers.tracking.sentences[0] in html.replace("&#39;", "'")
-    gain_table = lab.questions[1].tables[0]
-    unit_rows = [row for row in gain_table.rows if row[1] == "× 1"]
-    assert len(unit_rows) == 2 and all(row[2] == "as designed" for row in unit_rows)
+    assert any(s.anchor == "study-gains" for s in model.sections)
     assert compile_pdf(model).startswith(b"%PDF")
 
 
 def test_coupling_the_law_cancels_is_not_called_dominant():
     """Resolved acceleration with the exact model: the coupling torques are in the arm, not in the loop."""
-    from designkit.analysis.lab.coupling import JointCoupling, coupling_sentences
+    from designkit.studies.arm.coupling import JointCoupling, coupling_sentences
 
     strong = JointCoupling(1, "N*m", 3.0, 0.1, 3.1, 0.5, 1.0, 3.1, 0.0)  # coupling 3.1x the own torque, cancelled
     text = " ".join(coupling_sentences([strong], "model-based"))

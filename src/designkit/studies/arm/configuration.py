@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from designkit.analysis.lab.run import PathSamples, check_named, family_label
 from designkit.display.numbers import fmt_number, fmt_percent, fmt_poles, plain_complex, quantity
+from designkit.studies.arm.run import PathSamples, check_named, family_label
 
 __all__ = ["Configuration", "JointInertia", "configuration_sentences", "measure_configuration"]
 

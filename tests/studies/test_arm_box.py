@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.analysis.lab.mass import box_response_sentence
+from designkit.studies.arm.mass import box_response_sentence
 
 SPEC = Path(__file__).resolve().parents[2] / "specs" / "simnog-decentralized-pid.yaml"
 

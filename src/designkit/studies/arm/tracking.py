@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from designkit.analysis.lab.run import commanded_moves, error_floors, motion_scales, relative_to_moves
 from designkit.display.numbers import fmt_number, fmt_percent, quantity
+from designkit.studies.arm.run import commanded_moves, error_floors, motion_scales, relative_to_moves
 
 __all__ = ["CoordinateError", "TorquePeak", "Tracking", "measure_tracking", "step_metrics", "tracking_sentences"]
 

@@ -1,4 +1,4 @@
-"""The root locus over the gain study (:mod:`designkit.analysis.lab.root_locus`) against python-control.
+"""The root locus over the gain study (:mod:`designkit.studies.gains.locus`) against python-control.
 
 - at × 1 every gain's locus is the design's closed loop: python-control's ``pole()`` of
   ``design.closed_loop`` as a state-space system;
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.analysis.lab.root_locus import HIGH, LOW, POINTS, root_locus
+from designkit.studies.gains.locus import HIGH, LOW, POINTS, root_locus
 from designkit.families import family
 from designkit.synthesis.closed_loop import linearize
 
@@ -74,17 +74,25 @@ def test_the_ends_are_the_scaled_designs(scara, name):
     _same(locus.poles[k], _poles(_scaled_a(result, name, locus.scales[k])))
 
 
-def test_the_ends_match_the_gain_study_s_slowest_poles():
-    from designkit.analysis.lab import lab_answers
+def test_the_gain_study_draws_the_locus_of_its_gain_knobs():
+    from designkit.families import family
+    from designkit.studies.core.study import StudyContext
+    from designkit.studies.gains import STUDY
 
     result = dk.run(dk.load_spec(SPECS / "scara-decentralized-pid.yaml"))
-    rl = root_locus(result)
-    study = lab_answers(result).gains
-    for effect in study.effects:
-        locus = next(locus for locus in rl.loci if locus.name == effect.name)
-        for run in effect.runs:
-            if run.abscissa is not None:
-                assert float(np.max(locus.at(run.scale).real)) == pytest.approx(run.abscissa, rel=1e-6, abs=1e-9)
+    study = STUDY.run(StudyContext(result, family(result.design.kind), None, 60.0))
+    (fig,) = study.figures
+    assert fig.title == "Root locus over the gain study"
+    text = " ".join(s for q in study.section.questions for s in q.sentences)
+    assert "figure Root locus over the gain study" in text
+    # the table's rows at x 0.5 and x 2 are the runs whose loops the locus ends on: a loop the locus shows unstable
+    # is a variant that does not pass
+    rl = root_locus(result, ["K1", "K2", "K3", "K4"])
+    for entry in study.entries:
+        locus = next(locus for locus in rl.loci if locus.name == entry.parameter)
+        for r in entry.rows:
+            if r.factor != 1.0 and float(np.max(locus.at(r.factor).real)) > 1e-9:
+                assert r.outcome != "verified", (entry.parameter, r.factor)
 
 
 def test_doubling_k2_destabilizes_the_scara_loop_in_the_locus(scara):
@@ -104,10 +112,10 @@ def test_doubling_k2_destabilizes_the_scara_loop_in_the_locus(scara):
 
 
 def test_the_figure_is_legible_at_420_px_and_says_what_moves(scara):
-    from designkit.report.figures.root_locus import root_locus_figure
+    from designkit.studies.gains.locus_figure import root_locus_figure
 
-    result, _ = scara
-    fig = root_locus_figure(result)
+    result, rl = scara
+    fig = root_locus_figure(result, rl)
     width_pt = float(re.search(r'width="([\d.]+)pt"', fig.svg).group(1))
     sizes = [float(s) for s in re.findall(r"font-size[:=]\s*\"?([\d.]+)", fig.svg)]
     assert sizes and min(sizes) * 420.0 / width_pt >= 9.0

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from designkit.analysis.lab.run import NEGLIGIBLE_ERROR, check_named, commanded_moves
 from designkit.display.numbers import fmt_number, quantity
+from designkit.studies.arm.run import NEGLIGIBLE_ERROR, check_named, commanded_moves
 
 __all__ = ["BOX_RUNS_MAX", "box_response_sentence", "mass_sentences"]
 

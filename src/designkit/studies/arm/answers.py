@@ -1,4 +1,4 @@
-"""The lab answers of one run, assembled: :func:`lab_answers` and :class:`LabAnswers`."""
+"""The arm's questions of one run, assembled: :func:`lab_answers` and :class:`LabAnswers`."""
 
 from __future__ import annotations
 
@@ -7,19 +7,18 @@ from typing import Any
 
 import numpy as np
 
-from designkit.analysis.lab.configuration import Configuration, measure_configuration
-from designkit.analysis.lab.coupling import Coupling, measure_coupling
-from designkit.analysis.lab.gains import GainStudy, study_gains
-from designkit.analysis.lab.mass import mass_sentences
-from designkit.analysis.lab.run import check_named, family_label, path_samples
-from designkit.analysis.lab.tracking import Tracking, measure_tracking
+from designkit.studies.arm.configuration import Configuration, measure_configuration
+from designkit.studies.arm.coupling import Coupling, measure_coupling
+from designkit.studies.arm.mass import mass_sentences
+from designkit.studies.arm.run import check_named, family_label, path_samples
+from designkit.studies.arm.tracking import Tracking, measure_tracking
 
 __all__ = ["LabAnswers", "lab_answers", "nature_of"]
 
 
 @dataclass(frozen=True)
 class LabAnswers:
-    """The answers to the lab questions of experiment 1 for one run.
+    """The answers to the arm's questions for one run.
 
     Parameters
     ----------
@@ -30,7 +29,6 @@ class LabAnswers:
         (cancels the model's dynamics; its error poles are checked along the path) or ``"other"``;
         decided from the design and the checks, not from the family's kind.
     tracking : Tracking
-    gains : GainStudy
     configuration : Configuration
     mass : tuple of str
         Sentences on the influence of the mass parameters.
@@ -40,7 +38,6 @@ class LabAnswers:
     controller: str
     nature: str
     tracking: Tracking
-    gains: GainStudy
     configuration: Configuration
     mass: tuple[str, ...]
     coupling: Coupling
@@ -57,7 +54,7 @@ def nature_of(result: Any) -> str:
 
 
 def lab_answers(result: Any) -> LabAnswers | None:
-    """Answer the lab questions of experiment 1 for ``result`` (see the module docstring).
+    """Answer the arm's questions for ``result`` (see the package docstring).
 
     Parameters
     ----------
@@ -81,7 +78,6 @@ def lab_answers(result: Any) -> LabAnswers | None:
         controller=family_label(result),
         nature=nature,
         tracking=tracking,
-        gains=study_gains(result, plant, sim),
         configuration=measure_configuration(result, plant, path, nature),
         mass=mass_sentences(result, plant),
         coupling=measure_coupling(result, plant, path, nature),

@@ -1,6 +1,6 @@
-"""The lab-questions section of a report: the notes' experiment 1 answered from the run, as sentences and tables.
+"""The arm's section of a report: tracking, configuration, mass parameters and coupling answered from the run.
 
-:func:`lab_section` turns :class:`~designkit.analysis.lab.LabAnswers` into a
+:func:`lab_section` turns :class:`~designkit.studies.arm.LabAnswers` into a
 :class:`~designkit.display.section.ReportSection`, which the report lays out as it lays out the sections the
 families contribute.
 """
@@ -18,21 +18,9 @@ from designkit.display.section import Table as LabTable
 __all__ = ["lab_section"]
 
 
-def _root_locus_sentences(result: Any) -> tuple[str, ...]:
-    """What the root locus over the gain study shows (:mod:`designkit.analysis.lab.root_locus`), in words."""
-    from designkit.analysis.lab.root_locus import POINTS, root_locus
-
-    rl = root_locus(result)
-    if rl is None:
-        return ()
-    return (f"Between those ends, the root locus (figure Root locus over the gain study) follows the closed-loop "
-            f"poles of the loop linearized at the design's operating point over {POINTS} log-spaced factors from "
-            f"× 0.5 to × 2 of each gain:", *rl.sentences)
-
-
 def lab_section(result: Any) -> ReportSection | None:
-    """The lab questions' section of a run (None when the run has none: not a robot, or no simulation)."""
-    from designkit.analysis.lab import lab_answers
+    """The arm's section of a run (None when the run has none: not a robot, or no simulation)."""
+    from designkit.studies.arm import lab_answers
 
     answers = lab_answers(result)
     if answers is None:
@@ -50,32 +38,6 @@ def lab_section(result: Any) -> ReportSection | None:
                                tuple((q.name, f(q.peak), f(q.at), unit(q.unit)) for q in tr.torques)))
     sections = [LabSection("How well does the controller perform? How to characterize its performance?",
                            tr.sentences, tuple(tables))]
-
-    st = answers.gains
-    gain_tables = []
-    if st.effects:
-        step = any(r.overshoot is not None for e in st.effects for r in e.runs)
-        first = next(r for r in st.effects[0].runs if r.scale == 1.0)
-        kind = "RMS |e|" if st.measure.startswith("RMS") else "peak |e|"
-        poles = any(r.abscissa is not None for e in st.effects for r in e.runs)
-        header = ("Gain", "Scale", "Loop", *(("max Re(pole) (1/s)",) if poles else ()),
-                  *(f"{kind} {c} ({unit(u)})" for c, u in zip(st.coordinates, st.units, strict=True)),
-                  f"peak |{first.peak_torque_input}| ({unit(first.peak_torque_unit)})",
-                  *(("Overshoot (%)", "Settling (s)") if step else ()))
-        rows = []
-        for e in st.effects:
-            for r in e.runs:
-                values = r.rms_error if kind == "RMS |e|" else r.peak_error
-                cells = [f(v) for v in values] if r.ok else ["—"] * len(st.coordinates)
-                status = "as designed" if r.scale == 1.0 else ("stable" if r.ok else r.status)
-                rows.append((e.name, f"× {r.scale:g}", status, *((f(r.abscissa),) if poles else ()), *cells,
-                             f(r.peak_torque) if r.ok else "—",
-                             *((f(r.overshoot), f(r.settling_time)) if step else ())))
-        gain_tables.append(LabTable("Each gain scaled on every joint, everything else equal, on the true plant "
-                                    "(the × 1 rows are the run above)", header, tuple(rows)))
-    locus = _root_locus_sentences(result) if st.effects else ()
-    sections.append(LabSection("What is the function of each gain? How do gain variations influence performance?",
-                               (*st.sentences, *(e.sentence for e in st.effects), *locus), tuple(gain_tables)))
 
     cf = answers.configuration
     loops = any(j.design_value is not None for j in cf.joints)
@@ -104,8 +66,8 @@ def lab_section(result: Any) -> ReportSection | None:
         cp.sentences,
         (LabTable(f"Peak torques along the simulated path (q̈ by finite differences of the simulated velocities"
                   f"{stride})", header, rows),) if rows else ()))
-    intro = (f"The questions of the notes' simulation experiment 1 (appendix A), answered for this design "
-             f"({answers.controller}) from the simulation above: every number is measured on this run and every "
-             "sentence is written from those numbers; the gain study re-simulates the same scenario with one gain "
-             "scaled at a time.")
-    return ReportSection("lab", "Lab questions (notes, experiment 1)", intro, tuple(sections))
+    intro = (f"How this design ({answers.controller}) copes with the arm, answered from the simulation above: its "
+             "tracking, the configuration it moves through, its mass parameters and the couplings between joints. "
+             "Every number is measured on this run and every sentence is written from those numbers.")
+    return ReportSection("arm", "The arm: tracking, configuration, mass parameters and coupling", intro,
+                         tuple(sections))

@@ -1,9 +1,8 @@
 """The root locus over the gain study: one panel per gain that moves a pole, the closed-loop poles as that gain
-is scaled continuously from × 0.5 to × 2 (:func:`designkit.analysis.lab.root_locus.root_locus`)."""
+is scaled continuously from × 0.5 to × 2 (:func:`designkit.studies.gains.locus.root_locus`)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -53,18 +52,14 @@ def _draw(loci: tuple[Any, ...], nominal: np.ndarray) -> Any:
 
 
 TITLE = "Root locus over the gain study"
-"""The figure's title, which the lab section's gain-study answer names when it describes the locus."""
+"""The figure's title, which the gain study's answer names when it describes the locus."""
 
 
-def root_locus_figure(result: Any, sections: Sequence[Any] = ()) -> Figure | None:
-    """The root-locus figure of the gain study: None when the design has no linear loop to follow, or when
-    ``sections`` (the report's) are given and no gain-study answer among them names the figure (the study was
-    skipped)."""
-    from designkit.analysis.lab.root_locus import POINTS, root_locus
+def root_locus_figure(result: Any, rl: Any) -> Figure | None:
+    """The root-locus figure of the gain study from its locus ``rl``
+    (:func:`designkit.studies.gains.locus.root_locus`): None when no gain moves a pole."""
+    from designkit.studies.gains.locus import POINTS
 
-    if sections and not any(TITLE in sentence for sec in sections for q in sec.questions for sentence in q.sentences):
-        return None
-    rl = root_locus(result)
     if rl is None:
         return None
     loci = tuple(locus for locus in rl.loci if _moving(locus))

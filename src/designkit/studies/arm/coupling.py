@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from designkit.analysis.lab.run import NEGLIGIBLE_ERROR, PathSamples, check_named, family_label
 from designkit.display.numbers import fmt_number, fmt_percent, quantity
 from designkit.models.torques import coupling_torques, model_error_torque
+from designkit.studies.arm.run import NEGLIGIBLE_ERROR, PathSamples, check_named, family_label
 
 __all__ = ["Coupling", "JointCoupling", "coupling_level", "coupling_sentences", "measure_coupling"]
 

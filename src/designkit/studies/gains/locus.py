@@ -1,7 +1,7 @@
 """The root locus over the gain study: the closed-loop poles as each gain is scaled continuously over [0.5, 2].
 
-The gain study (:mod:`~designkit.analysis.lab.gains`) re-simulates each gain at × 0.5 and × 2; this module
-follows the poles in between.  For each gain of ``design.gains`` (all joints at once), the loop of the true
+The gain study (:mod:`designkit.studies.gains`) re-runs each gain at × 0.5 and × 2; this module follows the
+poles in between.  For each gain knob of the family (a design gain, all joints at once), the loop of the true
 plant and the family's law with that gain scaled (``family(kind).law(replace(design, gains=...))``) is
 linearized at the design's operating point (:func:`designkit.synthesis.closed_loop.linearize`) at
 :data:`POINTS` log-spaced scales from :data:`LOW` to :data:`HIGH`.
@@ -123,20 +123,22 @@ def _sentence(locus: GainLocus) -> str:
     return text + "."
 
 
-def root_locus(result: Any, points: int = POINTS) -> RootLocus | None:
-    """The closed-loop poles of every gain scaled over [:data:`LOW`, :data:`HIGH`] (None without a linear loop,
-    an operating point or gains, or when a linearization fails)."""
+def root_locus(result: Any, names: Any = None, points: int = POINTS) -> RootLocus | None:
+    """The closed-loop poles of every gain in ``names`` (default every gain of the design) scaled over
+    [:data:`LOW`, :data:`HIGH`] (None without an exact linear loop, an operating point or gains, or when a
+    linearization fails)."""
     design = result.design
     op = design.operating_point
     plant = result.plant if getattr(result, "plant", None) is not None else design.plant
-    if design.closed_loop is None or design.linear_law is None or not op or not design.gains:
+    names = tuple(design.gains) if names is None else tuple(names)
+    if design.closed_loop is None or design.linearization.kind != "exact" or not op or not names:
         return None
     anti_windup = result.loaded.spec.simulation.anti_windup if result.loaded.spec.simulation is not None else None
     scales = np.exp(np.linspace(np.log(LOW), np.log(HIGH), points))
     loci = []
     try:
-        base = _matrix(plant, design, next(iter(design.gains)), 1.0, anti_windup, op)
-        for name in design.gains:
+        base = _matrix(plant, design, names[0], 1.0, anti_windup, op)
+        for name in names:
             a_lo = _matrix(plant, design, name, LOW, anti_windup, op)
             a_hi = _matrix(plant, design, name, HIGH, anti_windup, op)
             step = (a_hi - base) / (HIGH - 1.0)

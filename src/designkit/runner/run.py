@@ -1,0 +1,110 @@
+"""A spec run as the pipeline runs it: true plant, design, simulation or trials, checks."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Run", "base_dir", "run_spec"]
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """What one run of a spec produced.
+
+    Parameters
+    ----------
+    loaded : LoadedSpec
+        The spec run (with its text and hash).
+    plant : Plant
+        The true plant the simulation ran on.
+    design : Design
+        The family's design (for the controller's model, which may differ from the true plant).
+    simulation : SimulationResult or None
+        The run (a learning law's last trial); None when not simulated.
+    trials : TrialsResult or None
+        Every trial of a learning law.
+    checks : tuple of Check
+        Every check the family offers that applies, in report order.
+    seconds : float
+        Wall time of the run (s), design and checks included.
+    """
+
+    loaded: Any
+    plant: Any
+    design: Any
+    simulation: Any
+    trials: Any
+    checks: tuple[Any, ...]
+    seconds: float = 0.0
+
+    @property
+    def verified(self) -> bool:
+        """Every required check passes (undecided is not a pass)."""
+        from designkit.verification.check import all_passed
+
+        return all_passed(self.checks)
+
+    @property
+    def failed(self) -> tuple[Any, ...]:
+        """Required checks that failed or are undecided."""
+        from designkit.verification.check import not_passed
+
+        return not_passed(self.checks)
+
+
+def base_dir(loaded: Any) -> Path | None:
+    """Folder of the spec file (relative model paths are resolved against it), or None for text."""
+    return None if str(loaded.path).startswith("<") else Path(loaded.path).resolve().parent
+
+
+def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | None = None,
+             simulate: bool = True, actual: Any = None) -> Run:
+    """Run a one-controller spec as :func:`designkit.pipeline.run` does.
+
+    Parameters
+    ----------
+    loaded : LoadedSpec
+        A validated one-controller spec.
+    plant : Plant, optional
+        The true plant (default: built from ``loaded.spec.plant``).
+    adjust : callable, optional
+        ``design -> design``: applied to the family's design before the run (a study's other gains,
+        :func:`designkit.runner.variants.with_gains`).
+    simulate : bool
+        Run the simulation (or the trials) and the checks that read it.
+    actual : Plant, optional
+        The plant the loop runs on and is checked on, when it differs from the one the family designs for
+        (``plant``): a study's other link mass or viscosity, which the controller is not told of.
+
+    Returns
+    -------
+    Run
+    """
+    from designkit.families import check_rules, synthesize
+    from designkit.simulation.run import build
+    from designkit.simulation.trials import run_trials
+    from designkit.spec.plant_builder import plant_from_spec
+    from designkit.verification.suite import run_checks
+
+    start = time.perf_counter()
+    spec = loaded.spec
+    plant = plant_from_spec(spec.plant, base_dir(loaded)) if plant is None else plant
+    design = synthesize(spec, plant)
+    if adjust is not None:
+        design = adjust(design)
+    plant = plant if actual is None else actual
+    sim = trials = None
+    if simulate:
+        learning = design.learning
+        simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
+        if learning is not None:
+            trials = run_trials(simulator, learning.trials, learning.update)
+            sim = trials.results[-1]
+        else:
+            sim = simulator.run()
+    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials)
+    return Run(loaded, plant, design, sim, trials, tuple(checks), time.perf_counter() - start)

@@ -1,0 +1,152 @@
+"""Studies: what interprets a verdict, each one module, discovered like the families and the check rules.
+
+A study varies what a family declares it may vary (its knobs, :mod:`designkit.synthesis.knobs`) and runs every
+variant through the family's own run with the family's own checks (:mod:`designkit.runner`); it measures what the
+family declares meaningful (its metrics) and says only what those runs showed.  Every module or package of this
+package other than :mod:`~designkit.studies.core` (and names starting with ``_``) defines ``STUDY``, a
+:class:`~designkit.studies.core.study.Study`; :data:`STUDIES` maps each name to it, in report order.  Adding a study
+is adding a module here: no generic file changes, the report lays out its section and figures, ``synth --json``
+carries its rows, and the spec's ``studies`` section takes its settings under its name.
+
+A spec's ``studies`` section::
+
+    studies:
+      budget: 20                  # s of work each study may spend on its variants (default 15)
+      gains: {knobs: [K1, K2], factors: [0.5, 2]}
+      boundary: {knob: gamma, low: 100, high: 1.0e6}
+
+is read by :func:`validate` before anything is run: an unknown study, a knob the family does not declare, a value
+outside the knob's declared range, or a budget too small for one variant is refused with its key path.
+"""
+
+from __future__ import annotations
+
+import pkgutil
+import time
+from importlib import import_module
+from types import MappingProxyType
+from typing import Any
+
+from designkit.errors import SpecError
+from designkit.studies.core.study import Study, StudyContext, StudyResult
+
+__all__ = ["DEFAULT_BUDGET", "STUDIES", "run_studies", "study_settings", "validate"]
+
+DEFAULT_BUDGET = 15.0
+"""Seconds of work each study may spend on its variants when the spec's ``studies.budget`` is not given."""
+
+
+def _discover() -> dict[str, Study]:
+    found: dict[str, Study] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("_") or info.name == "core":
+            continue
+        module = import_module(f"{__name__}.{info.name}")
+        study = getattr(module, "STUDY", None)
+        if not isinstance(study, Study):
+            raise TypeError(f"{module.__name__} defines no STUDY")
+        if study.name in found:
+            raise TypeError(f"study {study.name!r} registered twice ({module.__name__})")
+        found[study.name] = study
+    return dict(sorted(found.items(), key=lambda kv: (kv[1].order, kv[0])))
+
+
+STUDIES: MappingProxyType[str, Study] = MappingProxyType(_discover())
+"""Study name -> :class:`~designkit.studies.core.study.Study`, in report order (read-only)."""
+
+
+def _section(spec: Any) -> Any:
+    return getattr(spec, "studies", None)
+
+
+def _raw(spec: Any) -> dict[str, Any]:
+    """The study keys of the spec's ``studies`` section (its settings, unvalidated)."""
+    section = _section(spec)
+    return dict(section.model_extra or {}) if section is not None else {}
+
+
+def budget_of(spec: Any) -> float:
+    """Seconds each study may spend (``studies.budget``, default :data:`DEFAULT_BUDGET`)."""
+    section = _section(spec)
+    value = getattr(section, "budget", None) if section is not None else None
+    return DEFAULT_BUDGET if value is None else float(value)
+
+
+def study_settings(spec: Any, name: str) -> Any:
+    """The validated settings of study ``name`` in ``spec`` (its model), or None when the spec gives none."""
+    study = STUDIES[name]
+    raw = _raw(spec).get(name)
+    if raw is None or study.settings is None:
+        return None
+    return _parse(study, raw)
+
+
+def _parse(study: Study, raw: Any) -> Any:
+    from pydantic import ValidationError
+
+    from designkit.schema.loader import key_path, message
+
+    path = f"studies.{study.name}"
+    if study.settings is None:
+        raise SpecError(path, "this study takes no settings")
+    if not isinstance(raw, dict):
+        raise SpecError(path, f"must be a mapping of the study's settings, got {type(raw).__name__}")
+    try:
+        return study.settings.model_validate(raw)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        where = key_path(tuple(err.get("loc", ())))
+        raise SpecError(f"{path}.{where}" if where else path, message(err)) from None
+
+
+def validate(spec: Any, family: Any) -> None:
+    """Refuse, with its key path, what a spec's ``studies`` section asks that cannot be done (module docstring).
+
+    Raises
+    ------
+    SpecError
+        An unknown study, a study's settings that are not valid, or a setting its family does not allow.
+    """
+    for name, raw in _raw(spec).items():
+        study = STUDIES.get(name)
+        if study is None:
+            known = ", ".join(n for n in STUDIES if STUDIES[n].settings is not None)
+            raise SpecError(f"studies.{name}", f"unknown study; the studies with settings are {known}")
+        settings = _parse(study, raw)
+        if study.validate is not None:
+            try:
+                study.validate(settings, family, spec)
+            except ValueError as exc:
+                where, _, what = str(exc).partition(": ")
+                raise SpecError(f"studies.{name}.{where}", what) from None
+
+
+def run_studies(result: Any) -> tuple[StudyResult, ...]:
+    """Every study that applies to ``result`` (a one-controller run, or a comparison), in report order.
+
+    Each study runs its variants within the spec's studies budget (:func:`budget_of`) and says what it reduced
+    to stay within it.
+    """
+    from designkit.families import family
+
+    comparison = hasattr(result, "results") and hasattr(result, "labels")
+    spec = result.loaded.spec
+    fam = None if comparison else family(result.design.kind)
+    from designkit.studies.core.budget import Meter
+
+    meter = Meter()
+    out: list[StudyResult] = []
+    for study in STUDIES.values():
+        if study.comparison != comparison or not study.applies(result, fam):
+            continue
+        start = time.perf_counter()
+        ctx = StudyContext(result, fam, study_settings(spec, study.name) if not comparison else None,
+                           budget_of(spec), meter, tuple(out))
+        done = study.run(ctx)
+        if done is not None:
+            if not done.seconds:
+                import dataclasses
+
+                done = dataclasses.replace(done, seconds=time.perf_counter() - start)
+            out.append(done)
+    return tuple(out)
