@@ -13,9 +13,25 @@ from dataclasses import dataclass
 from typing import Any
 
 from designkit.comparison.metrics import baseline_simulation, compute_metrics
+from designkit.comparison.verdicts import CheckLine, check_lines, member_sentence, member_verified
 from designkit.display.numbers import fmt_number, unit
 
-__all__ = ["METRICS", "ComparisonTable", "ControllerRow", "Metric", "Winner", "baselines", "comparison_table"]
+__all__ = ["METRICS", "TIE_TOLERANCE", "ComparisonTable", "ControllerRow", "Metric", "Winner", "baselines",
+           "comparison_table", "tally", "tie"]
+
+TIE_TOLERANCE = 0.01
+"""Two controllers tie on a metric when their values differ by at most this fraction (1 %) of the larger
+magnitude: no controller wins a metric by less.  Equal values (both zero included) tie; a finite value never ties
+with a diverged or never-reached one."""
+
+
+def tie(a: float, b: float) -> bool:
+    """Whether two values of one metric tie: ``|a - b| <= TIE_TOLERANCE * max(|a|, |b|)`` (both finite), or equal."""
+    if a == b:
+        return True
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return False
+    return abs(a - b) <= TIE_TOLERANCE * max(abs(a), abs(b))
 
 
 @dataclass(frozen=True)
@@ -80,11 +96,14 @@ class ControllerRow:
     controller : str
         The family in words.
     verified : bool
-        Every check of its own run passed.
+        Every required check of its own run passed (an undecided check is not a pass).
     values : Mapping
         Metric key -> value (None: does not apply; ``inf``: diverged, or never re-converged).
-    checks : tuple of (str, str, str)
-        Each check's name, label in words and status (``PASS``, ``FAIL``, ``UNDECIDED``).
+    checks : tuple of CheckLine
+        Each check's name, label in words, status (``PASS``, ``FAIL``, ``UNDECIDED``) and whether it is required.
+    warnings : tuple of str
+        Its run's warnings (:attr:`~designkit.pipeline.PipelineResult.warnings`: weak margins, chattering...),
+        one plain sentence each.
     """
 
     label: str
@@ -92,17 +111,40 @@ class ControllerRow:
     controller: str
     verified: bool
     values: Mapping[str, float | None]
-    checks: tuple[tuple[str, str, str], ...]
+    checks: tuple[CheckLine, ...]
+    warnings: tuple[str, ...] = ()
 
     @property
-    def failed(self) -> tuple[tuple[str, str, str], ...]:
-        """The checks that did not pass."""
-        return tuple(c for c in self.checks if c[2] != "PASS")
+    def failed(self) -> tuple[CheckLine, ...]:
+        """The checks that did not pass, required or informational."""
+        return tuple(c for c in self.checks if c.status != "PASS")
+
+    @property
+    def sentence(self) -> str:
+        """Its verdict in one or two sentences, from its checks' statuses (:func:`~designkit.comparison.verdicts.
+        member_sentence`)."""
+        return member_sentence(self.label, self.controller, self.checks)
 
 
 @dataclass(frozen=True)
 class Winner:
-    """Who does best on one metric: ``label`` with ``value``, against the ``runner_up``'s ``second`` value."""
+    """Who does best on one metric, or who ties on it.
+
+    Parameters
+    ----------
+    metric : Metric
+        The metric.
+    label, value : str, float
+        The controller with the lowest value, and that value (in the metric's unit).
+    runner_up, second : str, float
+        The controller with the second lowest value, and that value.
+    sentence : str
+        What the comparison says of it, in words.
+    tie : bool
+        True when ``second`` is within :data:`TIE_TOLERANCE` of ``value``: nobody wins the metric.
+    tied : tuple of str
+        With a tie, every controller whose value is within the tolerance of the lowest, lowest first.
+    """
 
     metric: Metric
     label: str
@@ -110,6 +152,8 @@ class Winner:
     runner_up: str
     second: float
     sentence: str
+    tie: bool = False
+    tied: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -155,7 +199,8 @@ class ComparisonTable:
         return f"{fmt_number(value, 4)} {self.unit_of(metric)}"
 
     def winners(self) -> tuple[Winner, ...]:
-        """For each metric defined for two controllers or more: who has the lowest value, and by how much."""
+        """For each metric defined for two controllers or more: who has the lowest value and by how much, or who
+        ties with it (values within :data:`TIE_TOLERANCE` of the lowest)."""
         out = []
         for m in self.metrics:
             have = [(r.values[m.key], r.label) for r in self.rows if r.values.get(m.key) is not None]
@@ -163,9 +208,20 @@ class ComparisonTable:
                 continue
             have.sort(key=lambda p: p[0])
             (best, who), (second, other) = have[0], have[1]
-            if best == second:
-                sentence = f"On the {m.label}, {who} and {other} tie at {self.cell(m, best)}."
-            elif math.isinf(second):
+            group = [(v, label) for v, label in have if tie(best, v)]
+            if len(group) >= 2:
+                names = _and([label for _, label in group])
+                if all(v == best for v, _ in group):
+                    sentence = f"On the {m.label}, {names} tie at {self.cell(m, best)}."
+                else:
+                    worst = group[-1][0]
+                    gap = 100 * (worst - best) / max(abs(best), abs(worst))
+                    sentence = (f"On the {m.label}, {names} tie: {_and([self.cell(m, v) for v, _ in group])} differ "
+                                f"by {fmt_number(gap, 2)} % at most, within the {fmt_number(100 * TIE_TOLERANCE, 2)} % "
+                                "tie tolerance.")
+                out.append(Winner(m, who, best, other, second, sentence, True, tuple(lb for _, lb in group)))
+                continue
+            if math.isinf(second):
                 sentence = (f"On the {m.label}, {who} wins with {self.cell(m, best)}; {other}: "
                             f"{self.cell(m, second)}.")
             else:
@@ -177,16 +233,43 @@ class ComparisonTable:
             out.append(Winner(m, who, best, other, second, sentence))
         return tuple(out)
 
+    def winners_json(self) -> list[dict[str, Any]]:
+        """``--json``'s ``winners``: one object per metric with a finite lowest and second value: ``metric``,
+        ``label`` and ``value`` (the lowest), ``runner_up`` and ``runner_up_value``, ``tie`` (True: within
+        :data:`TIE_TOLERANCE`, nobody wins) and ``tied`` (the tied labels, lowest first; empty without a tie)."""
+        return [{"metric": w.metric.key, "label": w.label, "value": w.value, "runner_up": w.runner_up,
+                 "runner_up_value": w.second, "tie": w.tie, "tied": list(w.tied)}
+                for w in self.winners() if math.isfinite(w.value) and math.isfinite(w.second)]
+
     def to_json(self) -> list[dict[str, Any]]:
-        """One object per controller: label, kind, verified, metrics (non-finite values as None), checks."""
+        """One object per controller: label, kind, verified, metrics (non-finite values as None), the metrics that
+        diverged or never re-converged, checks (name -> status) and its run's warnings."""
         return [{
             "label": r.label, "kind": r.kind, "verified": r.verified,
             "metrics": {m.key: (None if r.values.get(m.key) is None or not math.isfinite(r.values[m.key])
                                 else r.values[m.key]) for m in self.metrics},
             "diverged_or_never": [m.key for m in self.metrics
                                   if r.values.get(m.key) is not None and math.isinf(r.values[m.key])],
-            "checks": {name: status for name, _, status in r.checks},
+            "checks": {c.name: c.status for c in r.checks},
+            "warnings": list(r.warnings),
         } for r in self.rows]
+
+
+def _and(words: Sequence[str]) -> str:
+    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
+
+
+def tally(labels: Sequence[str], winners: Sequence[Winner]) -> str:
+    """How many metrics each controller wins, and which are ties, in one sentence."""
+    wins = {label: sum(1 for w in winners if not w.tie and w.label == label) for label in labels}
+    ties = [w.metric.label for w in winners if w.tie]
+    n = len(winners)
+    text = f"Of the {n} metric{'s' * (n != 1)} compared, " + _and(
+        [f"{label} wins {k or 'none'}" for label, k in wins.items()])
+    if ties:
+        text += (f"; {len(ties)} {'is a tie' if len(ties) == 1 else 'are ties'} (values within "
+                 f"{fmt_number(100 * TIE_TOLERANCE, 2)} % of each other): " + ", ".join(ties))
+    return text + "."
 
 
 def _units(results: Sequence[Any]) -> tuple[str, str]:
@@ -258,10 +341,9 @@ def comparison_table(labels: Sequence[str], results: Sequence[Any],
     rows = []
     for label, res, base in zip(labels, results, unchanged, strict=True):
         values = compute_metrics(res.loaded.spec, res.simulation, base)
-        checks = tuple((c.name, getattr(c, "label", "") or c.name.replace("_", " ").capitalize(), c.status)
-                       for c in res.checks)
+        checks = check_lines(res.checks)
         rows.append(ControllerRow(label, res.design.kind, family(res.design.kind).display.label,
-                                  bool(res.verified), values, checks))
+                                  member_verified(checks), values, checks, tuple(res.warnings)))
     used = tuple(_worded(m, results) for m in METRICS if any(r.values.get(m.key) is not None for r in rows))
     error_unit, command_unit = _units(results)
     return ComparisonTable(used, tuple(rows), error_unit, command_unit)
