@@ -118,7 +118,7 @@ def test_a_difference_within_the_tolerance_is_a_tie_not_a_win():
     assert w.tie and w.tied == ("mrac", "selftune")
     assert "tie" in w.sentence and "wins" not in w.sentence
     assert "0.3607 rad and 0.3616 rad differ by 0.25 % at most, within the 1 % tie tolerance" in w.sentence
-    assert tally(("mrac", "selftune"), (w,)) == ("Of the 1 metric compared, mrac wins none and selftune wins none; "
+    assert tally(("mrac", "selftune"), (w,)) == ("Of the 1 metric compared, mrac wins none and selftune wins none. "
                                                  "1 is a tie (values within 1 % of each other): metric in words.")
 
 

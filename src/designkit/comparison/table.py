@@ -56,6 +56,8 @@ class Metric:
     meaning: str
 
 
+_SETTLED = ("over the settled instants: the last quarter of each level of the reference, from {settle} s after each "
+            "jump to the next (the error once each jump has been followed, the jumps themselves left out)")
 METRICS: tuple[Metric, ...] = (
     Metric("rms_error_before", "RMS tracking error before the change", "error",
            "root mean square of the tracking error |xD − x| over the run before the plant change (the whole run "
@@ -66,6 +68,25 @@ METRICS: tuple[Metric, ...] = (
            "root mean square of |xD − x| from the plant change to the end of the run"),
     Metric("max_error_after", "largest tracking error after the change", "error",
            "largest |xD − x| from the plant change on"),
+    Metric("rms_settled_before", "RMS settled error before the change", "error",
+           "root mean square of |xD − x| before the plant change, " + _SETTLED),
+    Metric("max_settled_before", "largest settled error before the change", "error",
+           "largest |xD − x| before the plant change over the settled instants (the last quarter of each level)"),
+    Metric("rms_settled_after", "RMS settled error after the change", "error",
+           "root mean square of |xD − x| from the plant change on, " + _SETTLED),
+    Metric("max_settled_after", "largest settled error after the change", "error",
+           "largest |xD − x| from the plant change on over the settled instants (the last quarter of each level)"),
+    Metric("rise_time_before", "mean 90 % rise time before the change", "s",
+           "mean, over the reference's jumps before the plant change, of the time from the jump until the output "
+           "first covers 90 % of it"),
+    Metric("rise_time_after", "mean 90 % rise time after the change", "s",
+           "mean, over the reference's jumps from the plant change on, of the time from the jump until the output "
+           "first covers 90 % of it"),
+    Metric("rms_model_error_before", "RMS error against the reference model before the change", "error",
+           "root mean square of |ym − x| before the plant change, ym the output of the reference model the "
+           "controller's law follows and records (only for such a law)"),
+    Metric("rms_model_error_after", "RMS error against the reference model after the change", "error",
+           "root mean square of |ym − x| from the plant change on (ym: the recorded reference model's output)"),
     Metric("rms_deviation", "RMS departure caused by the change", "error",
            "root mean square, from the plant change on, of |x − x0|: x0 is the same controller's output in a run "
            "on the unchanged plant"),
@@ -75,6 +96,10 @@ METRICS: tuple[Metric, ...] = (
            "time after the plant change from which |x − x0| stays within 1 % of the reference's range"),
     Metric("rms_error_final", "RMS tracking error over the last period", "error",
            "root mean square of |xD − x| over the last reference period of the run"),
+    Metric("rms_settled_final", "RMS settled error over the last period", "error",
+           "root mean square of |xD − x| over the last reference period of the run, " + _SETTLED),
+    Metric("max_error_load", "largest tracking error after the load step", "error",
+           "largest |xD − x| from the load step's onset ({load} s) to the end of the run"),
     Metric("peak_command", "peak command", "command", "largest |u| the controller commanded"),
     Metric("peak_command_after", "peak command after the change", "command",
            "largest |u| commanded from the plant change on"),
@@ -82,7 +107,11 @@ METRICS: tuple[Metric, ...] = (
     Metric("overshoot", "overshoot", "%", "largest excursion beyond the step, in percent of the step"),
     Metric("settling_time", "settling time (2 %)", "s", "last time the position leaves the 2 % band of the step"),
 )
-"""Every metric, in table order (lower is better for each)."""
+"""Every metric, in table order (lower is better for each); :func:`designkit.comparison.metrics.compute_metrics`
+leaves those that do not fit the scenario undefined (None), and the table shows only the others."""
+
+_NEVER = ("reconvergence", "rise_time_before", "rise_time_after")
+"""Metrics whose infinite value means the event did not happen within the run (written ``never``)."""
 
 
 @dataclass(frozen=True)
@@ -195,7 +224,7 @@ class ComparisonTable:
         if value is None:
             return "—"
         if math.isinf(value):
-            return "never" if metric.key == "reconvergence" else "diverged"
+            return "never" if metric.key in _NEVER else "diverged"
         return f"{fmt_number(value, 4)} {self.unit_of(metric)}"
 
     def winners(self) -> tuple[Winner, ...]:
@@ -267,8 +296,8 @@ def tally(labels: Sequence[str], winners: Sequence[Winner]) -> str:
     text = f"Of the {n} metric{'s' * (n != 1)} compared, " + _and(
         [f"{label} wins {k or 'none'}" for label, k in wins.items()])
     if ties:
-        text += (f"; {len(ties)} {'is a tie' if len(ties) == 1 else 'are ties'} (values within "
-                 f"{fmt_number(100 * TIE_TOLERANCE, 2)} % of each other): " + ", ".join(ties))
+        text += (f". {len(ties)} {'is a tie' if len(ties) == 1 else 'are ties'} (values within "
+                 f"{fmt_number(100 * TIE_TOLERANCE, 2)} % of each other): " + "; ".join(ties))
     return text + "."
 
 
@@ -287,27 +316,45 @@ def _units(results: Sequence[Any]) -> tuple[str, str]:
 
 
 def _worded(metric: Metric, results: Sequence[Any]) -> Metric:
-    """``metric`` with its words for the comparison's scenario: without a plant change "before the change" is the
-    whole run, and without a periodic reference the last window is the last quarter of the run
-    (:func:`~designkit.comparison.metrics.window_length`)."""
+    """``metric`` with its words for the comparison's scenario (:func:`~designkit.comparison.metrics.scenario`):
+    without a plant change "before the change" is the whole run; without a periodic reference the last window is
+    the last quarter of the run (:func:`~designkit.comparison.metrics.window_length`); the delay after each jump
+    and the load step's onset are written in seconds; a single jump's rise time is the step's."""
     import dataclasses
 
-    from designkit.comparison.metrics import window_length
+    from designkit.comparison.metrics import scenario
 
-    spec = next((r.loaded.spec for r in results if r.simulation is not None), None)
-    if spec is None:
+    run = next((r for r in results if r.simulation is not None), None)
+    if run is None:
         return metric
+    spec = run.loaded.spec
     label, meaning = metric.label, metric.meaning
-    if spec.simulation.plant_change is None and metric.key in ("rms_error_before", "max_error_before"):
-        label = label.replace("before the change", "over the run")
-        for words in (" over the run before the plant change (the whole run without one)",
-                      " before the plant change (the whole run without one)"):
-            meaning = meaning.replace(words, " over the whole run")
-    if metric.key == "rms_error_final" and getattr(spec.simulation.trajectory, "period", None) is None:
-        t = next(r.simulation.time for r in results if r.simulation is not None)
-        window = fmt_number(window_length(spec, t), 3)
-        label = f"RMS tracking error over the last {window} s"
-        meaning = f"root mean square of |xD − x| over the last quarter of the run ({window} s)"
+    sc = scenario(spec, run.simulation) if hasattr(run.simulation, "reference") else None
+    if spec.simulation.plant_change is None:
+        label = label.replace(" before the change", " over the run")
+        for words, by in ((" over the run before the plant change (the whole run without one)", " over the whole run"),
+                          (" before the plant change (the whole run without one)", " over the whole run"),
+                          (" before the plant change", " over the whole run")):
+            meaning = meaning.replace(words, by)
+    if metric.key in ("rms_error_final", "rms_settled_final") and getattr(spec.simulation.trajectory, "period",
+                                                                           None) is None:
+        t = run.simulation.time
+        window = fmt_number((float(t[-1]) - float(t[0])) / 4.0, 3)
+        if metric.key == "rms_error_final":
+            label = f"RMS tracking error over the last {window} s"
+            meaning = f"root mean square of |xD − x| over the last quarter of the run ({window} s)"
+        else:
+            label = f"RMS settled error over the last {window} s"
+            meaning = meaning.replace("the last reference period of the run",
+                                      f"the last quarter of the run ({window} s)")
+    if sc is not None:
+        if sc.settle is not None:
+            meaning = meaning.replace("{settle}", fmt_number(sc.settle, 3))
+        if sc.load is not None:
+            meaning = meaning.replace("{load}", fmt_number(sc.load, 4))
+        if metric.key == "rise_time_before" and len(sc.jumps) == 1 and spec.simulation.plant_change is None:
+            label = "90 % rise time of the step"
+            meaning = "time from the step until the output first covers 90 % of it"
     return dataclasses.replace(metric, label=label, meaning=meaning)
 
 
