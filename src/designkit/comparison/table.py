@@ -98,7 +98,7 @@ METRICS: tuple[Metric, ...] = (
            "root mean square of |xD − x| over the last reference period of the run"),
     Metric("rms_settled_final", "RMS settled error over the last period", "error",
            "root mean square of |xD − x| over the last reference period of the run, " + _SETTLED),
-    Metric("max_error_load", "largest tracking error after the load step", "error",
+    Metric("max_error_load", "largest tracking error from the load step on", "error",
            "largest |xD − x| from the load step's onset ({load} s) to the end of the run"),
     Metric("peak_command", "peak command", "command", "largest |u| the controller commanded"),
     Metric("peak_command_after", "peak command after the change", "command",

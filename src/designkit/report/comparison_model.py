@@ -35,8 +35,8 @@ class MemberRow:
         How many required and informational checks pass, fail and are undecided, and the name of each that did
         not pass (:func:`~designkit.comparison.verdicts.check_summary`).
     why : tuple of str
-        One sentence per check that did not pass, required or informational: the check in words, its status and
-        its detail.
+        One sentence per required check that did not pass: the check in words, its status and its detail (the
+        informational ones are named in ``summary``; their details are in the controller's own report).
     html, pdf : str
         Its own report's files, relative to the comparison report.
     warnings : tuple of str
@@ -126,9 +126,8 @@ def _member(label: str, result: Any) -> MemberRow:
     from designkit.report.verdict import verdict_of
 
     verdict, kind = verdict_of(tuple(result.checks))
-    why = tuple(f"{getattr(c, 'label', '') or c.name}" + ("" if c.required else " (informational)")
-                + f": {c.status}" + (f" — {c.detail}" if c.detail else "")
-                for c in result.checks if c.status != "PASS")
+    why = tuple(f"{getattr(c, 'label', '') or c.name}: {c.status}" + (f" — {c.detail}" if c.detail else "")
+                for c in result.failed)
     return MemberRow(label, family(result.design.kind).display.label,
                      verdict, kind, check_summary(check_lines(result.checks)), why,
                      f"{label}/report.html", f"{label}/report.pdf", tuple(result.warnings))
