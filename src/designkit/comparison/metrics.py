@@ -118,7 +118,19 @@ def reconvergence_time(t: np.ndarray, d: np.ndarray, tc: float, band: float) -> 
 
 def jumps(sim: Any) -> np.ndarray:
     """Indices of the samples where the reference jumps (:data:`JUMP_TOLERANCE`), sorted; ``0`` first when the run
-    starts off its reference (a step from the initial position)."""
+    starts off its reference (a step from the initial position).
+
+    Parameters
+    ----------
+    sim : SimulationResult
+        The run: its ``time`` (s), ``reference`` (position in rad or m and velocity in rad/s or m/s of each tracked
+        coordinate) and ``tracked_positions`` (rad or m).
+
+    Returns
+    -------
+    ndarray of int
+        The sample ``i`` of each jump (between samples ``i - 1`` and ``i``; 0: the start).
+    """
     t = np.asarray(sim.time, dtype=float)
     ref = np.asarray(sim.reference, dtype=float).reshape(len(t), -1, 3)
     xd, vd = ref[:, :, 0], ref[:, :, 1]
@@ -169,7 +181,15 @@ class Scenario:
 
 
 def scenario(spec: Any, sim: Any) -> Scenario:
-    """The :class:`Scenario` of one run of ``spec``."""
+    """The :class:`Scenario` of one run of ``spec``.
+
+    Parameters
+    ----------
+    spec : Spec
+        The run's single-controller spec (its ``simulation.plant_change``, ``perturbation`` and trajectory).
+    sim : SimulationResult
+        The run (its time grid in s and its reference).
+    """
     t = np.asarray(sim.time, dtype=float)
     change = spec.simulation.plant_change
     tc = float(change.time) if change is not None and float(change.time) < t[-1] else None
@@ -183,7 +203,22 @@ def scenario(spec: Any, sim: Any) -> Scenario:
 
 
 def settled(t: np.ndarray, jump_times: tuple[float, ...], settle: float) -> np.ndarray:
-    """The instants at least ``settle`` (s) after the latest jump (those before the first jump included)."""
+    """The instants at least ``settle`` after the latest jump (those before the first jump included).
+
+    Parameters
+    ----------
+    t : ndarray
+        The time grid (s).
+    jump_times : tuple of float
+        The jumps' times (s), sorted.
+    settle : float
+        The delay after a jump (s).
+
+    Returns
+    -------
+    ndarray of bool
+        One flag per instant of ``t``.
+    """
     j = np.asarray(jump_times, dtype=float)
     k = np.searchsorted(j, t, side="right") - 1
     since = np.where(k >= 0, t - j[np.clip(k, 0, None)], np.inf)

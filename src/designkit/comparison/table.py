@@ -26,7 +26,18 @@ with a diverged or never-reached one."""
 
 
 def tie(a: float, b: float) -> bool:
-    """Whether two values of one metric tie: ``|a - b| <= TIE_TOLERANCE * max(|a|, |b|)`` (both finite), or equal."""
+    """Whether two values of one metric tie: ``|a - b| <= TIE_TOLERANCE * max(|a|, |b|)`` (both finite), or equal.
+
+    Parameters
+    ----------
+    a, b : float
+        The two controllers' values, in the metric's unit (``inf``: diverged or never reached).
+
+    Returns
+    -------
+    bool
+        True when neither wins the metric.
+    """
     if a == b:
         return True
     if not (math.isfinite(a) and math.isfinite(b)):
@@ -289,7 +300,20 @@ def _and(words: Sequence[str]) -> str:
 
 
 def tally(labels: Sequence[str], winners: Sequence[Winner]) -> str:
-    """How many metrics each controller wins, and which are ties, in one sentence."""
+    """How many metrics each controller wins, and which are ties, in words.
+
+    Parameters
+    ----------
+    labels : sequence of str
+        The controllers' labels, in spec order.
+    winners : sequence of Winner
+        :meth:`ComparisonTable.winners`.
+
+    Returns
+    -------
+    str
+        ``Of the N metrics compared, a wins 3 and b wins none. 1 is a tie (values within 1 % of each other): …``
+    """
     wins = {label: sum(1 for w in winners if not w.tie and w.label == label) for label in labels}
     ties = [w.metric.label for w in winners if w.tie]
     n = len(winners)

@@ -1,8 +1,8 @@
 """The figures of a comparison report: every controller's output and error overlaid, each one's command alone.
 
 The output with the reference, the departure caused by a plant change and the tracking error are drawn on one
-axis, one colour per controller; the commands, whose scales may differ by orders of magnitude (a relay's tens of
-volts against a PID's few), get one panel per controller, each on its own scale; a load step
+axis, one colour per controller; the commands, whose scales may differ by orders of magnitude (a switching law's
+tens of volts against a smooth law's few), get one panel per controller, each on its own scale; a load step
 (``simulation.perturbation`` inside the run) gets a zoom on the outputs around it.  The plant change and the load
 step are marked by dotted vertical lines.  Captions are written from what was drawn.
 """
