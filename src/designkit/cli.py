@@ -79,26 +79,33 @@ def _summary(result) -> str:
 
 
 def _comparison_summary(result) -> str:
-    """The text summary of a comparison: the table (one column per controller), who wins, each verdict."""
+    """The text summary of a comparison: the table (one column per controller), who wins or ties, each controller's
+    verdict from its checks' statuses, and every controller's warnings."""
+    from designkit.comparison.table import tally
+
     table = result.table
     header = ("metric", *result.labels)
     rows = [header]
     for m in table.metrics:
         rows.append((f"{m.label} ({table.unit_of(m)})",
                      *(table.cell(m, r.values.get(m.key)).removesuffix(" " + table.unit_of(m)) for r in table.rows)))
-    rows.append(("checks passed", *(f"{sum(s == 'PASS' for *_, s in r.checks)} of {len(r.checks)}"
-                                    for r in table.rows)))
+    rows.append(("required checks passed", *(f"{sum(c.status == 'PASS' for c in r.checks if c.required)} of "
+                                             f"{sum(c.required for c in r.checks)}" for r in table.rows)))
     widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
     lines = [f"{result.loaded.spec.name}: comparison of " + ", ".join(
         f"{label} ({r.design.kind})" for label, r in zip(result.labels, result.results, strict=True))]
     lines += ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in rows]
-    lines += [w.sentence for w in table.winners()]
-    for label, r in zip(result.labels, result.results, strict=True):
-        lines.append(f"{label}: " + ("VERIFIED" if r.verified else
-                                     "NOT VERIFIED: " + ", ".join(c.name for c in r.failed)))
+    winners = table.winners()
+    lines += [tally(result.labels, winners), *(w.sentence for w in winners)]
+    for row, r in zip(table.rows, result.results, strict=True):
+        lines.append(row.sentence)
         for c in r.failed:
             if c.detail:
                 lines.append(f"  {c.status} {c.name}: {c.detail}")
+    warned = [(row.label, w) for row in table.rows for w in row.warnings]
+    if warned:
+        lines.append("warnings:")
+        lines += [f"  {label}: {w}" for label, w in warned]
     lines.append("VERIFIED (every controller)" if result.verified else
                  "NOT VERIFIED: " + ", ".join(dict.fromkeys(label for label, _ in result.failed)))
     return "\n".join(lines)

@@ -232,8 +232,10 @@ class ComparisonResult:
     def to_json(self) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json`` for a comparison.
 
-        ``comparison`` has one object per controller (label, kind, verified, metrics, checks, and its own
-        run's JSON under ``result``); ``passed`` and ``verified`` say whether every controller is verified;
+        ``comparison`` has one object per controller (label, kind, verified, metrics, checks, warnings, and its
+        own run's JSON under ``result``); ``winners`` one object per metric, with ``tie`` and ``tied``
+        (:meth:`~designkit.comparison.table.ComparisonTable.winners_json`); ``passed`` and ``verified`` say whether
+        every controller is verified; ``warnings`` every controller's warnings, each prefixed with its label;
         ``checks`` lists every check of every controller, each with its ``controller`` label.
         """
         rows = self.table.to_json()
@@ -246,9 +248,7 @@ class ComparisonResult:
             "controllers": list(self.labels),
             "comparison": rows,
             "metric_units": {m.key: self.table.unit_of(m) for m in self.table.metrics},
-            "winners": [{"metric": w.metric.key, "label": w.label, "value": w.value, "runner_up": w.runner_up,
-                         "runner_up_value": w.second} for w in self.table.winners()
-                        if all(map(_finite, (w.value, w.second)))],
+            "winners": self.table.winners_json(),
             "passed": self.verified,
             "verified": self.verified,
             "warnings": [f"{label}: {w}" for label, r in zip(self.labels, self.results, strict=True)
@@ -270,12 +270,6 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, np.generic):
         return value.item()
     return value
-
-
-def _finite(x: float) -> bool:
-    import math
-
-    return math.isfinite(x)
 
 
 def base_dir(loaded: LoadedSpec) -> Path | None:

@@ -86,3 +86,65 @@ def test_poppler_reads_the_comparison_pdf_without_a_message(written, tmp_path):
     _, files, _ = written
     done = subprocess.run(["pdfinfo", str(files.pdf)], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and done.stderr == "", done.stderr
+
+
+def _axes_and_lines(svg: str) -> list[int]:
+    """For each axes of an SVG figure, how many controller lines it draws (tagged ``dk-controller``)."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(svg)
+    out = []
+    for g in root.iter("{http://www.w3.org/2000/svg}g"):
+        if re.fullmatch(r"axes_\d+", g.get("id", "")):
+            out.append(sum(1 for el in g.iter() if el.get("id", "").startswith("dk-controller")))
+    return out
+
+
+def test_each_controllers_command_has_its_own_panel(written):
+    result, _, _ = written
+    from designkit.report.comparison_figures import comparison_figures
+
+    figures = {f.filename: f for f in comparison_figures(result)}
+    command = figures["comparison-command.svg"]
+    assert _axes_and_lines(command.svg) == [1] * len(result.labels)  # one axis per controller, one line each
+    assert "one panel per controller" in command.caption
+    assert _axes_and_lines(figures["comparison-output.svg"].svg) == [len(result.labels)]  # outputs overlaid
+    assert "comparison-load.svg" not in figures  # no load step in this scenario
+
+
+def test_a_load_step_gets_a_zoom_and_warnings_reach_page_one(tmp_path):
+    """A scenario with a load step: the zoom on it; a member's warnings on page 1 of the HTML and the PDF and in
+    the CLI summary, labelled by controller."""
+    import dataclasses
+
+    from designkit.cli import _comparison_summary
+    from designkit.comparison.table import comparison_table
+    from designkit.report.comparison_model import build_comparison_model
+    from designkit.report.comparison_writer import compile_comparison_pdf, render_comparison_html
+    from designkit.verification.check import Check
+    from tests.comparison.test_scenario_metrics import STEP_LOAD
+
+    result = run(parse_spec(STEP_LOAD))
+    warning = "Weak stability margin at u: gain margin 3.1 dB, below 6 dB"
+    warned = dataclasses.replace(result["fast"], checks=(*result["fast"].checks, Check(
+        "margins_note", True, required=False, label="A margin note", warnings=(warning,))))
+    results = (result["slow"], warned)
+    result = dataclasses.replace(result, results=results,
+                                 table=comparison_table(result.labels, results, result.unchanged))
+    assert result["fast"].warnings[-1] == warning
+    model = build_comparison_model(result, provenance=())
+    figures = {f.filename: f for f in model.figures}
+    load = figures["comparison-load.svg"]
+    assert _axes_and_lines(load.svg) == [2] and "dk-load-step" in load.svg
+    assert "Zoom on the load step of 0.5 N·m at 2.5 s" in load.caption
+    text = _text(render_comparison_html(model))
+    first = text[: text.index("Controllers and their verdicts", text.index("Warnings"))]
+    assert f"fast: {warning}" in first and "slow:" not in first
+    pdf = tmp_path / "report.pdf"
+    pdf.write_bytes(compile_comparison_pdf(model))
+    pages = pdf_pages(pdf)
+    assert "Warnings" in pages[0] and "fast: Weak stability margin at u: gain margin 3.1 dB" in " ".join(
+        pages[0].split())
+    summary = _comparison_summary(result)
+    assert f"  fast: {warning}" in summary
+    assert "fast (PID position servo) is verified: all 7 of its checks pass (4 required, 3 informational)." in summary

@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
 
 __all__ = ["CONTRIBUTIONS", "ComparisonContribution", "comparison_sections", "generic_section"]
@@ -55,30 +56,24 @@ CONTRIBUTIONS: tuple[Callable[[], ComparisonContribution], ...] = (_lab2, _lab3)
 
 
 def generic_section(result: Any) -> ReportSection:
-    """Who wins on each metric and by how much, and each controller's verdict, from the table alone."""
+    """Who wins on each metric and by how much (or ties), and each controller's verdict written from its checks'
+    statuses (:func:`~designkit.comparison.verdicts.member_sentence`), from the table alone."""
+    from designkit.comparison.table import TIE_TOLERANCE, tally
+
     table = result.table
     winners = table.winners()
-    wins: dict[str, int] = {label: 0 for label in result.labels}
-    for w in winners:
-        wins[w.label] += 1
-    tally = ", ".join(f"{label} on {n} of {len(winners)}" for label, n in wins.items())
-    verdicts = []
-    for r in table.rows:
-        if r.verified:
-            verdicts.append(f"{r.label} ({r.controller}) is verified: all {len(r.checks)} of its checks pass.")
-        else:
-            failed = "; ".join(f"{label} ({status.lower()})" for _, label, status in r.failed)
-            verdicts.append(f"{r.label} ({r.controller}) is not verified: {failed}.")
     meaning = Table("How each metric was computed", ("metric", "computed as"),
                     tuple((m.label, m.meaning) for m in table.metrics))
+    tolerance = fmt_number(100 * TIE_TOLERANCE, 2)
     return ReportSection(
         anchor="comparison-answers", title="Which controller does better, on what, by how much",
         intro="Every number is computed the same way from each controller's own run of the shared task; lower "
-              "is better for each metric.",
+              f"is better for each metric. Two controllers tie on a metric when their values differ by at most "
+              f"{tolerance} % of the larger: a tie is nobody's win.",
         questions=(
-            Question("Who wins on each metric?", (f"Metrics won: {tally}.", *(w.sentence for w in winners)),
+            Question("Who wins on each metric?", (tally(result.labels, winners), *(w.sentence for w in winners)),
                      (meaning,)),
-            Question("Is each controller verified?", tuple(verdicts)),
+            Question("Is each controller verified?", tuple(r.sentence for r in table.rows)),
         ),
     )
 

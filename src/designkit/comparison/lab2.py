@@ -93,7 +93,8 @@ def _why(result: Any) -> Question:
 
 
 def _difference(result: Any) -> Question:
-    keys = ("rms_deviation", "max_deviation", "reconvergence", "rms_error_after", "peak_command", "rms_command")
+    keys = ("rms_deviation", "max_deviation", "reconvergence", "rms_error_after", "rms_settled_after",
+            "rise_time_after", "peak_command", "rms_command")
     winners = [w.sentence for w in result.table.winners() if w.metric.key in keys]
     kinds = {r.design.kind: label for label, r, _ in _pairs(result)}
     ts = next((r.design.extra.get("Ts") for r in result.results if r.design.kind == SELF_TUNING), None)

@@ -420,7 +420,8 @@ def _surface_sentence(label: str, run: Any) -> str:
 
 
 def _compare(result: Any, chat: dict[str, Chatter], effects: dict[str, PerturbationEffect | None]) -> Question:
-    keys = ("rms_error_before", "overshoot", "settling_time", "peak_command", "rms_command", "rms_error_final")
+    keys = ("rms_error_before", "rise_time_before", "overshoot", "settling_time", "max_error_load", "peak_command",
+            "rms_command", "rms_error_final")
     winners = [w.sentence for w in result.table.winners() if w.metric.key in keys]
     eu = result.table.error_unit
     sm = _by_kind(result, VSC)

@@ -113,21 +113,9 @@ def variant(label: str, result: Any, setting: str, value: Any, *, section: str =
 
 
 def rise_times(sim: Any, fraction: float = 0.9) -> tuple[tuple[float, float], ...]:
-    """``(edge time, rise time)`` (s) of each jump of a square reference: the time from the jump until the output
-    first covers ``fraction`` of it (``inf`` when it does not before the next jump)."""
-    t = np.asarray(sim.time, dtype=float)
-    xd = np.asarray(sim.desired, dtype=float).reshape(len(t), -1)[:, 0]
-    x = np.asarray(sim.tracked_positions, dtype=float).reshape(len(t), -1)[:, 0]
-    jumps = np.flatnonzero(np.abs(np.diff(xd)) > 1e-9) + 1
-    edges = [0, *jumps.tolist()] if abs(xd[0] - x[0]) > 1e-9 else jumps.tolist()
-    out = []
-    for k, i in enumerate(edges):
-        end = edges[k + 1] if k + 1 < len(edges) else len(t)
-        if k + 1 == len(edges) and k > 0 and (end - i) < (i - edges[k - 1]):
-            break  # the last step is cut short by the end of the run
-        start, target = float(x[i - 1] if i > 0 else x[0]), float(xd[i])
-        level = start + fraction * (target - start)
-        seg = x[i:end]
-        hit = np.flatnonzero((seg - level) * np.sign(target - start) >= 0)
-        out.append((float(t[i]), float(t[i + hit[0]] - t[i]) if hit.size else math.inf))
-    return tuple(out)
+    """``(edge time, rise time)`` (s) of each jump of the reference: the time from the jump until the output first
+    covers ``fraction`` of it (``inf`` when it does not before the next jump);
+    :func:`designkit.comparison.metrics.rise_times`."""
+    from designkit.comparison.metrics import rise_times as measured
+
+    return measured(sim, fraction)

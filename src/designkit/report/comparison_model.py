@@ -32,11 +32,15 @@ class MemberRow:
     verdict, verdict_kind : str
         Its own report's verdict and ``verified`` / ``failed`` / ``undecided``.
     summary : str
-        Counts of passed, failed and undecided checks.
+        How many required and informational checks pass, fail and are undecided, and the name of each that did
+        not pass (:func:`~designkit.comparison.verdicts.check_summary`).
     why : tuple of str
-        One sentence per check that did not pass: the check in words, its status and its detail.
+        One sentence per required check that did not pass: the check in words, its status and its detail (the
+        informational ones are named in ``summary``; their details are in the controller's own report).
     html, pdf : str
         Its own report's files, relative to the comparison report.
+    warnings : tuple of str
+        Its run's warnings (weak margins, chattering...), one plain sentence each.
     """
 
     label: str
@@ -47,6 +51,7 @@ class MemberRow:
     why: tuple[str, ...]
     html: str
     pdf: str
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -62,7 +67,7 @@ class ComparisonReportModel:
     verified : bool
         Same as ``ComparisonResult.verified``.
     members : tuple of MemberRow
-        Each controller's verdict and its own report.
+        Each controller's verdict, warnings and its own report.
     header : tuple of str
         The table's header: ``metric``, ``unit`` and the labels.
     rows : tuple of tuple of str
@@ -105,21 +110,27 @@ class ComparisonReportModel:
     versions: tuple[tuple[str, str], ...] = ()
 
     @property
+    def has_warnings(self) -> bool:
+        """Whether any controller's run has a warning (page 1 then lists them, labelled by controller)."""
+        return any(m.warnings for m in self.members)
+
+    @property
     def figure_anchors(self) -> tuple[str, ...]:
         """HTML anchor of each figure."""
         return tuple(f.anchor for f in self.figures)
 
 
 def _member(label: str, result: Any) -> MemberRow:
+    from designkit.comparison.verdicts import check_lines, check_summary
     from designkit.families import family
-    from designkit.report.verdict import verdict_of, verdict_summary
+    from designkit.report.verdict import verdict_of
 
     verdict, kind = verdict_of(tuple(result.checks))
     why = tuple(f"{getattr(c, 'label', '') or c.name}: {c.status}" + (f" — {c.detail}" if c.detail else "")
                 for c in result.failed)
     return MemberRow(label, family(result.design.kind).display.label,
-                     verdict, kind, verdict_summary(tuple(result.checks)), why,
-                     f"{label}/report.html", f"{label}/report.pdf")
+                     verdict, kind, check_summary(check_lines(result.checks)), why,
+                     f"{label}/report.html", f"{label}/report.pdf", tuple(result.warnings))
 
 
 def build_comparison_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None) -> ComparisonReportModel:
@@ -136,7 +147,8 @@ def build_comparison_model(result: Any, provenance: Sequence[tuple[str, str]] | 
     summary = f"{verified_count} of {len(members)} controllers verified on the same task"
     rows = tuple((m.label, table.unit_of(m), *(table.cell(m, r.values.get(m.key)).removesuffix(
         " " + table.unit_of(m)) for r in table.rows)) for m in table.metrics)
-    checks = tuple((r.label, name, status) for r in table.rows for _, name, status in r.checks)
+    checks = tuple((r.label, c.label + ("" if c.required else " (informational)"), c.status)
+                   for r in table.rows for c in r.checks)
     if provenance is None:
         from designkit.report.provenance import provenance_rows
 
