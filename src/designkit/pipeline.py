@@ -96,10 +96,8 @@ class PipelineResult:
 
     @cached_property
     def diagnosis(self) -> Any:
-        """Why the run failed and the re-simulated fixes (:func:`designkit.analysis.diagnosis.diagnose`), on first
-        access; None for a verified run, the exception itself when the diagnosis failed."""
-        if self.verified:
-            return None
+        """The run's diagnosis (:func:`designkit.analysis.diagnosis.diagnose`: why it failed, the re-simulated fixes,
+        the linear model against the run), on first access; the exception itself when the diagnosis failed."""
         from designkit.analysis.diagnosis import diagnose
 
         try:
@@ -171,11 +169,18 @@ class PipelineResult:
 
     def _fixes_json(self) -> list[dict[str, Any]]:
         """Each re-simulated fix: its title, the spec fields it changes, whether every required check then passes,
-        and the re-run's verdict in words."""
+        and the re-run's verdict in words; then each study's recommendation that changes a spec setting (already run
+        by the study, with its neighbourhood)."""
+        from designkit.studies import study_fixes
+
+        studied = [{"fix": f.text, "note": f"run by the {f.study} study", "runs": [
+            {"title": f.text, "changes": [{"path": k, "value": _jsonable(v)} for k, v in f.changes],
+             "requirement": False, "passed": True, "verdict": "every required check passes", "error": "",
+             "checks": []}]} for f in study_fixes(self, self.studies)]
         diagnosis = self.diagnosis
         if diagnosis is None or isinstance(diagnosis, Exception):
-            return []
-        return [{"fix": p.sentence, "note": p.note, "runs": [
+            return studied
+        return studied + [{"fix": p.sentence, "note": p.note, "runs": [
             {"title": t.remedy.title, "changes": [{"path": k, "value": _jsonable(v)} for k, v in t.remedy.changes],
              "requirement": t.remedy.requirement, "passed": t.passed, "verdict": t.verdict, "error": t.error,
              "checks": [{"name": o.name, "status": o.status, "measured": o.measured, "requirement": o.requirement}

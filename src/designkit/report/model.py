@@ -200,6 +200,19 @@ def _divergence(diagnosis: Any) -> str:
     return unit(" ".join(p for p in parts if p))
 
 
+def _with_study_fixes(why: tuple[WhyRow, ...], fixes: tuple[WhyFix, ...], result: Any,
+                      studies: tuple[Any, ...]) -> tuple[WhyFix, ...]:
+    """The shared fixes of "why it failed", then the studies' recommendations that change a spec setting (each
+    already run with every required check passing, with its neighbourhood), numbered after them."""
+    if not why:
+        return fixes
+    from designkit.studies import study_fixes
+
+    extra = study_fixes(result, studies)
+    labels = tuple(r.label for r in why)
+    return (*fixes, *(WhyFix(len(fixes) + k + 1, unit(f.text), labels) for k, f in enumerate(extra)))
+
+
 def _studies(result: Any) -> tuple[Any, ...]:
     """The run's studies: those the pipeline's result carries (computed once for the report and ``--json``), or run
     here for a result that does not carry them."""
@@ -243,8 +256,9 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
                      if s is not None)
     figures = design_figures(result, processes=processes)
     figures = (*figures, *(f for st in studies for f in st.figures))
-    diagnosis = (result.diagnosis if hasattr(result, "diagnosis") else diagnose_run(result)) if checks else None
+    diagnosis = diagnose_run(result) if checks else None
     why, why_note, why_fixes = why_section(result, diagnosis)
+    why_fixes = _with_study_fixes(why, why_fixes, result, studies)
     if isinstance(diagnosis, Exception):
         diagnosis = None
     rows = [compliance_row(c, figures) for c in checks]

@@ -37,7 +37,10 @@ def _why_from_check(check: Any) -> WhyRow:
 
 def diagnose_run(result: Any) -> Any:
     """``designkit.analysis.diagnosis.diagnose(result)``; None when that module is not installed,
-    the exception itself when the diagnosis failed (the report then says so instead of failing)."""
+    the exception itself when the diagnosis failed (the report then says so instead of failing).  A pipeline
+    result computes its diagnosis once (``result.diagnosis``, shared with ``synth --json``'s fixes)."""
+    if "diagnosis" in getattr(result, "__dict__", {}) or type(result).__dict__.get("diagnosis") is not None:
+        return result.diagnosis
     try:
         from designkit.analysis.diagnosis import diagnose
     except ImportError:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import pkgutil
 import time
+from dataclasses import dataclass
 from importlib import import_module
 from types import MappingProxyType
 from typing import Any
@@ -30,7 +31,7 @@ from typing import Any
 from designkit.errors import SpecError
 from designkit.studies.core.study import Study, StudyContext, StudyResult
 
-__all__ = ["DEFAULT_BUDGET", "STUDIES", "run_studies", "study_settings", "validate"]
+__all__ = ["DEFAULT_BUDGET", "STUDIES", "StudyFix", "run_studies", "study_fixes", "study_settings", "validate"]
 
 DEFAULT_BUDGET = 15.0
 """Seconds of work each study may spend on its variants when the spec's ``studies.budget`` is not given."""
@@ -149,4 +150,36 @@ def run_studies(result: Any) -> tuple[StudyResult, ...]:
 
                 done = dataclasses.replace(done, seconds=time.perf_counter() - start)
             out.append(done)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class StudyFix:
+    """A study's recommendation proposed as a fix of a failing run: the spec change, in words, and the runs that
+    passed every required check with it and around it (the study's own, not re-run)."""
+
+    study: str
+    text: str
+    changes: tuple[tuple[str, Any], ...]
+    checked: tuple[float, ...]
+
+
+def study_fixes(result: Any, studies: tuple[StudyResult, ...]) -> tuple[StudyFix, ...]:
+    """The recommendations of ``studies`` that change a spec setting, as fixes of ``result`` when a required check
+    of it does not pass (none for a verified run)."""
+    if all(c.passed is True for c in result.checks if c.required):
+        return ()
+    from designkit.display.numbers import fmt_number
+
+    out = []
+    for st in studies:
+        for e in st.entries:
+            if e.setting is None or e.recommended is None:
+                continue
+            path, value = e.setting
+            rec = e.recommended
+            out.append(StudyFix(st.name, f"Set {path} = {fmt_number(value, 4)}: the {st.title.lower()} ran it with "
+                                f"every required check passing, as at each of the {len(rec.checked)} runs from "
+                                f"{fmt_number(rec.low, 4)} to {fmt_number(rec.high, 4)} ({e.parameter}).",
+                                ((path, value),), rec.checked))
     return tuple(out)

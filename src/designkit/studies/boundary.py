@@ -237,12 +237,15 @@ def _entry(ctx: StudyContext, knob: Any, budget: Budget, metrics: tuple) -> tupl
     primary = metrics[0] if metrics else None
     rows, pick, nu, reduced = search(axis.low, axis.high, run, budget, primary)
     sentences = _sentences(knob, axis, rows, pick, nu, primary, result, base)
+    setting = None
+    if pick is not None and knob.path and base is not None:
+        setting = (knob.path, float(axis.to_value(pick.value)))
     table = Table(f"{axis.name}: every run of the search, in increasing value",
                   (axis.name + (f" ({unit(axis.unit)})" if axis.unit else ""), "Outcome",
                    *(m.label + (f" ({unit(m.unit)})" if m.unit else "") for m in metrics)),
                   tuple((fmt_number(r.value, 4), r.outcome if not r.detail else f"{r.outcome}: {r.detail}",
                          *(fmt_number(r.metrics.get(m.key), 4) for m in metrics)) for r in rows))
-    return Entry(axis.name, axis.unit, tuple(rows), pick), sentences, (table,), reduced
+    return Entry(axis.name, axis.unit, tuple(rows), pick, setting), sentences, (table,), reduced
 
 
 def _coarse_first(n: int) -> list[int]:

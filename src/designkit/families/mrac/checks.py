@@ -230,7 +230,7 @@ def _stability(design: Any, ctx: Context) -> tuple[Check, ...]:
     cert.update({"bracket": [bd.lo, bd.hi], "runs": [[r.scale, r.stable] for r in bd.runs],
                  "frozen_signal_scale": frozen["scale"] if frozen else None,
                  "floquet_scale": floquet["scale"] if floquet else None,
-                 "gamma_would_do": (bd.lo * gamma).tolist() if bd.lo is not None else None})
+                 "gamma_bounded_at": (bd.lo * gamma).tolist() if bd.lo is not None else None})
     detail = f"the gradient rule lost stability: {a.reason}"
     if fix:
         detail += "; " + "; ".join(fix)
@@ -247,11 +247,14 @@ def _diagnose_own(result: Any, check: Any) -> tuple[str, str] | None:
     if check.name == "adaptive_stability" and check.passed is False:
         cause = (f"The gradient (MIT) rule is unstable at these adaptation gains: {check.detail.split('; ')[0]}. "
                  "Its stability depends on γ times the squared reference amplitude (and on Q and the link's gain).")
-        lo = cert.get("gamma_would_do")
-        fix = (f"Use γ = {_gammas(np.asarray(lo))} or less" if lo else "Lower γ")
+        fix = ("Lower γ: the boundary study of this report judges each γ by every required check on a grid refined "
+               "where the outcome changes (the outcome is not monotone in γ, so a bounded run at one γ says nothing of "
+               "the γ below it) and recommends a value only where its neighbourhood passes too")
         if cert.get("floquet_scale"):
-            fix += f" (below {cert['floquet_scale']:.3g} × the current γ the parameters converge)"
-        return cause + "", fix + ", or lower the reference amplitude: the boundary scales as 1/amplitude²."
+            fix += (f"; linearized about the matched trajectory, the parameters stop converging at "
+                    f"{cert['floquet_scale']:.3g} × the current γ")
+        return cause + "", fix + ". Lowering the reference amplitude acts the same way: the boundary scales as " \
+            "1/amplitude²."
     if check.name == "adaptation_error" and check.passed is False:
         return ("Adaptation did not lower the output error against the fixed-gain loop: " + check.detail + ".",
                 "Raise γ if the parameters moved too little (see the convergence check), lower it if they "

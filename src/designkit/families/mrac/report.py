@@ -197,6 +197,9 @@ def _boundary_question(result: Any, s: Any) -> Question:
                          f"from s³ + a2 s² + (a1 + k c1) s + k c0 at the worst instant t = {_f(s.frozen['at'], 4)} s "
                          f"(k = {_f(s.frozen['k'], 3)}): {_f(ratio, 3)} times below the simulated bounded end, a "
                          "conservative estimate, since the signals it freezes change on the loop's own time scale.")
+    sentences.append("Bounded is not verified, and the outcome need not be monotone in γ: the boundary study of this "
+                     "report judges each γ by every required check on a grid refined where the outcome changes, and "
+                     "recommends a γ only where its neighbourhood passes too.")
     sentences.append("Every estimate scales as 1/(k A² q): γ enters only multiplied by the squared reference "
                      "amplitude A (S and the regressor are proportional to A), by the scale q of Q and by the "
                      "link's gain ratio k = Km τn/(Kmn τ).")

@@ -85,12 +85,17 @@ class Recommended:
 
 @dataclass(frozen=True)
 class Entry:
-    """What a study measured for one parameter: the rows, in increasing value, and its recommendation."""
+    """What a study measured for one parameter: the rows, in increasing value, and its recommendation.
+
+    ``setting`` is the recommendation as a change of the spec, ``(key path, value)`` in the spec's units, when the
+    parameter is a spec setting: a fix a failing report can propose, already run.
+    """
 
     parameter: str
     unit: str
     rows: tuple[Row, ...]
     recommended: Recommended | None = None
+    setting: tuple[str, Any] | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {"parameter": self.parameter, "unit": self.unit, "rows": [r.to_json() for r in self.rows],
