@@ -298,7 +298,7 @@ def validate(spec: Any) -> None:
 
 
 def _family() -> Family:
-    from designkit.families.adaptive_computed_torque import checks, figures, report
+    from designkit.families.adaptive_computed_torque import checks, diagnoses, figures, report
 
     return Family(
         kind=KIND, spec=AdaptiveComputedTorqueSpec, plants=("robot",), reference="trajectory",
@@ -315,6 +315,7 @@ def _family() -> Family:
                     "filtered tracking error e + ψ ė, the filter (1 + ψ s)/(s² + K2 s + K1) strictly positive "
                     "real; or the Slotine–Li passivity-based law, which needs neither the acceleration nor D̂⁻¹."),
         validate=validate, figures=figures.FIGURES, sections=(report.section,), json=report.json,
+        diagnoses=(diagnoses.diagnose,),
     )
 
 

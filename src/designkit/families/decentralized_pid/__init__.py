@@ -36,6 +36,7 @@ from pydantic import Field, field_validator
 from designkit.errors import ModelError, SpecError
 from designkit.families import pid_servo
 from designkit.families.decentralized_pid import workspace_check as workspace_certificate
+from designkit.families.decentralized_pid.diagnoses import diagnose
 from designkit.models.link import simplified_link
 from designkit.spec.controllers import three_poles
 from designkit.spec.fields import PositiveFinite, Section, parse_pole, per_joint
@@ -317,4 +318,5 @@ FAMILY = Family(
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
     validate=poles_or_requirements,
+    diagnoses=(diagnose,),
 )
