@@ -29,6 +29,14 @@ A failing ``overshoot`` check is explained joint by joint (the loop's prediction
 overshoot of that joint); the fix moves the zeros of the joints that overshoot, declared as changes of the spec
 (:class:`~designkit.synthesis.spec_change.SpecChange`): with the family's ``design_margin`` below the limit, and on
 the third pole.
+
+**The workspace certificate** (the family's own rule): a joint's loop is stable only while ``tau < tau_crit =
+K1 (1 + Km K2)/K3 = tau* S1 S2/S3`` (``S1, S2, S3`` the symmetric functions of its poles' magnitudes, ``tau*`` the
+design's, :func:`pole_ratio`), so when the box holds a larger ``D_ii`` the fix asks for poles whose ``S1 S2/S3``
+exceeds ``tau_hi/tau*`` (declared: the complex pair's real part moved left until the ratio has the family's
+``design_margin`` above it), or for the design at the configuration where ``D_ii`` is largest (declared too: then
+``tau_crit = tau_hi S1 S2/S3``, though the coupled arm is linearized there), or a box that keeps ``D_ii`` below the
+critical inertia.
 """
 
 from __future__ import annotations
@@ -43,7 +51,8 @@ import numpy as np
 from designkit.display.numbers import fmt_number, quantity
 from designkit.synthesis.spec_change import SpecChange
 
-__all__ = ["JointLoop", "diagnose", "joint_loops", "overshoot", "poles_step", "upper_gain_margin", "zero_for"]
+__all__ = ["JointLoop", "diagnose", "joint_loops", "overshoot", "pole_ratio", "poles_step", "upper_gain_margin",
+           "zero_for"]
 
 SAMPLES = 30001
 """Grid points of the poles' step over :data:`SETTLE` time constants of the slowest pole."""
@@ -325,11 +334,98 @@ def _overshoot(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...
     return cause, fix[0].upper() + fix[1:] + ".", tuple(changes)
 
 
+def _vector(q: Sequence[float]) -> str:
+    return "[" + ", ".join(fmt_number(float(v)) for v in q) + "]"
+
+
+def _workspace(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | None:
+    """The workspace certificate failed: the joint's critical inertia against the box's largest (module docstring of
+    :mod:`~designkit.families.decentralized_pid.workspace_check`), and the configuration that covers it."""
+    cert = check.certificate if hasattr(check.certificate, "get") else {}
+    ev = cert.get("evidence") or {}
+    rows = {row.get("joint"): row for row in cert.get("joints", ())}
+    row = rows.get(ev.get("joint"))
+    if not row or row.get("inertia_critical") is None or not row.get("tau_nominal_s"):
+        return None
+    i = int(ev["joint"])
+    lp = joint_loops(result.design)[i - 1]
+    unit = row.get("inertia_unit", "kg*m^2")
+    d_star = float(row["tau_nominal_s"]) / lp.Km  # D_ii(q*) = f_i tau_i = tau_i/Km_i
+    d_crit, d_hi = float(row["inertia_critical"]), float(row["inertia_range"][1])
+    ratio, need = d_crit / d_star, d_hi / d_star
+    q_star = result.design.extra["configuration"]
+    q_max = [float(f"{v:.4g}") if abs(v) > 1e-6 else 0.0 for v in row["q_at_max"]]
+    cause = (f"joint {i}'s loop is designed at D_{i}{i}(q*) = {quantity(d_star, unit)} (q* = {_vector(q_star)}; "
+             f"τ = {quantity(float(row['tau_nominal_s']), 's')}) and is stable only while τ < K1 (1 + Km K2)/K3 = "
+             f"{quantity(float(row['tau_stable_s'][1]), 's')}, i.e. D_{i}{i} < {quantity(d_crit, unit)}, "
+             f"{fmt_number(ratio)} times the design value (S1 S2/S3 of its poles {_poles(lp.poles)}); the workspace "
+             f"reaches D_{i}{i} = {quantity(float(ev['inertia']), unit)} at q = {_vector(ev['configuration'])} "
+             f"(proven at most {quantity(d_hi, unit)}), where the loop's poles reach the real part "
+             f"{quantity(float(ev['spectral_abscissa']), '1/s')}")
+    margin = float(getattr(result.loaded.spec.controller, "design_margin", 0.0) or 0.0)
+    damped = _damped(lp.poles, need * (1.0 + margin))
+    fix = (f"poles of joint {i} whose S1 S2/S3 exceeds {fmt_number(need)}"
+           + (f", e.g. {_poles(damped)} (the complex pair's real part moved left to reach {fmt_number(1 + margin)} "
+              "times that)" if damped else "")
+           + f"; or design the joint loops at the configuration where D_{i}{i} is largest, q = {_vector(q_max)}, "
+           f"where joint {i} is stable up to {fmt_number(ratio)} times that inertia; or a workspace that keeps "
+           f"D_{i}{i} below {quantity(d_crit, unit)}")
+    changes = []
+    if damped:
+        sets = [[_pole_text(p) for p in (damped if k.joint == i else k.poles)] for k in joint_loops(result.design)]
+        changes.append(SpecChange(f"the poles of joint {i} at {_poles(damped)}", (("controller.poles", sets),)))
+    changes.append(SpecChange(f"the joint loops designed at q = {_vector(q_max)}, where D_{i}{i} is largest",
+                              (("controller.configuration", q_max),)))
+    return cause[0].upper() + cause[1:] + ".", fix[0].upper() + fix[1:] + ".", tuple(changes)
+
+
+def pole_ratio(poles: Sequence[complex]) -> float:
+    """``S1 S2/S3`` of three poles (their elementary symmetric functions with the signs of ``(s - p)``): the factor
+    by which ``tau`` may grow over its design value before the joint loop loses stability."""
+    p = np.asarray(poles, dtype=complex)
+    S1, S3 = -p.sum().real, -np.prod(p).real
+    S2 = (p[0] * p[1] + p[0] * p[2] + p[1] * p[2]).real
+    return float(S1 * S2 / S3)
+
+
+def _damped(poles: Sequence[complex], target: float) -> tuple[complex, ...] | None:
+    """The poles with their complex pair's real part scaled (bisection, then printed to three digits on the far
+    side) so that :func:`pole_ratio` reaches ``target``; None without a complex pair."""
+    if len(poles) != 3 or all(abs(p.imag) <= 1e-9 * abs(p) for p in poles):
+        return None
+
+    def moved(k: float) -> tuple[complex, ...]:
+        return tuple(complex(k * p.real, p.imag) if abs(p.imag) > 1e-9 * abs(p) else p for p in poles)
+
+    lo, hi = 1.0, 2.0
+    while pole_ratio(moved(hi)) < target:
+        lo, hi = hi, 2.0 * hi
+        if hi > 1e6:
+            return None
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if pole_ratio(moved(mid)) < target else (lo, mid)
+    pair = next(p for p in poles if p.imag > 1e-9 * abs(p))
+    sigma = hi * pair.real
+    e = math.floor(math.log10(abs(sigma))) - 2
+    sigma = -math.ceil(-sigma / 10.0 ** e - 1e-9) * 10.0 ** e
+    return moved(float(f"{sigma:.3g}") / pair.real)
+
+
+def _pole_text(p: complex) -> Any:
+    """A pole as the spec writes it: a number, or ``"a+bi"`` for a complex one."""
+    if abs(p.imag) <= 1e-9 * abs(p):
+        return float(f"{p.real:.6g}")
+    return f"{p.real:.6g}{'+' if p.imag > 0 else '-'}{abs(p.imag):.6g}i"
+
+
 def diagnose(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | tuple[str, str] | None:
-    """``(cause, fix, changes)`` for a failed ``overshoot`` check of a decentralized PID run (module docstring),
-    else None."""
+    """``(cause, fix, changes)`` for a failed ``overshoot`` check of a decentralized PID run or its failed
+    ``workspace`` certificate (module docstring), else None."""
     if check.passed is not False or "links" not in result.design.extra or not result.design.loops:
         return None
     if check.name == "overshoot":
         return _overshoot(result, check)
+    if check.name == "workspace":
+        return _workspace(result, check)
     return None
