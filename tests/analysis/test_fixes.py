@@ -26,7 +26,7 @@ SPECS = Path(__file__).resolve().parents[2] / "specs"
 CORE = ["infeasible-requirements", "posspeed-relay", "puma560-computed-torque-payload", "scara-decentralized-pid"]
 FAMILY = ["puma560-resolved-acceleration", "sliding-mode-weak-switching", "ilc-simnog-diverging", "mrac-gamma-unstable",
           "selftune-no-forgetting", "vsc-elastic-joint-narrow-gains", "smid-link-single-step", "adaptive-ct-not-spr",
-          "pid-sm-link-weak-relay"]
+          "pid-sm-link-weak-relay", "hierarchy-simnog-small-M"]
 
 
 @pytest.fixture(scope="module")

@@ -137,3 +137,14 @@ def test_a_long_cause_stated_by_an_earlier_row_is_referred_to():
                           row("Third", "Short cause."), row("Fourth", "Short cause.")])
     assert [r.cause for r in rows[1:]] == ["Same cause as First (above).", "Short cause.", "Short cause."]
     assert rows[0].cause.startswith(long_cause)
+
+
+def test_no_committed_report_leaves_a_failing_row_undiagnosed():
+    """Every committed example report (``designkit synth specs/<name>.yaml --out reports``) gives a cause and a fix
+    in each row of "why it failed"."""
+    from pathlib import Path
+
+    reports = sorted((Path(__file__).resolve().parents[2] / "reports").glob("*/report.html"))
+    assert len(reports) >= 50
+    undiagnosed = [p.parent.name for p in reports if "not diagnosed" in p.read_text(encoding="utf-8")]
+    assert undiagnosed == []

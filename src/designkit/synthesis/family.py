@@ -102,7 +102,10 @@ class Family:
     sections : tuple of callable
         ``result -> ReportSection | None``: report sections of its own (lab questions answered from the run).
     diagnoses : tuple of callable
-        ``(result, check) -> (cause, fix) | None``: why one of its checks failed, and what would fix it.
+        ``(result, check) -> (cause, fix) | (cause, fix, changes) | None``: why a check failed on its design (its
+        own checks, and a generic one explained from its own quantities), what would fix it, and optionally the
+        changes of the spec that realize the fix (:class:`~designkit.synthesis.spec_change.SpecChange`), which
+        the diagnosis re-runs.
     motion : callable or None
         Task-space families: ``(spec, design) -> TaskMotion``, also stored in ``design.motion`` at synthesis.
     json : callable or None

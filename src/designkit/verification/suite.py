@@ -111,7 +111,9 @@ class CheckRule:
     figures : tuple of callable
         ``(result, check) -> Figure | None``: figures drawn from one of its checks.
     diagnose : callable or None
-        ``(result, check) -> (cause, fix) | None``: why one of its checks failed and what would fix it.
+        ``(result, check) -> (cause, fix) | (cause, fix, changes) | None``: why one of its checks failed, what
+        would fix it, and optionally the changes of the spec that realize the fix
+        (:class:`~designkit.synthesis.spec_change.SpecChange`), which the diagnosis re-runs.
     universal : bool
         Offered for every family, whether or not its ``checks`` name it (a property of any simulated loop,
         such as a chattering command); ``applies`` still decides.

@@ -41,6 +41,10 @@ class Finding:
     fixes : tuple of str
         The distinct fixes ``fix`` is made of, each a sentence of its own (capitalized, ending with a
         period), in order; a report shows a fix shared by several findings once.
+    changes : tuple of (str, tuple of SpecChange)
+        The fix sentence of the check's owner (as in ``fixes``) with the changes of the spec its owner declared
+        for it (:class:`~designkit.synthesis.spec_change.SpecChange`); empty when the owner declared none (the
+        sentence is then read by :data:`~designkit.analysis.diagnosis.remedies.RECOGNIZERS`).
     """
 
     check: str
@@ -52,6 +56,7 @@ class Finding:
     cause: str
     fix: str
     fixes: tuple[str, ...] = ()
+    changes: tuple[tuple[str, tuple[Any, ...]], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """Every fix a diagnosis proposes, re-simulated: :func:`check_fixes` and the :class:`ProposedFix` it returns.
 
-For each distinct fix sentence of the findings (in finding order), the remedies it reads as
-(:func:`~designkit.analysis.diagnosis.remedies.propose`) are re-run through the pipeline
+For each distinct fix sentence of the findings (in finding order), the remedies its owner declared as changes
+of the spec, or else the remedies it reads as (:func:`~designkit.analysis.diagnosis.remedies.propose`), are
+re-run through the pipeline
 (:func:`~designkit.analysis.diagnosis.resimulate.try_remedy`), at most
 :data:`~designkit.analysis.diagnosis.resimulate.MAX_FIX_RUNS` in all.  A remedy whose re-run passes every
 required check is a fix; one that does not is "tried, and not a fix", with what it still fails measured.
@@ -14,7 +15,7 @@ smaller factor for a weaker requirement) is not re-run, and said so.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -59,7 +60,8 @@ def _relaxed(trial: FixTrial) -> Remedy | None:
 
 
 def check_fixes(result: Any, sentences: Sequence[str], settling_infeasible: bool = False,
-                budget: int = MAX_FIX_RUNS) -> tuple[ProposedFix, ...]:
+                budget: int = MAX_FIX_RUNS, declared: Mapping[str, Sequence[Any]] | None = None
+                ) -> tuple[ProposedFix, ...]:
     """Re-run the remedies of every fix sentence (see the module docstring).
 
     Parameters
@@ -71,12 +73,15 @@ def check_fixes(result: Any, sentences: Sequence[str], settling_infeasible: bool
         The root cause says no controller meets the settling requirement with this actuator.
     budget : int
         At most this many re-runs.
+    declared : mapping of str to sequence of SpecChange, optional
+        Sentences whose owner declared the changes of the spec that realize them
+        (:class:`~designkit.synthesis.spec_change.SpecChange`): those are re-run, and the sentence is not read.
     """
     out = []
     left = budget
     seen: dict[tuple[tuple[str, str], ...], FixTrial] = {}
     passed_fields: set[tuple[str, frozenset[str]]] = set()
-    for sentence, remedies in propose(result, sentences):
+    for sentence, remedies in propose(result, sentences, declared):
         if not remedies:
             out.append(ProposedFix(sentence, (), "not re-simulated: no change of the spec is read from it"))
             continue

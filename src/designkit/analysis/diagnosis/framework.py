@@ -3,7 +3,8 @@
 :func:`diagnose` measures the run (:mod:`~designkit.analysis.diagnosis.divergence`), asks the module of
 the simulation's nonlinear element (:mod:`designkit.analysis.elements`) why a diverged run diverged, what a
 limit cycle should be and what settling time the actuator allows, asks the owners of a failing check --
-its rule's ``diagnose`` and the family's ``diagnoses`` -- for their cause and fix, and writes each
+its rule's ``diagnose`` and the family's ``diagnoses`` -- for their cause and fix (and the changes of the spec
+that realize the fix, which :func:`~designkit.analysis.diagnosis.fixes.check_fixes` re-runs), and writes each
 :class:`~designkit.analysis.diagnosis.findings.Finding` from those pieces.  No table here names an element,
 a check or a family.
 """
@@ -29,6 +30,7 @@ from designkit.analysis.diagnosis.findings import Diagnosis, Finding, LimitCycle
 from designkit.analysis.diagnosis.fixes import check_fixes
 from designkit.analysis.elements import analysis_of
 from designkit.display.numbers import TARGET, fmt_number, plain_complex, quantity, unit
+from designkit.synthesis.spec_change import SpecChange, explanation
 
 __all__ = ["diagnose"]
 
@@ -146,22 +148,24 @@ def _context(result: Any) -> _Context:
 
 
 
-def _specific(result: Any, check: Any) -> tuple[str, str]:
-    """Cause and fix from the owners: the rule of the check (``CheckRule.diagnose``), then the design's family
-    (``Family.diagnoses``), the first that has something to say; ``("", "")`` when none does."""
+def _specific(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]]:
+    """Cause, fix and the fix's spec changes from the owners: the rule of the check (``CheckRule.diagnose``), then
+    the design's family (``Family.diagnoses``), the first that has something to say; ``("", "", ())`` when none
+    does.  An owner answers ``(cause, fix)`` or ``(cause, fix, changes)``, ``changes`` a tuple of
+    :class:`~designkit.synthesis.spec_change.SpecChange` realizing ``fix``."""
     from designkit.families import check_rules, family
     from designkit.verification.suite import owner
 
     kind = getattr(result.design, "kind", None)
     if kind is None:  # a run without a registered design: no owner to ask
-        return ("", "")
+        return ("", "", ())
     rule = owner(check_rules(kind), check.name)
     owners = ((rule.diagnose,) if rule is not None and rule.diagnose is not None else ())
     for explain in (*owners, *family(kind).diagnoses):
         found = explain(result, check)
         if found:
-            return found
-    return ("", "")
+            return explanation(found)
+    return ("", "", ())
 
 
 def _sentence(text: str) -> str:
@@ -169,7 +173,8 @@ def _sentence(text: str) -> str:
     return text[0].upper() + text[1:] + ("" if text.endswith(".") else ".") if text else ""
 
 
-def _finding(check: Any, ctx: _Context, demand: dict[str, Any], specific: tuple[str, str] = ("", "")) -> Finding:
+def _finding(check: Any, ctx: _Context, demand: dict[str, Any],
+             specific: tuple[str, str, tuple[SpecChange, ...]] = ("", "", ())) -> Finding:
     label = _LABELS.get(check.name, check.name.replace("_", " "))
     target = unit(check.target or "")
     requirement = f"{label} {target}" if TARGET.match(target) else f"{label}: {target}" if target else label
@@ -219,8 +224,10 @@ def _finding(check: Any, ctx: _Context, demand: dict[str, Any], specific: tuple[
     if fix:
         fix = fix[0].upper() + fix[1:] + ("" if fix.endswith(".") else ".")
     parts = tuple(dict.fromkeys(_sentence(f) for f in fixes if f.strip()))
+    declared = ((_sentence(specific[1]), specific[2]),) if specific[1].strip() and specific[2] else ()
     return Finding(check=check.name, status=check.status, requirement=requirement, achieved=achieved,
-                   shortfall=absolute, shortfall_percent=relative, cause=cause, fix=fix, fixes=parts)
+                   shortfall=absolute, shortfall_percent=relative, cause=cause, fix=fix, fixes=parts,
+                   changes=declared)
 
 
 def _not_a_fix(text: str) -> bool:
@@ -287,7 +294,11 @@ def diagnose(result: Any, *, resimulate: bool = True) -> Diagnosis:
     proposed: tuple[Any, ...] = ()
     if resimulate and getattr(result, "loaded", None) is not None and result.simulation is not None:
         sentences = tuple(dict.fromkeys(s for f in findings for s in f.fixes))
-        proposed = check_fixes(result, sentences, settling_infeasible=bool(root))
+        declared: dict[str, tuple[SpecChange, ...]] = {}
+        for f in findings:
+            for sentence, changes in f.changes:
+                declared.setdefault(sentence, changes)
+        proposed = check_fixes(result, sentences, settling_infeasible=bool(root), declared=declared)
     return Diagnosis(findings=findings, diverged=bool(div is not None and div.diverged),
                      divergence=ctx.divergence_text, limit_cycle=ctx.limit_cycle, linear_vs_nonlinear=pairs,
                      root_cause=root, proposed=proposed)

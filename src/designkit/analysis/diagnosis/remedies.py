@@ -2,13 +2,15 @@
 
 The owners of a failing check (an element's module, a family, a check's rule) state their fixes as
 sentences with their numbers (``"Reduce the relay hysteresis to 4.394 N·m or less"``, ``"Raise K1 by a
-factor 5.21 or more"``).  :func:`propose` turns each sentence it recognizes (:data:`RECOGNIZERS`, one
-regular expression and one builder per kind of fix) into one or more :class:`Remedy` values, each a
-concrete change of the spec that :mod:`~designkit.analysis.diagnosis.resimulate` runs again.  A number
-read from a sentence is taken at the end of the interval its printed digits round from, on the side the
-sentence asks for (:func:`printed_bound`: "at least 8.619" is 8.6195, "4.394 or less" is 4.3935), so that
-the changed spec honours the sentence whatever the digits left out.  A sentence no recognizer reads is
-left as it is and is not numbered as a fix.
+factor 5.21 or more"``).  An owner may declare, with its sentence, the changes of the spec that realize it
+(:class:`~designkit.synthesis.spec_change.SpecChange`): those are that sentence's remedies
+(:func:`declared_remedies`), and the sentence is not read.  Otherwise :func:`propose` turns each sentence it
+recognizes (:data:`RECOGNIZERS`, one regular expression and one builder per kind of fix) into one or more
+:class:`Remedy` values, each a concrete change of the spec that :mod:`~designkit.analysis.diagnosis.resimulate`
+runs again.  A number read from a sentence is taken at the end of the interval its printed digits round from,
+on the side the sentence asks for (:func:`printed_bound`: "at least 8.619" is 8.6195, "4.394 or less" is
+4.3935), so that the changed spec honours the sentence whatever the digits left out.  A sentence no
+recognizer reads is left as it is and is not numbered as a fix.
 
 The "slower poles" fix is computed here: every closed-loop pole (and the zero) of the design scaled by
 the one factor ``c < 1`` at which the ideal linear loop's peak command is just under :data:`HEADROOM` times
@@ -20,7 +22,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -29,7 +31,8 @@ import numpy as np
 from designkit.display.numbers import fmt_number, quantity, unit
 from designkit.spec.fields import parse_pole
 
-__all__ = ["HEADROOM", "RECOGNIZERS", "Remedy", "printed_bound", "propose", "round_down", "round_up", "snippet"]
+__all__ = ["HEADROOM", "RECOGNIZERS", "Remedy", "declared_remedies", "printed_bound", "propose", "round_down",
+           "round_up", "snippet"]
 
 HEADROOM = 0.9
 """The slower-poles fix aims the ideal linear loop's peak command at this fraction of the actuator limit."""
@@ -357,7 +360,16 @@ RECOGNIZERS: tuple[tuple[re.Pattern[str], Builder], ...] = (
 remedies."""
 
 
-def propose(result: Any, sentences: Sequence[str]) -> tuple[tuple[str, tuple[Remedy, ...]], ...]:
+def declared_remedies(sentence: str, changes: Sequence[Any]) -> tuple[Remedy, ...]:
+    """The changes of the spec an owner declared for its fix ``sentence``
+    (:class:`~designkit.synthesis.spec_change.SpecChange`) as remedies; each its own kind (``"declared: "`` and its
+    title), so that every one is re-run."""
+    return tuple(Remedy(c.title, tuple(c.changes), sentence, c.requirement, kind=f"declared: {c.title}")
+                 for c in changes)
+
+
+def propose(result: Any, sentences: Sequence[str], declared: Mapping[str, Sequence[Any]] | None = None
+            ) -> tuple[tuple[str, tuple[Remedy, ...]], ...]:
     """Every fix sentence with the remedies it reads as (an empty tuple: not recognized), in order.
 
     Parameters
@@ -366,11 +378,18 @@ def propose(result: Any, sentences: Sequence[str]) -> tuple[tuple[str, tuple[Rem
         The run the sentences diagnose (its spec text, design, plant and simulation).
     sentences : sequence of str
         The distinct fix sentences of the findings.
+    declared : mapping of str to sequence of SpecChange, optional
+        Sentences whose owner declared their changes of the spec: those changes are the remedies
+        (:func:`declared_remedies`), and :data:`RECOGNIZERS` do not read the sentence.
     """
     data = _spec_dict(result)
+    owned = {unit(k): v for k, v in (declared or {}).items()}
     out = []
     for sentence in sentences:
         text = unit(sentence)
+        if owned.get(text):
+            out.append((sentence, declared_remedies(sentence, owned[text])))
+            continue
         remedies: list[Remedy] = []
         for pattern, build in RECOGNIZERS:
             m = pattern.search(text)

@@ -299,7 +299,7 @@ def validate(spec: Any) -> None:
 
 
 def _family() -> Family:
-    from designkit.families.adaptive_computed_torque import checks, figures, report
+    from designkit.families.adaptive_computed_torque import checks, diagnoses, figures, report
 
     return Family(
         kind=KIND, spec=AdaptiveComputedTorqueSpec, plants=("robot",), reference="trajectory",
@@ -321,6 +321,7 @@ def _family() -> Family:
                Knob("psi", "s", "ψ of the error filter e + ψ ė (strictly positive real when ψ K2 > 1)", 1e-9, 1e9,
                     path="controller.psi", current=lambda d: d.gains["psi"], when=lambda d: "psi" in d.gains)),
         traits=("adaptive", "model_based"),
+        diagnoses=(diagnoses.diagnose,),
     )
 
 

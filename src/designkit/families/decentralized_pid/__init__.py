@@ -37,6 +37,7 @@ from pydantic import Field, field_validator
 from designkit.errors import ModelError, SpecError
 from designkit.families import pid_servo
 from designkit.families.decentralized_pid import workspace_check as workspace_certificate
+from designkit.families.decentralized_pid.diagnoses import diagnose
 from designkit.models.link import simplified_link
 from designkit.spec.controllers import three_poles
 from designkit.spec.fields import PositiveFinite, Section, parse_pole, per_joint
@@ -334,4 +335,5 @@ FAMILY = Family(
     knobs=gain_knobs(pid_servo.GAIN_INFO, ("K1", "K2", "K3", "K4")),
     traits=("pid",),
     regain=regain,
+    diagnoses=(diagnose,),
 )

@@ -49,6 +49,7 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.families.pid_sliding_mode.bound import corners, design_box, perturbation_bound
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.pid_sliding_mode.diagnoses import diagnose
 from designkit.families.pid_sliding_mode.figures import FIGURES
 from designkit.families.pid_sliding_mode.measure import json_summary
 from designkit.families.pid_sliding_mode.spec import (
@@ -265,7 +266,8 @@ FAMILY = Family(
                 path="controller.poles"),
            Knob("epsilon", "rad*s", "boundary layer |slm| ≤ ε replacing the relay's sign", 1e-9, 1e6,
                 path="controller.epsilon")),
-    traits=("pid", "switching"),
+    traits=("switching",),
+    diagnoses=(diagnose,),
 )
 
 from designkit.families.pid_sliding_mode.elastic import extend as _with_elastic_joint  # noqa: E402
