@@ -13,11 +13,7 @@ from functools import cache
 
 import numpy as np
 import pytest
-import scipy.optimize
 
-from designkit.studies.arm import lab_answers
-from designkit.studies.arm.coupling import JointCoupling, coupling_level, coupling_sentences
-from designkit.studies.arm.tracking import CoordinateError, tracking_sentences
 from designkit.models.robot_plant import zoo_plant
 from designkit.models.torques import coupling_torques, model_error_torque
 from designkit.pipeline import run
@@ -25,6 +21,9 @@ from designkit.report.html import render_html
 from designkit.report.model import build_report_model
 from designkit.report.pdf import compile_pdf
 from designkit.schema.loader import parse_spec
+from designkit.studies.arm import lab_answers
+from designkit.studies.arm.coupling import JointCoupling, coupling_level, coupling_sentences
+from designkit.studies.arm.tracking import CoordinateError, tracking_sentences
 from tests.problems import POSSPEED_YAML
 from tests.tolerances import TOL
 

@@ -36,9 +36,9 @@ def test_every_change_of_a_non_monotone_outcome_is_located():
     run, calls = _planted(lambda v: 10.0 <= v <= 100.0 or 1e3 <= v <= 3e3)
     rows, pick, nu, reduced = search(1.0, 1e5, run, Budget(1e9, 1.0), METRIC)
     assert reduced == ""
-    changes = [(a.value, b.value) for a, b in zip(rows, rows[1:]) if a.passed != b.passed]
+    changes = [(a.value, b.value) for a, b in zip(rows, rows[1:], strict=False) if a.passed != b.passed]
     assert len(changes) == 4
-    for (a, b), edge in zip(changes, edges):
+    for (a, b), edge in zip(changes, edges, strict=True):
         assert a <= edge * (1 + 1e-12) and b >= edge * (1 - 1e-12), (a, b, edge)
         assert b / a <= RESOLUTION * (1 + 1e-9)  # bisected REFINE times
     # the recommendation passes with both ends of its neighbourhood, every run inside passing too
@@ -46,7 +46,7 @@ def test_every_change_of_a_non_monotone_outcome_is_located():
     assert math.isclose(pick.low * nu, pick.value) and math.isclose(pick.high / nu, pick.value)
     inside = [r for r in rows if pick.low * (1 - 1e-9) <= r.value <= pick.high * (1 + 1e-9)]
     assert all(r.passed for r in inside) and len(inside) >= 3
-    assert 10.0 <= pick.low and pick.high <= 100.0 or 1e3 <= pick.low and pick.high <= 3e3
+    assert pick.low >= 10.0 and pick.high <= 100.0 or pick.low >= 1e3 and pick.high <= 3e3
 
 
 def test_no_recommendation_where_no_neighbourhood_fits():
@@ -69,7 +69,7 @@ def test_the_grid_is_anchored_on_decades():
     rows_b = search(5.0, 3e4, _planted(passing)[0], Budget(1e9, 1.0), METRIC)[0]
 
     def change(rows):
-        return next((a.value, b.value) for a, b in zip(rows, rows[1:]) if a.passed != b.passed)
+        return next((a.value, b.value) for a, b in zip(rows, rows[1:], strict=False) if a.passed != b.passed)
 
     assert change(rows_a) == pytest.approx(change(rows_b), rel=1e-12)
 

@@ -110,7 +110,6 @@ def test_learning_gain_rows_learn_over_the_trials():
     """Each scaled learning gain's row is the error after all its trials (not one trial with no learning): the
     lifted model predicts e_N = (I - Q H)^N e_0 per joint, from the first trial's measured error."""
     from designkit.families.ilc.learning import lifted_errors, lifted_of
-
     from designkit.studies.gains import GainsSettings
 
     spec = parse_spec(ILC_EXACT)

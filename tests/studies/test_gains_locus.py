@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 import designkit as dk
-from designkit.studies.gains.locus import HIGH, LOW, POINTS, root_locus
 from designkit.families import family
+from designkit.studies.gains.locus import HIGH, LOW, POINTS, root_locus
 from designkit.synthesis.closed_loop import linearize
 
 control = pytest.importorskip("control")
