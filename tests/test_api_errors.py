@@ -113,7 +113,7 @@ def test_write_report_to_an_existing_file_is_refused_and_nothing_overwritten(res
     blocker.write_text("precious")
     for out in (blocker, blocker / "below"):
         with pytest.raises(dk.OutputError) as info:
-            dk.write_report(result, out)
+            dk.write_report(result, out, studies=False)
         assert info.value.path == "out_dir"
         assert "is an existing file" in info.value.message and str(blocker) in info.value.message
     assert blocker.read_text() == "precious"
@@ -123,7 +123,7 @@ def test_write_report_to_an_existing_file_is_refused_and_nothing_overwritten(res
 def test_write_report_where_the_report_folder_is_a_file(result, tmp_path):
     (tmp_path / result.loaded.spec.name).write_text("precious")
     with pytest.raises(dk.OutputError, match="is an existing file"):
-        dk.write_report(result, tmp_path)
+        dk.write_report(result, tmp_path, studies=False)
     assert (tmp_path / result.loaded.spec.name).read_text() == "precious"
 
 
@@ -134,7 +134,7 @@ def test_write_report_into_a_read_only_folder(result, tmp_path):
     locked.chmod(0o500)
     try:
         with pytest.raises(dk.OutputError, match="no permission"):
-            dk.write_report(result, locked / "reports")
+            dk.write_report(result, locked / "reports", studies=False)
     finally:
         locked.chmod(0o700)
     assert list(locked.iterdir()) == []
@@ -143,14 +143,14 @@ def test_write_report_into_a_read_only_folder(result, tmp_path):
 @pytest.mark.parametrize("argument", [None, 1, "result"])
 def test_write_report_refuses_what_is_not_a_result(tmp_path, argument):
     with pytest.raises(dk.SpecError) as info:
-        dk.write_report(argument, tmp_path)
+        dk.write_report(argument, tmp_path, studies=False)
     assert info.value.path == "result"
     assert list(tmp_path.iterdir()) == []
 
 
 def test_write_report_refuses_an_out_dir_that_is_not_a_path(result):
     with pytest.raises(dk.OutputError, match="got NoneType"):
-        dk.write_report(result, None)
+        dk.write_report(result, None, studies=False)
 
 
 # ------------------------------------------------------------------------------------ the CLI's mapping

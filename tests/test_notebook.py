@@ -68,7 +68,7 @@ def result():
 
 @pytest.fixture(scope="module")
 def model(result):
-    return build_report_model(result)
+    return build_report_model(result, studies=False)
 
 
 def test_result_view_has_verdict_every_check_and_inline_svg(result, model):
@@ -102,7 +102,7 @@ def test_result_view_escapes_text(model):
 
 def test_failed_run_shows_why_and_the_failing_checks():
     failed = dk.run(dk.load_spec(SPECS / "infeasible-requirements.yaml"))
-    m = build_report_model(failed)
+    m = build_report_model(failed, studies=False)
     text = " ".join(_parse(result_html(m)).text)
     assert m.verdict_kind == "failed" and m.verdict in text
     for check in failed.failed:

@@ -109,7 +109,8 @@ class PipelineResult:
     def _report_model(self) -> Any:
         from designkit.report.model import build_report_model
 
-        return build_report_model(self)
+        # the studies only once asked for (``result.studies``): a notebook shows the run at once
+        return build_report_model(self, studies="studies" in self.__dict__)
 
     def _repr_html_(self) -> str:
         """Jupyter view of the run, laid out from the same report model as the HTML and PDF reports

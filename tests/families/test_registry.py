@@ -82,5 +82,5 @@ def test_a_familys_own_checks_figures_and_sections_reach_the_pipeline_and_the_re
     assert own_figures and own_figures <= {f.filename for f in design_figures(result)}
     own_rules = [r for r in fam.checks if isinstance(r, CheckRule)]
     assert all(any(r.owns(c.name) for c in result.checks) for r in own_rules)
-    model = build_report_model(result)
+    model = build_report_model(result, studies=False)
     assert [s.anchor for s in model.sections] == [s.anchor for s in (make(result) for make in fam.sections) if s]

@@ -141,4 +141,4 @@ def tracking_result() -> PipelineResult:
 def servo_model(servo_result):
     from designkit.report.model import build_report_model
 
-    return build_report_model(servo_result)
+    return build_report_model(servo_result, studies=False)

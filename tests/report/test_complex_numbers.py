@@ -54,7 +54,7 @@ def complex_report():
               certificate={"note": f"eigenvalues {poles}", "poles": [[-4.0, 3.0], [-4.0, -3.0], [-20.0, 0.0]]}),
     )
     result = dataclasses.replace(result, checks=(*result.checks, *worded))
-    model = build_report_model(result)
+    model = build_report_model(result, studies=False)
     return result, model, _text(render_html(model))
 
 

@@ -80,7 +80,7 @@ def test_compliance_table_comes_before_the_details(servo_model, servo_html):
 
 
 def test_why_it_failed_comes_first_in_a_failed_report(failed_result):
-    html = render_html(build_report_model(failed_result))
+    html = render_html(build_report_model(failed_result, studies=False))
     why = html.index('id="why"')
     assert why < html.index('id="compliance"') < html.index('id="certificates"')
     section = html[why:html.index('id="compliance"')]
@@ -108,7 +108,7 @@ def test_table_of_contents_links_every_section(servo_model, servo_html):
 ])
 def test_verdict_banner_matches_result(request, fixture, kind, verdict):
     result = request.getfixturevalue(fixture)
-    html = render_html(build_report_model(result))
+    html = render_html(build_report_model(result, studies=False))
     banner = re.search(r'<header class="banner (\w+)" role="status">\s*<div class="inner">\s*'
                        r'<div class="verdict">([^<]*)</div>', html)
     assert banner is not None
@@ -144,7 +144,7 @@ def test_user_text_is_escaped():
                     detail=NASTY, certificate={"note": "<script>x</script>"}),)
     text = make_result(checks=checks, simulate=False).loaded.text.replace(
         "used by the report tests.", "used by <script>alert(1)</script> & tests.")
-    html = render_html(build_report_model(make_result(text, checks=checks, simulate=False)))
+    html = render_html(build_report_model(make_result(text, checks=checks, simulate=False), studies=False))
     assert "<img" not in html and "<script" not in html
     template_bold = (html.count("<b>Cause:</b>") + html.count("<b>Fix:</b>") + html.count("<b>Contents</b>")
                      + html.count("<figcaption><b>") + html.count('<td data-label="Requirement"><b>'))
@@ -169,7 +169,7 @@ def test_inline_svg_prefixes_ids_and_drops_namespaces():
 
 
 def test_tracking_report_renders(tracking_result):
-    html = render_html(build_report_model(tracking_result))
+    html = render_html(build_report_model(tracking_result, studies=False))
     assert "PID trajectory tracking" in html and "http" not in html
 
 

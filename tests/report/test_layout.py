@@ -18,7 +18,7 @@ from tests.report.conftest import make_result, servo_checks
 
 @pytest.fixture(scope="module")
 def failed_html(failed_result) -> str:
-    return render_html(build_report_model(failed_result))
+    return render_html(build_report_model(failed_result, studies=False))
 
 
 def _css(html: str) -> str:

@@ -24,7 +24,7 @@ def test_verified_verdict(servo_result, servo_model):
 
 
 def test_failed_verdict_names_the_failed_checks(failed_result):
-    model = build_report_model(failed_result)
+    model = build_report_model(failed_result, studies=False)
     assert not failed_result.verified
     assert model.verified is False
     assert model.verdict == "FAILED: Overshoot"
@@ -32,7 +32,7 @@ def test_failed_verdict_names_the_failed_checks(failed_result):
 
 
 def test_undecided_verdict_is_not_a_pass(undecided_result):
-    model = build_report_model(undecided_result)
+    model = build_report_model(undecided_result, studies=False)
     assert not undecided_result.verified
     assert model.verdict == "UNDECIDED: Overshoot"
     assert model.verdict_kind == "undecided"
@@ -53,7 +53,7 @@ def test_the_verdict_names_checks_in_words_per_joint_ones_grouped():
 
 def test_no_checks_is_vacuously_verified_and_says_so():
     result = make_result(checks=(), simulate=False, margins=False)
-    model = build_report_model(result)
+    model = build_report_model(result, studies=False)
     assert result.verified and model.verdict == "VERIFIED"
     assert "No checks were run" in model.verdict_summary
     assert model.checks == () and model.simulation == ()
@@ -116,7 +116,7 @@ def test_check_rows_in_order_with_formatted_values(servo_model):
 def test_model_is_frozen_and_build_is_pure(servo_result):
     before = json.dumps(servo_result.to_json(), sort_keys=True)
     sim_before = servo_result.simulation.state.copy()
-    model = build_report_model(servo_result)
+    model = build_report_model(servo_result, studies=False)
     assert isinstance(model, ReportModel)
     with pytest.raises(dataclasses.FrozenInstanceError):
         model.verdict = "x"  # type: ignore[misc]
@@ -125,12 +125,12 @@ def test_model_is_frozen_and_build_is_pure(servo_result):
 
 
 def test_build_is_deterministic(servo_result, servo_model):
-    again = build_report_model(servo_result)
+    again = build_report_model(servo_result, studies=False)
     assert again == servo_model
 
 
 def test_tracking_model(tracking_result):
-    model = build_report_model(tracking_result)
+    model = build_report_model(tracking_result, studies=False)
     assert model.controller == "PID trajectory tracking (pid_tracking)"
     assert [g.name for g in model.gains] == ["K1", "K2", "K3"]
     assert model.zeros == ()
@@ -171,20 +171,20 @@ def test_simulation_settings_of_nested_values_are_words():
 
 
 def test_why_it_failed_rows_have_the_shortfall(failed_result):
-    model = build_report_model(failed_result)
+    model = build_report_model(failed_result, studies=False)
     (row,) = model.why
     assert (row.check, row.label, row.status) == ("overshoot", "Overshoot", "FAIL")
     assert row.requirement == "≤ 10 %"
     # the fixture's check says 4.2 % achieved with margin +5.8 even though it failed: no shortfall to report
     assert row.shortfall == "not measurable" and row.shortfall_percent == ""
     assert model.why_note
-    assert build_report_model(make_result()).why == ()  # a verified design has no such section
+    assert build_report_model(make_result(), studies=False).why == ()  # a verified design has no such section
 
 
 def test_why_row_shortfall_absolute_and_percent():
     checks = (Check("max_control", False, target="<= 5 N*m", achieved=13386.2, margin=-13381.2, unit="N*m"),
               Check("overshoot", None, target="<= 5 %", achieved=None, margin=None, unit="%"))
-    model = build_report_model(make_result(checks=checks, simulate=False, margins=False))
+    model = build_report_model(make_result(checks=checks, simulate=False, margins=False), studies=False)
     rows = {r.check: r for r in model.why}
     assert rows["max_control"].requirement == "≤ 5 N·m"
     assert rows["max_control"].achieved == "1.339e+04 N·m"
@@ -253,13 +253,13 @@ def test_equation_splits_words_and_subscripts():
 
 def test_provenance_rows_are_in_the_model(servo_result):
     rows = (("designkit", "9.9"), ("command line", "designkit synth x.yaml"))
-    model = build_report_model(servo_result, provenance=rows)
+    model = build_report_model(servo_result, provenance=rows, studies=False)
     assert model.provenance == rows
 
 
 def test_failed_check_detail_kept_verbatim():
     result = make_result(checks=servo_checks(overshoot_passed=False, detail_extra=" <b>&"), simulate=False)
-    model = build_report_model(result)
+    model = build_report_model(result, studies=False)
     assert model.checks[2].detail.endswith(" <b>&")  # escaping is the renderers' job
 
 
@@ -270,7 +270,7 @@ def test_a_failed_diagnosis_is_reported_not_raised(failed_result, monkeypatch):
         raise ValueError("no simulation")
 
     monkeypatch.setattr(model, "diagnose_run", lambda result: model_diagnose(broken, result))
-    built = build_report_model(failed_result)
+    built = build_report_model(failed_result, studies=False)
     assert [r.check for r in built.why] == ["overshoot"]
     assert "diagnosis of this run failed (ValueError: no simulation)" in built.why_note
     assert built.divergence == "" and built.linear_vs_nonlinear == ()
@@ -293,7 +293,7 @@ def test_findings_of_the_diagnosis_fill_cause_and_fix(failed_result, monkeypatch
                                 linear_vs_nonlinear=(SimpleNamespace(metric="overshoot", unit="%", linear="4.5",
                                                                      nonlinear=""),))
     monkeypatch.setattr(model, "diagnose_run", lambda result: diagnosis)
-    built = build_report_model(failed_result)
+    built = build_report_model(failed_result, studies=False)
     (row,) = built.why
     assert (row.cause, row.fix) == ("the loop diverges", "add anti-windup")
     assert built.divergence == "The loop diverges at t = 1 s."

@@ -86,7 +86,7 @@ def test_typst_string_round_trips(text):
 def test_template_escapes_every_value_by_default():
     checks = (Check(name=NASTY, passed=None, target="$a$ # b", achieved="@x", detail=NASTY,
                     certificate={NASTY: NASTY, "M": [[1.0, 2.0], [3.0, 4.0]]}),)
-    model = build_report_model(make_result(checks=checks, simulate=False))
+    model = build_report_model(make_result(checks=checks, simulate=False), studies=False)
     model = dataclasses.replace(model, notes=(NASTY, "= not a heading"), description=NASTY)
     source = render_typst(model)
     assert "#panic" not in source.replace("\\#panic", "")

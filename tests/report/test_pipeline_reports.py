@@ -25,7 +25,7 @@ def test_report_of_a_real_run(name, tmp_path):
     if not path.exists():
         pytest.skip(f"{path.name} not shipped")
     result = run(load_spec(path))
-    model = build_report_model(result)
+    model = build_report_model(result, studies=False)
     assert model.verified == result.verified
     if result.verified:
         assert model.verdict == "VERIFIED"
@@ -34,7 +34,7 @@ def test_report_of_a_real_run(name, tmp_path):
     assert [c.name for c in model.checks] == [c.name for c in result.checks]
     assert {f.filename for f in model.figures} >= {"fig-pole-zero.svg", "fig-linear-response.svg",
                                                    "fig-loop-bode.svg", "fig-simulation.svg"}
-    files = write_report(result, tmp_path)
+    files = write_report(result, tmp_path, studies=False)
     html = files.html.read_text(encoding="utf-8")
     assert "http" not in html and "src=" not in html
     from designkit.report.labels import check_label
@@ -73,8 +73,8 @@ def example_reports(tmp_path_factory):
     try:
         for name in EXAMPLES:
             result = run(load_spec(SPECS / f"{name}.yaml"))
-            files = write_report(result, out)
-            reports[name] = (result, build_report_model(result), files)
+            files = write_report(result, out, studies=False)
+            reports[name] = (result, build_report_model(result, studies=False), files)
     finally:
         if saved is None:
             os.environ.pop(STABLE_ENV, None)

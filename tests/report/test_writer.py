@@ -13,7 +13,7 @@ from designkit.report import ReportFiles, build_report_model, write_report
 
 @pytest.fixture(scope="module")
 def written(servo_result, tmp_path_factory) -> ReportFiles:
-    return write_report(servo_result, tmp_path_factory.mktemp("reports"))
+    return write_report(servo_result, tmp_path_factory.mktemp("reports"), studies=False)
 
 
 def test_report_files_layout(written):
@@ -26,7 +26,7 @@ def test_report_files_layout(written):
 
 
 def test_rewriting_replaces_both_files(written, failed_result):
-    files = write_report(failed_result, written.html.parent.parent)
+    files = write_report(failed_result, written.html.parent.parent, studies=False)
     assert files == written
     assert "FAILED: Overshoot" in files.html.read_text(encoding="utf-8")
     assert sorted(p.name for p in files.html.parent.iterdir()) == ["report.html", "report.pdf"]
@@ -37,7 +37,7 @@ def _snapshot(files: ReportFiles) -> tuple[bytes, bytes]:
 
 
 def test_pdf_failure_leaves_the_old_report_untouched(servo_result, tmp_path, monkeypatch):
-    files = write_report(servo_result, tmp_path)
+    files = write_report(servo_result, tmp_path, studies=False)
     before = _snapshot(files)
 
     def boom(model):
@@ -45,13 +45,13 @@ def test_pdf_failure_leaves_the_old_report_untouched(servo_result, tmp_path, mon
 
     monkeypatch.setattr(writer, "compile_pdf", boom)
     with pytest.raises(RuntimeError, match="typst exploded"):
-        write_report(servo_result, tmp_path)
+        write_report(servo_result, tmp_path, studies=False)
     assert _snapshot(files) == before
     assert sorted(p.name for p in files.html.parent.iterdir()) == ["report.html", "report.pdf"]
 
 
 def test_failure_while_writing_leaves_the_old_report_and_no_temp_files(servo_result, tmp_path, monkeypatch):
-    files = write_report(servo_result, tmp_path)
+    files = write_report(servo_result, tmp_path, studies=False)
     before = _snapshot(files)
     real_stage = writer._stage
     calls = []
@@ -64,7 +64,7 @@ def test_failure_while_writing_leaves_the_old_report_and_no_temp_files(servo_res
 
     monkeypatch.setattr(writer, "_stage", stage_then_fail)
     with pytest.raises(OSError, match="disk full"):
-        write_report(servo_result, tmp_path)
+        write_report(servo_result, tmp_path, studies=False)
     assert calls == ["report.html", "report.pdf"]
     assert _snapshot(files) == before
     assert sorted(p.name for p in files.html.parent.iterdir()) == ["report.html", "report.pdf"]
@@ -100,8 +100,8 @@ def test_partial_write_of_a_staged_file_is_cleaned_up(tmp_path, monkeypatch):
 
 
 def test_model_name_is_the_folder(servo_result, tmp_path):
-    files = write_report(servo_result, tmp_path / "new" / "nested")
-    assert files.html.parent == tmp_path / "new" / "nested" / build_report_model(servo_result).name
+    files = write_report(servo_result, tmp_path / "new" / "nested", studies=False)
+    assert files.html.parent == tmp_path / "new" / "nested" / build_report_model(servo_result, studies=False).name
 
 
 @pytest.mark.parametrize("name", ["", ".", "..", "a/b", "a\\b"])

@@ -225,7 +225,7 @@ def _studies(result: Any) -> tuple[Any, ...]:
 
 
 def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
-                       processes: int = 1) -> ReportModel:
+                       processes: int = 1, studies: bool = True) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
 
     Parameters
@@ -237,6 +237,9 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     processes : int
         2 draws the figures on two cores (:func:`designkit.report.parallel.run_tasks`: a forked child,
         only when this process runs no other thread); the report is the same.
+    studies : bool
+        Lay out the run's studies (:mod:`designkit.studies`: run on first access, the result keeps them); False
+        leaves them out.
 
     Returns
     -------
@@ -251,7 +254,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
     label = display.label
     plant = design.plant
     fam = family(design.kind)
-    studies = _studies(result)
+    studies = _studies(result) if studies else ()
     sections = tuple(s for s in (*(make(result) for make in fam.sections), *(st.section for st in studies))
                      if s is not None)
     figures = design_figures(result, processes=processes)

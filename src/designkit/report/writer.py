@@ -93,7 +93,7 @@ def _check_destination(out_dir: object, name: str) -> Path:
     return folder
 
 
-def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1) -> ReportFiles:
+def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1, studies: bool = True) -> ReportFiles:
     """Render the report of ``result`` and write ``out_dir/<spec name>/report.{html,pdf}``.
 
     Parameters
@@ -104,6 +104,9 @@ def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1)
         Report root; created when missing.
     processes : int
         2 draws the figures on two cores (see :func:`~designkit.report.model.build_report_model`).
+    studies : bool
+        Lay out the run's studies (:mod:`designkit.studies`, run on first access); False leaves them out of the
+        report (the run's own verdict, checks and figures only).
 
     Returns
     -------
@@ -123,7 +126,7 @@ def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1)
     if not all(hasattr(result, name) for name in ("loaded", "design", "checks", "simulation")):  # a PipelineResult
         raise SpecError("result", f"expected the PipelineResult of designkit.run, got {type(result).__name__}")
     _check_destination(out_dir, result.loaded.spec.name)  # before the costly rendering
-    model = build_report_model(result, processes=processes)
+    model = build_report_model(result, processes=processes, studies=studies)
     html = render_html(model).encode("utf-8")
     pdf = compile_pdf(model)
     folder = _check_destination(out_dir, model.name)

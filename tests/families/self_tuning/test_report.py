@@ -54,7 +54,7 @@ def test_reports_have_no_raw_python_representation(speed_result, failing_result,
     monkeypatch.setenv(STABLE_ENV, "stable")  # the command line is pytest's here: not part of what is scanned
 
     for result in (speed_result, failing_result):
-        files = write_report(result, tmp_path)
+        files = write_report(result, tmp_path, studies=False)
         html = _html_text(files.html.read_text(encoding="utf-8"))
         assert _raw(html) == [] and "N*m" not in html
         assert "Lab questions (notes, experiment 2: self-tuning)" in html

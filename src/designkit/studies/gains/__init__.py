@@ -135,41 +135,47 @@ def _run(ctx: StudyContext) -> StudyResult:
     budget = ctx.new_budget()
     plan = _plan(ctx)
     # Fit the budget: whole knobs in the family's order, else the first knob's first factor.
-    kept, left_out, planned = [], [], 0
+    runnable, unset = [], []
     for knob, factors in plan:
         current = knob_value(knob, spec, result.design)
-        factors = [f for f in factors if current is not None and _in_range(knob, current, f)]
-        if planned + len(factors) <= budget.capacity():
-            kept.append((knob, current, factors))
+        if current is None:
+            unset.append(knob.key)
+            continue
+        runnable.append((knob, current, [f for f in factors if _in_range(knob, current, f)], factors))
+    kept, left_out, planned = [], [], 0
+    for knob, current, factors, asked in runnable:
+        if factors and planned + len(factors) <= budget.capacity():
+            kept.append((knob, current, factors, asked))
             planned += len(factors)
-        else:
+        elif factors:
             left_out.append(knob.key)
-    reduced = ""
-    if not kept and plan:
-        knob, factors = plan[0]
-        current = knob_value(knob, spec, result.design)
-        kept = [(knob, current, [f for f in factors if current is not None and _in_range(knob, current, f)][:1])]
-        reduced = (f"one variant is estimated at {fmt_number(budget.per_run, 2)} s, more than the studies' budget of "
-                   f"{fmt_number(ctx.budget, 3)} s allows for every factor: only {kept[0][0].key} at its first factor "
-                   "was run (raise studies.budget to run more)")
+        else:
+            kept.append((knob, current, factors, asked))  # every factor outside the declared range: said so
+    notes = []
+    if not planned and any(f for *_, f, _ in runnable):  # not even one knob fits: its first factor, never none
+        knob, current, factors, asked = next(x for x in runnable if x[2])
+        kept = [(knob, current, factors[:1], asked)]
+        notes.append(f"one variant is estimated at {fmt_number(budget.per_run, 2)} s, more than the studies' budget "
+                     f"of {fmt_number(ctx.budget, 3)} s allows for every factor: only {knob.key} at its first factor "
+                     "was run (raise studies.budget to run more)")
     elif left_out:
-        reduced = (f"{', '.join(left_out)} not varied: their variants would exceed the studies' budget of "
-                   f"{fmt_number(ctx.budget, 3)} s at about {fmt_number(budget.per_run, 2)} s each (raise "
-                   "studies.budget to vary them)")
+        notes.append(f"{', '.join(left_out)} not varied: their variants would exceed the studies' budget of "
+                     f"{fmt_number(ctx.budget, 3)} s at about {fmt_number(budget.per_run, 2)} s each (raise "
+                     "studies.budget to vary them)")
+    reduced = "; ".join(notes)
     entries, questions = [], []
     sensitivities = []
     stopped: list[str] = []
-    for knob, current, factors in kept:
+    for knob, current, factors, asked in kept:
         nominal = nominal_row(result, current, metrics)
         rows = [nominal]
-        outside = [f for f in (knob.factors if ctx.settings is None or not ctx.settings.factors
-                               else ctx.settings.factors) if f not in factors]
+        outside = [f for f in asked if not _in_range(knob, current, f)]
         for f in factors:
             if budget.runs and not budget.affords(1):  # measured variants cost more than planned
                 stopped.append(f"{knob.key} ×{fmt_number(f, 3)}")
                 continue
             rows.append(run_variant(result, knob, knob.scaled(current, f), f, metrics, budget))
-        if len(rows) == 1:
+        if len(rows) == 1 and not outside:
             continue
         rows_t = tuple(sorted(rows, key=lambda r: r.factor))
         entries.append(Entry(knob.key, knob.unit, rows_t))
@@ -205,7 +211,11 @@ def _run(ctx: StudyContext) -> StudyResult:
         if finite and finite[0][0] > 0:
             summary.append(f"Of the variants that keep every check as it was, the {primary.label} is most sensitive "
                            f"to {finite[0][1]}" + (f" and least to {finite[-1][1]}" if len(finite) > 1 else "") + ".")
-    locus_sentences, figures = _locus(ctx, [k for k, _, _ in kept if k.gain])
+    locus_sentences, figures = _locus(ctx, [k for k, *_ in kept if k.gain])
+    if unset:
+        questions.append(Question("Which knobs were not varied?", (
+            f"{', '.join(unset)}: not set in the spec and not computed by this design, so there is no value to "
+            "scale.",)))
     if locus_sentences:
         questions.append(Question("How do the closed-loop poles move between those factors?", locus_sentences))
     intro = ("Each knob the family declares moved by the factors shown, everything else equal; every variant is run "
