@@ -153,15 +153,17 @@ def cmd_synth(args: argparse.Namespace) -> int:
     comparison = _is_comparison(result)
     files = None
     if not args.no_report:
-        write = write_comparison_report if comparison else write_report
         try:
-            files = write(result, Path(args.out), processes=args.jobs)
+            if comparison:
+                files = write_comparison_report(result, Path(args.out), processes=args.jobs)
+            else:
+                files = write_report(result, Path(args.out), processes=args.jobs, studies=not args.no_studies)
         except OutputError as exc:
             raise OutputError("--out", f"cannot write the report: {exc.message}") from None
         except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
             raise OutputError("--out", f"cannot write the report: {exc.strerror or exc}") from None
     if args.json:
-        payload = result.to_json(studies=True) if not comparison else result.to_json()
+        payload = result.to_json(studies=not args.no_studies) if not comparison else result.to_json()
         if files is not None:
             payload["report"] = {"html": str(files.html), "pdf": str(files.pdf)}
         print(json.dumps(payload, indent=2))
@@ -366,6 +368,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object (gains, verified, checks; for a "
                    "comparison spec: a comparison list, one object per controller, and passed)")
     p.add_argument("--no-report", action="store_true", help="do not write the report")
+    p.add_argument("--no-studies", action="store_true", help="run no study (gain study, boundary, lab answers): "
+                   "the report and --json give the run's own verdict, checks and figures only")
     _jobs_option(p)
     _budget_option(p)
     p.set_defaults(func=cmd_synth)

@@ -133,16 +133,13 @@ def run_studies(result: Any) -> tuple[StudyResult, ...]:
     comparison = hasattr(result, "results") and hasattr(result, "labels")
     spec = result.loaded.spec
     fam = None if comparison else family(result.design.kind)
-    from designkit.studies.core.budget import Meter
-
-    meter = Meter()
     out: list[StudyResult] = []
     for study in STUDIES.values():
         if study.comparison != comparison or not study.applies(result, fam):
             continue
         start = time.perf_counter()
         ctx = StudyContext(result, fam, study_settings(spec, study.name) if not comparison else None,
-                           budget_of(spec), meter, tuple(out))
+                           budget_of(spec), tuple(out))
         done = study.run(ctx)
         if done is not None:
             if not done.seconds:

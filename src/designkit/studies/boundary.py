@@ -293,9 +293,9 @@ def search(low: float, high: float, run: Any, budget: Budget, primary: Any = Non
             reduced = f"{max(room, 2)} points over the range (the budget fits no more)"
     rows = []
     for k, i in enumerate(_coarse_first(len(grid))):  # a grid cut short by the budget still spans the range
-        if rows and budget.spent >= budget.seconds:  # the runs cost more than planned: stop, and say so
-            reduced = (reduced + "; " if reduced else "") + (f"the grid stopped after {k} of {len(grid)} points "
-                                                             "(budget)")
+        if rows and budget.overrun:  # the safety net: far more wall time than estimated
+            reduced = (reduced + "; " if reduced else "") + (f"the grid stopped after {k} of {len(grid)} points: "
+                                                             + budget.overrun_words())
             break
         rows.append(run(grid[i]))
     for _ in range(REFINE):

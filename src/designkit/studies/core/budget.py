@@ -1,86 +1,88 @@
-"""How much a study may run: the work of one variant estimated before it starts, then measured.
+"""How much a study may run: the work of one variant estimated before it starts, deterministically.
 
-A variant is a whole run of the spec (design, simulation or trials, every check), so before any has run its cost is
-the larger of the spec's own run as measured (``result.seconds``: the design, the run and the checks, proofs
-included) and the spec's work estimate (:func:`designkit.schema.budget.estimate`: the simulations, the lattice and
-the Lyapunov LMIs, without the imports a process pays once and the model a run builds once), and never less than
-:data:`VARIANT_FLOOR`, the design and checks of a one-link variant measured on the development machine.  Once
-variants have run, the mean of their measured wall times replaces it.  A study plans
-its variants with :meth:`Budget.affords` before it runs them and says what it left out.
+A variant is a whole run of the spec (design, simulation or trials, every check) with a new law, so its cost is
+estimated from the spec itself (:func:`variant_estimate`): the spec's work estimate
+(:func:`designkit.schema.budget.estimate`: the simulations, the lattice and the Lyapunov LMIs, without the imports a
+process pays once and the model it builds once), plus the new law's compiled functions (:data:`COMPILE` times the
+model's size), and never less than :data:`VARIANT_FLOOR`.  A study plans its variants with :meth:`Budget.affords`
+on that estimate, so the same spec gets the same study on any machine, and says what it left out.
+
+The measured wall time is kept as a safety net only: when the variants run has taken more than :data:`SAFETY`
+times the budget (a family's proof the estimate does not see, a machine far slower than the development one), the
+study stops where it is and says so (:attr:`Budget.overrun`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["VARIANT_FLOOR", "Budget", "Meter", "variant_estimate"]
+__all__ = ["COMPILE", "SAFETY", "VARIANT_FLOOR", "Budget", "variant_estimate"]
 
 VARIANT_FLOOR = 0.25
 """Seconds one variant costs at least: the design and checks of a one-link spec (0.1 to 0.2 s measured warm on
 the development machine for the MRAC, PID and sliding-mode links), rounded up."""
+COMPILE = 0.2
+"""Seconds a new law's compiled step costs per unit of model size (the one-link Dormand--Prince library: 0.2 s
+measured); a variant's gains are new constants, so its functions are new."""
+SAFETY = 3.0
+"""A study stops when its variants' measured wall time exceeds this many times its budget."""
 
 _ONCE = ("fixed work", "model build")
 
 
-def variant_estimate(spec: Any, base_dir: Any = None, measured: float = 0.0) -> float:
-    """Seconds one run of ``spec`` is expected to cost inside a process that has run it once (module docstring);
-    ``measured``: the spec's own run (s)."""
-    from designkit.schema.budget import estimate
+def variant_estimate(spec: Any, base_dir: Any = None) -> float:
+    """Seconds one variant of ``spec`` is estimated to cost inside a process that has run the spec once (module
+    docstring)."""
+    from designkit.schema.budget import estimate, size
 
-    work = sum(t.seconds for t in estimate(spec, base_dir).terms if t.what not in _ONCE and t.what != "studies")
-    return max(work, VARIANT_FLOOR, float(measured))
-
-
-@dataclass
-class Meter:
-    """The wall times of every variant the studies of one run have run (s), shared by them: a later study plans
-    with what the earlier ones measured."""
-
-    times: list[float] = field(default_factory=list)
-
-    @property
-    def mean(self) -> float | None:
-        """Mean wall time of a variant so far (s), None before any has run."""
-        return sum(self.times) / len(self.times) if self.times else None
+    est = estimate(spec, base_dir)
+    work = sum(t.seconds for t in est.terms if t.what not in _ONCE)
+    return max(work + COMPILE * size(est.joints), VARIANT_FLOOR)
 
 
 @dataclass
 class Budget:
-    """The seconds a study may spend, what it has spent, and what one more variant is expected to cost.
+    """The seconds a study may spend, the variants it has planned and run, and what they measured.
 
     Parameters
     ----------
     seconds : float
         The study's budget (s).
     estimate : float
-        One variant's cost before any has run (s, :func:`variant_estimate`).
+        One variant's estimated cost (s, :func:`variant_estimate`).
     """
 
     seconds: float
     estimate: float
-    meter: Meter = field(default_factory=Meter)
-    spent: float = 0.0
     runs: int = 0
+    spent: float = 0.0
 
     @property
     def per_run(self) -> float:
-        """Expected seconds of the next variant: the estimate until one has run (in any study of the run), then the
-        measured mean."""
-        mean = self.meter.mean
-        return self.estimate if mean is None else max(VARIANT_FLOOR / 2, mean)
+        """Estimated seconds of one variant."""
+        return self.estimate
 
     def capacity(self) -> int:
-        """How many more variants fit (at :attr:`per_run` each)."""
-        left = self.seconds - self.spent
-        return max(0, int(left / self.per_run + 1e-9)) if self.per_run > 0 else 0
+        """How many more variants the budget fits, on the estimate (deterministic)."""
+        left = self.seconds - self.runs * self.estimate
+        return max(0, int(left / self.estimate + 1e-9))
 
     def affords(self, n: int = 1) -> bool:
-        """Whether ``n`` more variants fit."""
-        return self.capacity() >= n
+        """Whether ``n`` more variants fit on the estimate and the safety net has not tripped."""
+        return not self.overrun and self.capacity() >= n
+
+    @property
+    def overrun(self) -> bool:
+        """The variants have taken more than :data:`SAFETY` times the budget (measured): stop."""
+        return self.spent > SAFETY * self.seconds
+
+    def overrun_words(self) -> str:
+        """Why a study stopped early, in words."""
+        return (f"the {self.runs} variants run took {self.spent:.3g} s of wall time, more than {SAFETY:g} times the "
+                f"budget of {self.seconds:.3g} s (estimated at {self.estimate:.2g} s each): the study stopped there")
 
     def record(self, seconds: float) -> None:
-        """A variant ran in ``seconds``."""
+        """A variant ran in ``seconds`` (wall time)."""
         self.spent += seconds
         self.runs += 1
-        self.meter.times.append(float(seconds))

@@ -159,8 +159,6 @@ class StudyContext:
         The study's section of the spec's ``studies`` (its model, validated), or None.
     budget : float
         Seconds of work the study may spend on variants.
-    meter : Meter or None
-        The variants' wall times measured by the run's earlier studies (:class:`~designkit.studies.core.budget.Meter`).
     earlier : tuple of StudyResult
         What the studies before this one (in report order) returned: a lab answer cites the gain study's rows.
     """
@@ -169,7 +167,6 @@ class StudyContext:
     family: Any
     settings: Any = None
     budget: float = 15.0
-    meter: Any = None
     earlier: tuple[Any, ...] = ()
 
     def study(self, name: str) -> Any:
@@ -178,13 +175,12 @@ class StudyContext:
 
     def new_budget(self) -> Any:
         """A :class:`~designkit.studies.core.budget.Budget` of :attr:`budget` seconds for this study, planning with
-        the spec's own run and what earlier studies measured."""
+        the spec's estimated variant cost."""
         from designkit.runner.run import base_dir
-        from designkit.studies.core.budget import Budget, Meter, variant_estimate
+        from designkit.studies.core.budget import Budget, variant_estimate
 
         result = self.result
-        estimate = variant_estimate(result.loaded.spec, base_dir(result.loaded), getattr(result, "seconds", 0.0))
-        return Budget(self.budget, estimate, self.meter if self.meter is not None else Meter())
+        return Budget(self.budget, variant_estimate(result.loaded.spec, base_dir(result.loaded)))
 
 
 @dataclass(frozen=True)

@@ -171,7 +171,7 @@ def _run(ctx: StudyContext) -> StudyResult:
         rows = [nominal]
         outside = [f for f in asked if not _in_range(knob, current, f)]
         for f in factors:
-            if budget.runs and not budget.affords(1):  # measured variants cost more than planned
+            if budget.overrun:  # the safety net: far more wall time than estimated
                 stopped.append(f"{knob.key} ×{fmt_number(f, 3)}")
                 continue
             rows.append(run_variant(result, knob, knob.scaled(current, f), f, metrics, budget))
@@ -196,8 +196,7 @@ def _run(ctx: StudyContext) -> StudyResult:
                                   (Table(f"{knob.key} scaled, everything else equal, each variant run through the "
                                          "family's own run and checks", header, table_rows),)))
     if stopped:
-        cut = (f"{', '.join(stopped)} not run: the variants measured {fmt_number(budget.per_run, 2)} s each, and the "
-               f"studies' budget of {fmt_number(ctx.budget, 3)} s was spent (raise studies.budget to run them)")
+        cut = f"{', '.join(stopped)} not run: {budget.overrun_words()}"
         reduced = f"{reduced}; {cut}" if reduced else cut
     summary = []
     ranked = sorted((s for s in sensitivities if s[0] is not None), reverse=True)

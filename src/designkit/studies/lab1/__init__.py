@@ -107,21 +107,23 @@ def _run(ctx: StudyContext) -> StudyResult:
     ran: dict[str, list[tuple[str, Row]]] = {}
     left = []
     for c in scenario:
-        if budget.runs and not budget.affords(1):
+        if not budget.affords(1):
             left.append(c.label)
             continue
         row = run_row(lambda c=c: vary_spec(result, c.changes), c.size, c.size, metrics, budget)
         ran.setdefault(c.group, []).append((c.label, row))
     for p in plants:
-        if budget.runs and not budget.affords(1):
+        if not budget.affords(1):
             left.append(p.label)
             continue
         row = run_row(lambda p=p: vary_plant(result, p.values), p.factor, p.factor, metrics, budget)
         ran.setdefault(p.group, []).append((p.label, row))
     reduced = ""
     if left:
-        reduced = (f"{len(left)} variants not run ({'; '.join(left)}): the studies' budget of "
-                   f"{fmt_number(ctx.budget, 3)} s was spent at about {fmt_number(budget.per_run, 2)} s each")
+        why = budget.overrun_words() if budget.overrun else (
+            f"the studies' budget of {fmt_number(ctx.budget, 3)} s fits {budget.runs} at about "
+            f"{fmt_number(budget.per_run, 2)} s each (raise studies.budget to run them)")
+        reduced = f"{len(left)} variants not run ({'; '.join(left)}): {why}"
     scenario_groups = [g for g in ("sampling", "delay", "noise", "quantization", "limit", "load") if g in ran]
     plant_groups = [g for g in ("viscosity", "inertia", "masses", "lengths") if g in ran]
     other = [s for g in scenario_groups for s in _variant_sentences(ran[g], nominal, primary)]
