@@ -24,7 +24,7 @@ from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import gain_knobs
+from designkit.synthesis.knobs import Knob, Metric, gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
@@ -185,6 +185,34 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return design(plant, poles, zero, notes=notes, extra=extra)
 
 
+def strategy(result: Any) -> tuple[str, ...]:
+    """What the servo measures and what its design needs, with the design's poles and zero (1/s) (a study's
+    ``strategy`` answer, :data:`designkit.synthesis.family.ANSWER_TOPICS`)."""
+    from designkit.display.numbers import fmt_number, fmt_poles
+
+    d = result.design
+    poles, zero = fmt_poles(d.poles), fmt_number(d.zeros[0].real if d.zeros else None, 4)
+    info = d.extra.get("pid_servo_elastic")
+    if info is not None:
+        rigid = info["rigid"]
+        poles, zero = fmt_poles(complex(a, b) for a, b in info["requested_poles"]), fmt_number(info["zero"], 4)
+        return (f"u = −K1 (x3 − xD) − K2 x4 − K3 ∫(x3 − xD) dt + K3 K4 xD on the link's position and speed: its gains "
+                f"place the poles {poles} 1/s and the zero {zero} 1/s on the rigid approximation (Km = "
+                f"{fmt_number(rigid['Km'], 4)}, τ = {fmt_number(rigid['tau'], 4)} s) by matching the characteristic "
+                f"polynomial; with the elastic transmission the loop's poles are "
+                f"{fmt_poles(complex(a, b) for a, b in info['loop_poles'])} 1/s. Its integral action removes a "
+                "constant load's offset.",)
+    return (f"u = −K1 (x1 − xD) − K2 x2 − K3 ∫(x1 − xD) dt + K3 K4 xD: its gains place the poles {poles} 1/s and "
+            f"the zero {zero} 1/s by matching the characteristic polynomial on the link (notes §3.2). Its integral "
+            "action removes a constant load's offset.",)
+
+
+def load_offset(result: Any) -> float | None:
+    """The static offset (rad) a constant load of the spec's ``simulation.perturbation`` leaves: 0, the integral of
+    the controlled position's error being held at rest; None without a perturbation."""
+    return 0.0 if result.loaded.spec.simulation.perturbation is not None else None
+
+
 FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
@@ -202,6 +230,12 @@ FAMILY = Family(
                 "closed-loop poles and the zero of x1/xD.",
     ),
     validate=poles_or_requirements,
-    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
+        Knob("poles", "1/s", "closed-loop poles the gains place", 1e-3, 1e6, path="controller.poles"),
+        Knob("zero", "1/s", "closed-loop zero of the controlled position over xD (sets K4)", 1e-6, 1e6,
+             path="controller.zero")),
     traits=("pid",),
+    answers=(("strategy", strategy),),
+    predictions=(Metric("load_offset", "static offset a constant load leaves (closed form)", "rad", load_offset,
+                        "0: the integral action holds the controlled position at xD"),),
 )

@@ -20,15 +20,22 @@ from dataclasses import dataclass
 from typing import Any
 
 from designkit.synthesis.design import Design
-from designkit.synthesis.knobs import Knob, Metric
+from designkit.synthesis.knobs import Knob, Metric, Variant
 from designkit.synthesis.law import Law
 
-__all__ = ["Display", "Family", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
+__all__ = ["ANSWER_TOPICS", "Display", "Family", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
 
 STEP_REFERENCES = ("step", "square", "prbs")
 """References a servo (a ``"step"`` design) follows by default: ``simulation.step``, a square wave, a PRBS."""
 TRAJECTORY_REFERENCES = ("quintic", "sine", "trapezoidal", "via_points")
 """References a joint tracker (a ``"trajectory"`` design) follows by default."""
+ANSWER_TOPICS = {
+    "how": "why and how the law does what it does on this run, with the run's numbers: what an adaptive law adapted "
+           "and what it ended at, how a switching law reached and held its surface",
+    "strategy": "the control strategy: what the law measures and computes at each instant or sample, from which "
+                "settings, and which algorithms its design needs, with the design's numbers",
+}
+"""The topics a family may answer (:attr:`Family.answers`) when a study asks it about one of its runs."""
 
 
 @dataclass(frozen=True)
@@ -125,6 +132,17 @@ class Family:
         ``(design, gains, anti_windup) -> Design``: the design with other gains (its law, its closed loop and
         its per-joint loops rebuilt), for a family whose design the generic rebuild
         (:func:`designkit.runner.variants.with_gains`) cannot redo, e.g. one with per-joint loops.
+    answers : tuple of (str, callable)
+        ``(topic, result -> tuple of str)``: what the family says of one of its runs when a study asks about a
+        topic of :data:`ANSWER_TOPICS` (a comparison's lab answer asks every member), one sentence each, numbers
+        from the run and the design; an empty tuple when it has nothing to say of that run.
+    predictions : tuple of Metric
+        Numbers the family predicts in closed form for a run (``load_offset``: the static offset a constant load
+        leaves), each a :class:`~designkit.synthesis.knobs.Metric` (None where it does not apply), which a study
+        sets beside what the run measured; unlike :attr:`metrics` they rank nothing.
+    variants : tuple of Variant
+        Named changes of the spec a study may run (:class:`~designkit.synthesis.knobs.Variant`): another form of
+        the law, such as an adaptive rule's ad hoc modifications.
     """
 
     kind: str
@@ -146,6 +164,9 @@ class Family:
     metrics: tuple[Metric, ...] = ()
     traits: frozenset[str] = frozenset()
     regain: Callable[[Design, Any, Any], Design] | None = None
+    answers: tuple[tuple[str, Callable[[Any], tuple[str, ...]]], ...] = ()
+    predictions: tuple[Metric, ...] = ()
+    variants: tuple[Variant, ...] = ()
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):
@@ -153,12 +174,24 @@ class Family:
         if not self.references:
             default = STEP_REFERENCES if self.reference == "step" else TRAJECTORY_REFERENCES
             object.__setattr__(self, "references", default)
-        for name in ("checks", "references", "figures", "sections", "diagnoses", "knobs", "metrics"):
+        for name in ("checks", "references", "figures", "sections", "diagnoses", "knobs", "metrics", "answers",
+                     "predictions", "variants"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         object.__setattr__(self, "traits", frozenset(self.traits))
         keys = [k.key for k in self.knobs]
         if len(set(keys)) != len(keys):
             raise ValueError(f"family {self.kind!r}: two knobs share a name ({keys})")
+        for topic, _ in self.answers:
+            if topic not in ANSWER_TOPICS:
+                raise ValueError(f"family {self.kind!r}: answers a topic {topic!r} not in {tuple(ANSWER_TOPICS)}")
+
+    def answer(self, topic: str, result: Any) -> tuple[str, ...]:
+        """What the family says of ``result`` on ``topic`` (:attr:`answers`); empty when it does not answer it."""
+        return tuple(s for t, make in self.answers if t == topic for s in make(result))
+
+    def prediction(self, key: str) -> Metric | None:
+        """The prediction named ``key`` (:attr:`predictions`), or None."""
+        return next((m for m in self.predictions if m.key == key), None)
 
     def knob(self, key: str) -> Knob | None:
         """The knob named ``key`` (:attr:`Knob.key`), or None."""

@@ -9,6 +9,9 @@ amplitude.  A study (:mod:`designkit.studies`) changes one knob, runs the result
 (its trials, its adaptation, its held step) with the family's own checks, and measures it with the family's
 **metrics**: the numbers that are meaningful for the law (the error against the reference model of an MRAC,
 the last trial's error of a learning law, the settled error of a switching law), each a function of the run.
+A **variant** is a named change of the spec that is not a number to scale: another form of the law (an ad hoc
+modification of an adaptive rule, its safeguards turned off), sized from the run it varies; a study runs it
+through the family's own run as it runs a knob's value.
 
 Nothing here runs anything: these are declarations, read above the families.
 """
@@ -20,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["GAIN_FACTORS", "ROLES", "Knob", "Metric", "gain_knobs"]
+__all__ = ["GAIN_FACTORS", "ROLES", "VARIANT_ROLES", "Knob", "Metric", "Variant", "gain_knobs"]
 
 ROLES = ("gain", "adaptation", "learning", "forgetting", "switching")
 """What a knob is to its law: a fixed gain, an adaptation gain, a learning gain, a forgetting factor (its
@@ -113,6 +116,10 @@ class Knob:
         return self.low * (1 - 1e-12) <= abs(value) <= self.high * (1 + 1e-12)
 
 
+VARIANT_ROLES = ("modification",)
+"""What a variant is to its law: an ad hoc ``modification`` of the off-the-shelf algorithm (a normalised or dead-zoned
+adaptation, a projection of the adapted parameters, a safeguard turned on or off)."""
+
 GAIN_FACTORS = (0.01, 100.0)
 """The range of a design gain's knob, as factors on the designed value."""
 
@@ -164,3 +171,38 @@ class Metric:
             return None
         v = float(v)
         return v if math.isfinite(v) else math.inf
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A named change of the spec a study may run (module docstring).
+
+    Parameters
+    ----------
+    key : str
+        Its name in ``--json`` and in the report's tables (``"normalized"``).
+    label : str
+        The variant in words (``"normalised gradient rule"``).
+    meaning : str
+        What it changes and how it was sized, one sentence with the formula.
+    changes : callable
+        ``run -> tuple of (key path, value)``: the spec's settings to set (a value of None removes the key), sized
+        from ``run`` (the run varied: its spec, design and simulation); an empty tuple when the variant does not
+        apply to that run (the spec already has it).
+    role : str
+        One of :data:`VARIANT_ROLES`.
+    """
+
+    key: str
+    label: str
+    meaning: str
+    changes: Callable[[Any], tuple[tuple[str, Any], ...]]
+    role: str = "modification"
+
+    def __post_init__(self) -> None:
+        if self.role not in VARIANT_ROLES:
+            raise ValueError(f"variant {self.key!r}: role must be one of {VARIANT_ROLES}, got {self.role!r}")
+
+    def changes_for(self, run: Any) -> tuple[tuple[str, Any], ...]:
+        """The key paths and values that make ``run``'s spec this variant (empty: it does not apply)."""
+        return tuple((str(path), value) for path, value in self.changes(run))

@@ -38,6 +38,9 @@ the output error with against without adaptation, parameter convergence with a
 persistent-excitation indicator.  The family follows ``step``, ``square`` and ``prbs`` references
 (adaptation needs excitation); ``simulation.plant_change`` changes the link mid-run without telling
 the controller.
+
+**Modifications** (``controller.modification``, :mod:`designkit.families.mrac.modification`): the normalised
+rule, a dead zone on the error, or a projection of the parameters on a box replace the plain gradient rule.
 """
 
 from __future__ import annotations
@@ -47,9 +50,11 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from designkit.errors import SpecError
 from designkit.families.mrac import laws as mrac_law
 from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, gains_of
+from designkit.families.mrac.modification import Modification, describe, resolved
 from designkit.spec.fields import Finite, Pole, PositiveFinite, Section, check_conjugates
 from designkit.spec.ranges import Ranged, check_poles
 from designkit.synthesis.closed_loop import with_closed_loop
@@ -142,6 +147,8 @@ class MracSpec(Section):
     (position, velocity), positive definite: two numbers (a diagonal) or a 2 x 2 symmetric matrix (default
     ``[1, 0.1]``).  ``initial``: the adapted parameters ``[a1, a2]`` at ``t = 0`` (1/s^2, 1/s, positive;
     default the nominal design).  ``nominal``: the link the gains are realised on (default the spec's plant).
+    ``modification``: an ad hoc modification of the gradient rule, ``{kind: normalized, rate}``, ``{kind:
+    dead_zone, width}`` or ``{kind: projection, low, high}`` (:mod:`designkit.families.mrac.modification`).
     """
 
     kind: Literal[KIND]
@@ -152,6 +159,7 @@ class MracSpec(Section):
                                                  description="Error weighting, positive definite.")
     initial: list[Finite] | None = None
     nominal: NominalLink | None = None
+    modification: Modification | None = None
 
     @field_validator("poles")
     @classmethod
@@ -264,12 +272,22 @@ def synthesize(spec: Any, plant: Any) -> Design:
     gamma = tuple(_positive_list(c.gamma, 2, "an adaptation gain"))
     gamma = gamma * 2 if len(gamma) == 1 else gamma
     Q = q_matrix(c.Q)
-    return design(nominal, model, gamma, Q, initial, notes=tuple(notes))
+    modification = resolved(c, model.natural_frequency)
+    if modification is not None and modification["kind"] == "projection":
+        for k, (lo, hi, a0) in enumerate(zip(modification["low"], modification["high"], initial, strict=True)):
+            if not lo <= a0 <= hi:
+                side = "low" if a0 < lo else "high"
+                raise SpecError(f"controller.modification.{side}[{k}]",
+                                f"the initial {('a1', 'a2')[k]} = {a0:.6g} lies outside the box [{lo:g}, {hi:g}]: the "
+                                "projection keeps the parameters in it, so they must start in it")
+    return design(nominal, model, gamma, Q, initial, notes=tuple(notes), modification=modification)
 
 
 def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: list[list[float]],
-           initial: tuple[float, float], *, notes: tuple[str, ...] = ()) -> Design:
-    """The MRAC on the nominal link ``nominal`` following ``model`` from ``initial`` (see the module docstring).
+           initial: tuple[float, float], *, notes: tuple[str, ...] = (), modification: dict | None = None) -> Design:
+    """The MRAC on the nominal link ``nominal`` following ``model`` from ``initial`` (see the module docstring),
+    with the gradient rule modified by ``modification`` (:func:`~designkit.families.mrac.modification.resolved`)
+    when given.
 
     Examples
     --------
@@ -297,17 +315,18 @@ def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: l
                             "source": model.source},
         "nominal": {"Km": Km, "tau": tau}, "gamma": list(gamma), "Q": [list(row) for row in Q],
         "initial": list(initial), "parameters": list(PARAMETERS), "units": list(UNITS),
+        "modification": modification,
     }
     formulas = (
         "K1 = τn a1 / Kmn,  K2 = (τn a2 − 1) / Kmn  (the coefficients realised on the nominal link)",
         "closed loop: x1'' + ((1 + Km K2)/τ) x1' + (Km K1/τ) x1 = (Km K1/τ) xD",
         "reference model: ym'' + a2 ym' + a1 ym = a1 xD",
         "S' = (∂f_m/∂y) S + ∂f_m/∂a  (CasADi Jacobians of f_m)",
-        "α' = Γ Sᵀ Q e,  e = ym − x",
+        "α' = Γ Sᵀ Q e,  e = ym − x" + (f"  (modified: {describe(modification)})" if modification else ""),
     )
     d = Design(kind=KIND, plant=nominal, gains=gains, poles=frozen_poles, reference="step",
                formulas=formulas, notes=notes, extra=extra)
-    adaptive = mrac_law.adaptive_law(nominal, model, gamma, Q, initial)
+    adaptive = mrac_law.adaptive_law(nominal, model, gamma, Q, initial, modification)
     lin = Linearization("frozen", reason="the PD gains with the adapted coefficients held (no adaptation, no "
                         "reference or sensitivity model)", parameters=PARAMETERS, initial=initial, units=UNITS,
                         freeze=mrac_law.Freezer(nominal))
@@ -318,11 +337,11 @@ def law(design: Design, anti_windup: Any = None) -> Any:
     """The adaptive law of ``design`` (its reference model, gains and initial parameters from ``design.extra``)."""
     x = design.extra
     return mrac_law.adaptive_law(design.plant, ReferenceModel(tuple(x["reference_model"]["a"])), tuple(x["gamma"]),
-                                 [list(r) for r in x["Q"]], tuple(x["initial"]))
+                                 [list(r) for r in x["Q"]], tuple(x["initial"]), x.get("modification"))
 
 
 def _family() -> Family:
-    from designkit.families.mrac import checks, figures, knobs, report
+    from designkit.families.mrac import answers, checks, figures, knobs, report
 
     return Family(
         kind=KIND, spec=MracSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
@@ -339,7 +358,9 @@ def _family() -> Family:
                     "adjusted by the gradient rule so that the link follows a reference model."),
         validate=validate, references=("step", "square", "prbs"),
         figures=figures.FIGURES, sections=(report.section,), diagnoses=(checks.diagnose,), json=report.json,
-        knobs=knobs.KNOBS, metrics=knobs.METRICS, traits=("adaptive",),
+        knobs=knobs.KNOBS, metrics=knobs.METRICS, traits=("adaptive", "model_reference"),
+        answers=answers.ANSWERS,
+        variants=knobs.VARIANTS,
     )
 
 

@@ -9,7 +9,7 @@ Adaptive law (:func:`adaptive_law`), controller states in this order::
     a1, a2                          adapted closed-loop coefficients (start at the initial values)
 
     ym' = f_m(ym, a, xD),   S' = (df_m/dy) S + df_m/da      (mrac.model.sensitivity_function)
-    e = (ym1 - x1, ym2 - x2),       alpha' = Gamma S' Q e
+    e = (ym1 - x1, ym2 - x2),       alpha' = Gamma S' Q e    (or modified: mrac.modification)
     u = -K1(alpha) (x1 - xD) - K2(alpha) x2,   K1 = tau_n a1/Km_n,  K2 = (tau_n a2 - 1)/Km_n
 
 ``a`` in the model and its sensitivity is the model's own (fixed) coefficient vector: the gradient
@@ -24,7 +24,7 @@ model's when the spec gives its own.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,6 +39,7 @@ from designkit.families.mrac.model import (
     gains_of,
     sensitivity_function,
 )
+from designkit.families.mrac.modification import modified_rate
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
 __all__ = ["Freezer", "MAX_STEP_FACTOR", "STATE_NAMES", "adaptive_law", "fixed_law"]
@@ -56,7 +57,7 @@ def _link(plant: Any) -> tuple[float, float]:
 
 
 def adaptive_law(nominal: Any, model: ReferenceModel, gamma: Sequence[float], Q: Sequence[Sequence[float]],
-                 initial: Sequence[float]) -> Law:
+                 initial: Sequence[float], modification: Mapping[str, Any] | None = None) -> Law:
     """The adaptive law (module docstring) on the nominal link ``nominal``.
 
     Parameters
@@ -71,6 +72,9 @@ def adaptive_law(nominal: Any, model: ReferenceModel, gamma: Sequence[float], Q:
         Error weighting (symmetric positive definite).
     initial : sequence of 2 float
         ``a1, a2`` at ``t = 0``.
+    modification : mapping or None
+        An ad hoc modification of the gradient rule (:func:`designkit.families.mrac.modification.resolved`), None
+        for the plain rule.
     """
     Km, tau = _link(nominal)
     sens = sensitivity_function()
@@ -87,7 +91,8 @@ def adaptive_law(nominal: Any, model: ReferenceModel, gamma: Sequence[float], Q:
             alpha = ca.vertcat(*[s.state(n) for n in PARAMETERS])
             y_dot, S_dot = sens(ym, S, a, s.qD[0])
             e = ym - ca.vertcat(s.q[0], s.qd[0])
-            alpha_dot = G @ ca.reshape(S, 2, 2).T @ Qm @ e
+            Sm = ca.reshape(S, 2, 2)
+            alpha_dot = modified_rate(modification, G @ Sm.T @ Qm @ e, alpha, e, Sm, G, Qm)
             K1, K2 = gains_of((alpha[0], alpha[1]), Km, tau)
             memo[key] = {"y_dot": y_dot, "S_dot": S_dot, "alpha_dot": alpha_dot, "e": e, "K1": K1, "K2": K2,
                          "ym": ym, "alpha": alpha}
@@ -105,7 +110,8 @@ def adaptive_law(nominal: Any, model: ReferenceModel, gamma: Sequence[float], Q:
         command=lambda s: -parts(s)["K1"] * (s.q[0] - s.qD[0]) - parts(s)["K2"] * s.qd[0],
         settings={"reference_model": {"a1": model.a[0], "a2": model.a[1]}, "gamma": [float(g) for g in gamma],
                   "Q": [[float(x) for x in row] for row in Q], "initial": [float(v) for v in initial],
-                  "nominal": {"Km": Km, "tau": tau}, "adaptation": "gradient rule, alpha' = Gamma S' Q e"},
+                  "nominal": {"Km": Km, "tau": tau}, "adaptation": "gradient rule, alpha' = Gamma S' Q e",
+                  "modification": dict(modification) if modification is not None else None},
         signals={"ym": lambda s: parts(s)["ym"][0], "e": lambda s: parts(s)["e"][0],
                  "ev": lambda s: parts(s)["e"][1], "a1": lambda s: parts(s)["alpha"][0],
                  "a2": lambda s: parts(s)["alpha"][1], "K1": lambda s: parts(s)["K1"],

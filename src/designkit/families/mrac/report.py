@@ -17,6 +17,7 @@ from designkit.display.numbers import fmt_number, fmt_poles
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.mrac.checks import fixed_comparison
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, coefficients_of, gains_of
+from designkit.families.mrac.modification import describe
 from designkit.families.mrac.runs import adapted, final_link, matching, rms
 from designkit.families.mrac.study import Comparison, context, study
 
@@ -89,7 +90,8 @@ def _why_how(result: Any, s: Any) -> Question:
         f"leaves the model by {_f(m.rms_fixed)} rad RMS over the run ({_f(m.last_fixed)} rad over its last quarter).",
         "How: the closed-loop coefficients a1, a2 (realised through K1, K2 on the nominal link) follow the gradient "
         "rule α' = Γ Sᵀ Q e, with S = ∂ym/∂a from the sensitivity model CasADi generates from the reference model "
-        "(the notes' approximation ∂e/∂α ≈ −∂ym/∂a).",
+        "(the notes' approximation ∂e/∂α ≈ −∂ym/∂a)" + (f", modified: {describe(x['modification'])}."
+                                                         if x.get("modification") else "."),
         f"With what success: {_f(m.rms_adaptive)} rad RMS with adaptation against {_f(m.rms_fixed)} rad without "
         f"({_f(100 * m.rms_adaptive / m.rms_fixed if m.rms_fixed else math.nan)} %), {_f(m.last_adaptive)} rad "
         f"against {_f(m.last_fixed)} rad over the last quarter; a1, a2 end at {_pair(m.final)}, the values that put "
@@ -259,6 +261,8 @@ def _modifications_question(s: Any) -> Question:
     else:
         sentences.append("The bounded runs all end within 10 % of the matching values; a dead zone on small |e| would "
                          "still be needed against the drift a perturbation or noise causes.")
+    sentences.append("Each of the three is a setting of this family (controller.modification: normalized, dead_zone or "
+                     "projection, derived in docs/families/mrac.md).")
     return Question("What ad hoc modifications of the off-the-shelf algorithm might be required?", tuple(sentences))
 
 

@@ -57,12 +57,14 @@ def rms(x: np.ndarray) -> float:
 
 def adaptive_variant(design: Any, *, gamma_scale: float = 1.0, gamma: Any = None, Q: Any = None, initial: Any = None,
                      model: ReferenceModel | None = None) -> Any:
-    """The design's adaptive law with some of its settings replaced (``gamma_scale`` multiplies the gains)."""
+    """The design's adaptive law with some of its settings replaced (``gamma_scale`` multiplies the gains); its
+    modification of the gradient rule (if any) is kept."""
     x = design.extra
     g = np.asarray(x["gamma"] if gamma is None else gamma, dtype=float) * float(gamma_scale)
     return adaptive_law(design.plant, model or ReferenceModel(tuple(x["reference_model"]["a"])), tuple(g.tolist()),
                         [list(r) for r in (x["Q"] if Q is None else Q)], tuple(x["initial"] if initial is None
-                                                                              else initial))
+                                                                              else initial),
+                        x.get("modification"))
 
 
 def simulate(spec: Any, design: Any, plant: Any, law: Any) -> Any:

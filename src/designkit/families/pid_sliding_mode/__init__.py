@@ -47,6 +47,7 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
+from designkit.families.pid_sliding_mode import answers
 from designkit.families.pid_sliding_mode.bound import corners, design_box, perturbation_bound
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.pid_sliding_mode.diagnoses import diagnose
@@ -268,6 +269,8 @@ FAMILY = Family(
                 path="controller.epsilon")),
     traits=("switching",),
     diagnoses=(diagnose,),
+    answers=answers.ANSWERS,
+    predictions=answers.PREDICTIONS,
 )
 
 from designkit.families.pid_sliding_mode.elastic import extend as _with_elastic_joint  # noqa: E402

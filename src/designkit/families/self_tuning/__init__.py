@@ -230,7 +230,7 @@ def settings_from(design: Design) -> Settings:
 
 
 def _family() -> Family:
-    from designkit.families.self_tuning import checks, figures, report
+    from designkit.families.self_tuning import answers, checks, figures, report
 
     return Family(
         kind=KIND, spec=SelfTuningSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
@@ -250,7 +250,9 @@ def _family() -> Family:
                     path="controller.poles"),
                Knob("sampling_period", "s", "the regulator's sampling period", 1e-5, 10.0,
                     path="controller.sampling_period")),
-        traits=("adaptive",),
+        traits=("adaptive", "certainty_equivalence"),
+        answers=answers.ANSWERS,
+        variants=answers.VARIANTS,
     )
 
 

@@ -20,6 +20,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit.families.state_regulator import answers
 from designkit.families.state_regulator.gains import ackermann, check_controllable, load_offset, reference_gain
 from designkit.families.state_regulator.spec import EXTRA, KIND, StateRegulatorSpec, validate
 from designkit.families.vsc.surface import linear_model
@@ -108,4 +109,7 @@ FAMILY = Family(
     json=json_summary,
     knobs=(Knob("poles", "1/s", "closed-loop poles of x' = (A − B K) x: the regulator's speed", 1e-3, 1e6,
                 path="controller.poles"),),
+    traits=("state_feedback",),
+    answers=answers.ANSWERS,
+    predictions=answers.PREDICTIONS,
 )

@@ -46,6 +46,7 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
+from designkit.families.vsc import answers
 from designkit.families.vsc.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.vsc.diagnoses import diagnose
 from designkit.families.vsc.figures import FIGURES
@@ -289,6 +290,11 @@ FAMILY = Family(
            Knob("sliding_poles", "1/s", "poles of the sliding motion on σ = c x = 0", 1e-3, 1e6,
                 path="controller.sliding_poles"),
            Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
-                path="controller.margin")),
-    traits=("switching",),
+                path="controller.margin"),
+           Knob("chattering_band", "rad/s", "band |σ| ≤ band the command held over one step may leave (sets the "
+                "step)", 1e-12, 1e6, path="controller.chattering_band", current=lambda d: float(d.extra[KIND]["band"]),
+                when=lambda d: d.extra[KIND]["boundary_layer"] is None)),
+    traits=("switching", "state_feedback"),
+    answers=answers.ANSWERS,
+    predictions=answers.PREDICTIONS,
 )
