@@ -155,7 +155,8 @@ def cmd_synth(args: argparse.Namespace) -> int:
     if not args.no_report:
         try:
             if comparison:
-                files = write_comparison_report(result, Path(args.out), processes=args.jobs)
+                files = write_comparison_report(result, Path(args.out), processes=args.jobs,
+                                                studies=not args.no_studies)
             else:
                 files = write_report(result, Path(args.out), processes=args.jobs, studies=not args.no_studies)
         except OutputError as exc:
@@ -163,7 +164,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
         except OSError as exc:  # failed part-way (disk full, ...): the previous report is left as it was
             raise OutputError("--out", f"cannot write the report: {exc.strerror or exc}") from None
     if args.json:
-        payload = result.to_json(studies=not args.no_studies) if not comparison else result.to_json()
+        payload = result.to_json(studies=not args.no_studies)
         if files is not None:
             payload["report"] = {"html": str(files.html), "pdf": str(files.pdf)}
         print(json.dumps(payload, indent=2))

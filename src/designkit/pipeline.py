@@ -228,6 +228,14 @@ class ComparisonResult:
         """``(label, check)`` of every required check that failed or is undecided, controller by controller."""
         return tuple((label, c) for label, r in zip(self.labels, self.results, strict=True) for c in r.failed)
 
+    @cached_property
+    def studies(self) -> tuple[Any, ...]:
+        """Every comparison study that applies (:func:`designkit.studies.run_studies`: lab experiments over several
+        controllers), run on first access, each through the members' families' own runs."""
+        from designkit.studies import run_studies
+
+        return run_studies(self)
+
     def __getitem__(self, label: str) -> PipelineResult:
         """The run of controller ``label``."""
         try:
@@ -235,18 +243,21 @@ class ComparisonResult:
         except ValueError:
             raise KeyError(label) from None
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self, *, studies: bool = False) -> dict[str, Any]:
         """The JSON object printed by ``designkit synth --json`` for a comparison.
 
         ``comparison`` has one object per controller (label, kind, verified, metrics, checks, warnings, and its
         own run's JSON under ``result``); ``winners`` one object per metric, with ``tie`` and ``tied``
         (:meth:`~designkit.comparison.table.ComparisonTable.winners_json`); ``passed`` and ``verified`` say whether
         every controller is verified; ``warnings`` every controller's warnings, each prefixed with its label;
-        ``checks`` lists every check of every controller, each with its ``controller`` label.
+        ``checks`` lists every check of every controller, each with its ``controller`` label.  With ``studies``
+        (``synth --json``) also ``"studies"``, the comparison studies' objects
+        (:meth:`designkit.studies.core.study.StudyResult.to_json`), and each controller's own ``studies`` and
+        ``fixes`` under ``result``.
         """
         rows = self.table.to_json()
         for row, r in zip(rows, self.results, strict=True):
-            row["result"] = r.to_json()
+            row["result"] = r.to_json(studies=studies)
         return {
             "name": self.loaded.spec.name,
             "spec_sha256": self.loaded.sha256,
@@ -262,6 +273,7 @@ class ComparisonResult:
             "checks": [{**c.to_dict(), "controller": label}
                        for label, r in zip(self.labels, self.results, strict=True) for c in r.checks],
             "versions": dict(self.versions),
+            **({"studies": [e for st in self.studies for e in st.to_json()]} if studies else {}),
         }
 
 

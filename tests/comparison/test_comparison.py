@@ -140,7 +140,7 @@ simulation:
 
 
 def test_exit_codes_and_json(tmp_path, capsys):
-    code = main(["synth", str(EXAMPLE), "--no-report", "--json"])
+    code = main(["synth", str(EXAMPLE), "--no-report", "--json", "--no-studies"])  # studies: tests/studies
     payload = json.loads(capsys.readouterr().out)
     assert code == 0 and payload["passed"] is True
     assert [c["label"] for c in payload["comparison"]] == ["mrac", "selftune"]

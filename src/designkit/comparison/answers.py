@@ -1,58 +1,19 @@
-"""The sections a comparison report answers: one generic, from the metrics alone, and contributed ones.
+"""The sections a comparison report answers: the generic one, from the metrics alone, then the comparison studies'.
 
-A contribution is a :class:`ComparisonContribution`: which sets of controller kinds it answers for
-(``applies``) and a function of the :class:`~designkit.pipeline.ComparisonResult` returning a
-:class:`~designkit.display.section.ReportSection` (or None).  :data:`CONTRIBUTIONS` lists them; a family (or
-a lab experiment that involves several) adds its entry there, e.g. :mod:`designkit.comparison.lab2` for the
-MRAC and SELFTUNE simulators of lab experiment 2.  :func:`comparison_sections` is what the report lays out.
+:func:`generic_section` says who wins on each metric and each controller's verdict; the comparison studies
+(:mod:`designkit.studies`, e.g. the lab experiments over several controllers) are discovered above this layer, run by
+the :class:`~designkit.pipeline.ComparisonResult` (its ``studies``), and each returns its own section.
+:func:`comparison_sections` is what the report lays out.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
 
-__all__ = ["CONTRIBUTIONS", "ComparisonContribution", "comparison_sections", "generic_section"]
-
-
-@dataclass(frozen=True)
-class ComparisonContribution:
-    """A section a comparison report adds when its controllers' kinds fit.
-
-    Parameters
-    ----------
-    name : str
-        Who contributes it (for documentation and tests).
-    applies : callable
-        ``applies(kinds: tuple[str, ...]) -> bool``, the kinds of the comparison's controllers in spec order.
-    build : callable
-        ``build(result) -> ReportSection | None`` from the :class:`~designkit.pipeline.ComparisonResult`.
-    """
-
-    name: str
-    applies: Callable[[tuple[str, ...]], bool]
-    build: Callable[[Any], ReportSection | None]
-
-
-def _lab2() -> ComparisonContribution:
-    from designkit.comparison import lab2
-
-    return ComparisonContribution("lab experiment 2: MRAC against SELFTUNE", lab2.applies, lab2.section)
-
-
-def _lab3() -> ComparisonContribution:
-    from designkit.comparison import lab3
-
-    return ComparisonContribution("lab experiment 3: sliding mode on ROBEL's elastic joint", lab3.applies,
-                                  lab3.section)
-
-
-CONTRIBUTIONS: tuple[Callable[[], ComparisonContribution], ...] = (_lab2, _lab3)
-"""Factories of the contributed sections, in report order (imported when a report is built)."""
+__all__ = ["comparison_sections", "generic_section"]
 
 
 def generic_section(result: Any) -> ReportSection:
@@ -78,19 +39,8 @@ def generic_section(result: Any) -> ReportSection:
     )
 
 
-def comparison_sections(result: Any) -> tuple[ReportSection, ...]:
-    """The generic section, then every contributed one that applies to the comparison's kinds."""
-    kinds = tuple(r.design.kind for r in result.results)
-    out: list[ReportSection] = [generic_section(result)]
-    for factory in CONTRIBUTIONS:
-        contribution = factory()
-        if contribution.applies(kinds):
-            section = contribution.build(result)
-            if section is not None:
-                out.append(section)
-    return tuple(out)
-
-
-def kinds_include(*wanted: str) -> Callable[[Sequence[str]], bool]:
-    """An ``applies`` predicate: the comparison includes a controller of each of ``wanted``."""
-    return lambda kinds: all(k in kinds for k in wanted)
+def comparison_sections(result: Any, studies: bool = True) -> tuple[ReportSection, ...]:
+    """The generic section, then the section of every comparison study the result ran (``result.studies``, run on
+    first access; none with ``studies`` False)."""
+    done = tuple(getattr(result, "studies", ())) if studies else ()
+    return (generic_section(result), *(st.section for st in done if st.section is not None))

@@ -2,7 +2,8 @@
 
 Page 1: the comparison's verdict (verified only when every controller is), the table of metrics (the
 same for every controller, units typeset), each check's verdict per controller, and the overlay figures;
-then the comparison's sections (:func:`designkit.comparison.answers.comparison_sections`), then each
+then the comparison's sections (:func:`designkit.comparison.answers.comparison_sections`: the generic one and the
+comparison studies'), then each
 controller's own report (its sections, figures and checks: the single-spec report model, written in a
 sub-folder and linked), the spec and the provenance.
 """
@@ -81,7 +82,7 @@ class ComparisonReportModel:
     figures : tuple of Figure
         The overlay figures.
     sections : tuple of ReportSection
-        The comparison's sections (generic, then contributed).
+        The comparison's sections (generic, then the comparison studies').
     spec_text, spec_sha256, spec_path : str
         The spec echoed verbatim, its SHA-256, where it was read from.
     provenance, versions : tuple of (name, value)
@@ -133,8 +134,10 @@ def _member(label: str, result: Any) -> MemberRow:
                      f"{label}/report.html", f"{label}/report.pdf", tuple(result.warnings))
 
 
-def build_comparison_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None) -> ComparisonReportModel:
-    """Build the comparison report of ``result`` (pure: reads the result, returns a new value)."""
+def build_comparison_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
+                           studies: bool = True) -> ComparisonReportModel:
+    """Build the comparison report of ``result`` (pure: reads the result, returns a new value); with ``studies`` its
+    comparison studies' sections and figures are laid out after the generic section (run on first access)."""
     table = result.table
     loaded = result.loaded
     spec = loaded.spec
@@ -162,8 +165,8 @@ def build_comparison_model(result: Any, provenance: Sequence[tuple[str, str]] | 
         header=("metric", "unit", *result.labels), rows=rows,
         check_header=("controller", "check", "verdict"), check_rows=checks,
         winners=tuple(w.sentence for w in table.winners()),
-        figures=comparison_figures(result),
-        sections=comparison_sections(result),
+        figures=(*comparison_figures(result), *(f for st in (result.studies if studies else ()) for f in st.figures)),
+        sections=comparison_sections(result, studies),
         spec_text=loaded.text, spec_sha256=loaded.sha256, spec_path=str(loaded.path),
         provenance=tuple((str(k), str(v)) for k, v in provenance),
         versions=tuple((str(k), str(v)) for k, v in dict(result.versions).items()),

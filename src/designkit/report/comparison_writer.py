@@ -63,7 +63,8 @@ def compile_comparison_pdf(model: ComparisonReportModel) -> bytes:
     return without_false_suspects(out)  # poppler reads Typst's /Suspects false as a syntax error
 
 
-def write_comparison_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1) -> ReportFiles:
+def write_comparison_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1,
+                            studies: bool = True) -> ReportFiles:
     """Write the comparison report of ``result`` and every controller's own report.
 
     Parameters
@@ -75,6 +76,9 @@ def write_comparison_report(result, out_dir: str | os.PathLike[str], *, processe
         own report to ``out_dir/<spec name>/<label>/report.{html,pdf}``.
     processes : int
         Passed to each controller's report (2 draws its figures on two cores).
+    studies : bool
+        Lay out the comparison studies and each controller's own studies (:mod:`designkit.studies`, run on first
+        access); False leaves them out.
 
     Returns
     -------
@@ -91,11 +95,11 @@ def write_comparison_report(result, out_dir: str | os.PathLike[str], *, processe
     if not all(hasattr(result, name) for name in ("loaded", "labels", "results", "table")):
         raise SpecError("result", f"expected the ComparisonResult of designkit.run, got {type(result).__name__}")
     folder = _check_destination(out_dir, result.loaded.spec.name)
-    model = build_comparison_model(result)
+    model = build_comparison_model(result, studies=studies)
     html = render_comparison_html(model).encode("utf-8")
     pdf = compile_comparison_pdf(model)
     for member in result.results:
-        write_report(member, folder, processes=processes)
+        write_report(member, folder, processes=processes, studies=studies)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

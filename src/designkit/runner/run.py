@@ -62,7 +62,7 @@ def base_dir(loaded: Any) -> Path | None:
 
 
 def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | None = None,
-             simulate: bool = True, actual: Any = None) -> Run:
+             simulate: bool = True, actual: Any = None, design: Any = None) -> Run:
     """Run a one-controller spec as :func:`designkit.pipeline.run` does.
 
     Parameters
@@ -79,6 +79,9 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     actual : Plant, optional
         The plant the loop runs on and is checked on, when it differs from the one the family designs for
         (``plant``): a study's other link mass or viscosity, which the controller is not told of.
+    design : Design, optional
+        The design to run instead of the family's synthesis of ``loaded`` (a scenario variant: the controller as
+        designed for another spec, run in this one's scenario).
 
     Returns
     -------
@@ -93,7 +96,7 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     start = time.perf_counter()
     spec = loaded.spec
     plant = plant_from_spec(spec.plant, base_dir(loaded)) if plant is None else plant
-    design = synthesize(spec, plant)
+    design = synthesize(spec, plant) if design is None else design
     if adjust is not None:
         design = adjust(design)
     plant = plant if actual is None else actual

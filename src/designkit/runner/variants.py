@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["changed_spec", "knob_value", "spec_value", "vary", "vary_plant", "vary_spec"]
+__all__ = ["changed_spec", "knob_value", "spec_value", "vary", "vary_plant", "vary_scenario", "vary_spec"]
 
 
 def _set(data: dict[str, Any], path: str, value: Any) -> None:
@@ -43,10 +43,24 @@ def changed_spec(loaded: Any, changes: Sequence[tuple[str, Any]]) -> Any:
 
     from designkit.schema.loader import parse_spec
 
-    data = yaml.safe_load(loaded.text)
+    data = _given(loaded)
     for path, value in changes:
         _set(data, path, _plain(value))
     return parse_spec(yaml.safe_dump(data, sort_keys=False, allow_unicode=True), path=loaded.path)
+
+
+def _given(loaded: Any) -> dict[str, Any]:
+    """What the spec of ``loaded`` gives, as data: its YAML, except for a spec built in Python (a comparison's member),
+    whose text is its canonical JSON (every default written out): there, only the fields it was given
+    (``exclude_unset``), since a default written out is not the same spec (``numerics.integrator`` given chooses the
+    integrator, left out lets the loop's poles choose it)."""
+    import yaml
+
+    from designkit.schema.loader import LoadedSpec
+
+    if loaded.text == LoadedSpec.from_spec(loaded.spec).text:
+        return loaded.spec.model_dump(mode="json", exclude_unset=True)
+    return yaml.safe_load(loaded.text)
 
 
 def _plain(value: Any) -> Any:
@@ -132,6 +146,16 @@ def vary_spec(result: Any, changes: Sequence[tuple[str, Any]]) -> Any:
 
     plant = result.plant if result.plant is not None else result.design.plant
     return run_spec(changed_spec(result.loaded, changes), plant=plant)
+
+
+def vary_scenario(result: Any, changes: Sequence[tuple[str, Any]]) -> Any:
+    """Run ``result``'s own design in its spec's scenario with the key paths of ``changes`` set (a load removed):
+    what the loop as designed does there, not what a design for that scenario would do (a design sized from the
+    load keeps its size); judged by the family's checks, the true plant unchanged."""
+    from designkit.runner.run import run_spec
+
+    plant = result.plant if result.plant is not None else result.design.plant
+    return run_spec(changed_spec(result.loaded, changes), plant=plant, design=result.design)
 
 
 def vary_plant(result: Any, values: dict[str, float]) -> Any:

@@ -175,12 +175,12 @@ class StudyContext:
 
     def new_budget(self) -> Any:
         """A :class:`~designkit.studies.core.budget.Budget` of :attr:`budget` seconds for this study, planning with
-        the spec's estimated variant cost."""
+        the spec's estimated variant cost (for a comparison, the costliest of its members' specs)."""
         from designkit.runner.run import base_dir
         from designkit.studies.core.budget import Budget, variant_estimate
 
-        result = self.result
-        return Budget(self.budget, variant_estimate(result.loaded.spec, base_dir(result.loaded)))
+        runs = getattr(self.result, "results", None) or (self.result,)
+        return Budget(self.budget, max(variant_estimate(r.loaded.spec, base_dir(r.loaded)) for r in runs))
 
 
 @dataclass(frozen=True)

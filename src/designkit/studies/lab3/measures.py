@@ -1,0 +1,77 @@
+"""What lab experiment 3 measures on every run, the same way for every controller: the command's chattering and the
+step's steady-state error, as :class:`~designkit.synthesis.knobs.Metric` values of a run (next to the family's own
+metrics and the generic ones, :func:`designkit.studies.core.metrics.metrics_of`).
+
+* **chattering**: the total variation ``TV(u) = sum |u[k+1] - u[k]|`` of the command (its unit) and its reversals per
+  second (sign changes of ``u[k+1] - u[k]``, steps below :data:`REVERSAL_TOL` ``max |u|`` ignored) (:func:`chattering`);
+* **steady-state error**: ``|x - xD|`` of the step at the end of the run
+  (:func:`designkit.verification.time_domain.response_metrics`), in the controlled position's unit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from designkit.synthesis.knobs import Metric
+
+__all__ = ["MEASURES", "REVERSAL_TOL", "Chatter", "chattering", "measures_of"]
+
+REVERSAL_TOL = 1e-9
+"""A command step below this fraction of ``max |u|`` is not a reversal."""
+
+
+@dataclass(frozen=True)
+class Chatter:
+    """Chattering of a run's command: ``total_variation`` (the command's unit), ``reversals`` and their ``rate``
+    (1/s)."""
+
+    total_variation: float
+    reversals: int
+    rate: float
+
+
+def chattering(sim: Any) -> Chatter:
+    """:class:`Chatter` of ``sim.u_command[:, 0]`` (module docstring); ``inf`` for a command that is not finite."""
+    t = np.asarray(sim.time, float)
+    u = np.asarray(sim.u_command, float).reshape(len(t), -1)[:, 0]
+    if not np.all(np.isfinite(u)):
+        return Chatter(math.inf, 0, math.inf)
+    du = np.diff(u)
+    tv = float(np.sum(np.abs(du)))
+    big = du[np.abs(du) > REVERSAL_TOL * max(float(np.max(np.abs(u))), 1e-300)]
+    reversals = int(np.count_nonzero(np.sign(big[1:]) != np.sign(big[:-1])))
+    return Chatter(tv, reversals, reversals / float(t[-1] - t[0]))
+
+
+def _steady(run: Any) -> float | None:
+    from designkit.verification.time_domain import response_metrics
+
+    sim = run.simulation
+    if sim is None or sim.kind != "step":
+        return None
+    req = run.loaded.spec.requirements
+    return response_metrics(sim, settling_band=req.settling_band if req is not None else 0.02).steady_state_error
+
+
+MEASURES = (
+    Metric("steady_state_error", "steady-state error", "rad", _steady, "|x − xD| of the step at the end of the run"),
+    Metric("command_variation", "total variation of the command", "", lambda run: chattering(run.simulation)
+           .total_variation if run.simulation is not None else None, "Σ |u[k+1] − u[k]| over the run"),
+    Metric("command_reversals", "reversals of the command per second", "1/s", lambda run: chattering(run.simulation)
+           .rate if run.simulation is not None else None, "sign changes of u[k+1] − u[k] per second"),
+)
+"""The experiment's own measures (module docstring), in the units of the task (the command's is the table's)."""
+
+
+def measures_of(run: Any, family: Any) -> tuple[Metric, ...]:
+    """The family's metrics and the generic ones (:func:`~designkit.studies.core.metrics.metrics_of`), then
+    :data:`MEASURES`."""
+    from designkit.studies.core.metrics import metrics_of
+
+    own = metrics_of(run, family)
+    keys = {m.key for m in own}
+    return own + tuple(m for m in MEASURES if m.key not in keys)

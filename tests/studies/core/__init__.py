@@ -1,0 +1,1 @@
+"""Tests of what every study is built from (src/designkit/studies/core)."""

@@ -1,0 +1,1 @@
+"""Tests of lab experiment 2, a comparison study (src/designkit/studies/lab2)."""
