@@ -33,8 +33,8 @@ def test_status_words_say_what_the_checks_say():
 def test_a_run_without_checks_says_why():
     diverged = Measured("mrac", "larger change", Row(1.0, 1.0, {}, "diverged", "the state leaves at t = 25 s"))
     refused = Measured("vsc", "no load", Row(1.0, 1.0, {}, "refused", "controller.relay_amplitude: give it"))
-    assert diverged.status == "diverged: the state leaves at t = 25 s"
-    assert refused.status == "refused by its family: controller.relay_amplitude: give it"
+    assert diverged.status == "diverges: the state leaves at t = 25 s"
+    assert refused.status == "is refused by its family: controller.relay_amplitude: give it"
 
 
 def test_the_plan_says_what_the_budget_left_out():

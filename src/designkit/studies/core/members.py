@@ -139,11 +139,12 @@ class Measured:
 
     @property
     def status(self) -> str:
-        """What happened, as a clause that follows "is": the checks' verdict (:func:`status_words`), or ``diverged:
-        ...``, ``refused by its family: ...``, ``not run: ...`` with the reason."""
+        """What happened, as a predicate: ``"is verified: ..."`` or ``"is not verified: ..."`` (:func:`status_words`),
+        ``"diverges: ..."``, ``"is refused by its family: ..."`` or ``"could not be run: ..."`` with the reason."""
         if self.row.outcome in ("verified", "failed", "undecided"):
-            return status_words(self.checks)
-        words = {"diverged": "diverged", "refused": "refused by its family"}.get(self.row.outcome, "not run")
+            return f"is {status_words(self.checks)}"
+        words = {"diverged": "diverges", "refused": "is refused by its family"}.get(self.row.outcome,
+                                                                                  "could not be run")
         return f"{words}: {self.row.detail}" if self.row.detail else words
 
     @property

@@ -97,7 +97,7 @@ def adaptation_question(runs: dict[str, list[tuple[Any, list[Measured]]]], by_la
                          f" after the change, departure {amount(best[1].get('rms_deviation'), eu)} RMS). ")
             text += " ".join(f"{knob.key} = {v}: re-converged {amount(x.get('reconvergence'), 's')} after the change, "
                              f"departure {amount(x.get('rms_deviation'), eu)} RMS, peak command "
-                             f"{amount(x.get('peak_command'), cu)}; {status}." for v, x, status in tried[1:])
+                             f"{amount(x.get('peak_command'), cu)}; the run {status}." for v, x, status in tried[1:])
             sentences.append(text)
     table = Table("Each controller with one adaptation parameter changed (the first row of each: the spec's value)",
                   ("controller", "parameter", "value", "checks", "RMS departure", "re-convergence", "peak command"),
@@ -169,7 +169,7 @@ def modifications_question(adaptive: tuple[Member, ...], scenario: dict[str, lis
                          amount(d.metrics.get("reconvergence"), "")))
             moved = "; ".join(f"{mt.label} {change(own.get(mt.key), d.metrics.get(mt.key), mt.unit)}"
                               for mt in metrics)
-            sentences.append(f"{m.label} with the {variant.label} ({variant.meaning}) is {d.status}. Against its own "
+            sentences.append(f"{m.label} with the {variant.label} ({variant.meaning}) {d.status}. Against its own "
                              "run: " + (f"{moved}; " if moved else "")
                              + f"re-converged {amount(d.metrics.get('reconvergence'), 's')} after the change (its own "
                                f"run: {amount(m.values.get('reconvergence'), 's')}).")
@@ -182,7 +182,7 @@ def modifications_question(adaptive: tuple[Member, ...], scenario: dict[str, lis
             for variant, d in through:
                 trows.append((variant.label, _outcome(d.row), *_metric_cells(metrics, d.metrics),
                               amount(d.metrics.get("reconvergence"), "")))
-                sentences.append(f"Through the larger change, {m.label} with the {variant.label} is {d.status}"
+                sentences.append(f"Through the larger change, {m.label} with the {variant.label} {d.status}"
                                  + (f"; it re-converged {amount(d.metrics.get('reconvergence'), 's')} after the change."
                                     if d.row.outcome != "diverged" else "."))
             tables.append(Table(f"{m.label} with each modification through the larger change ({larger_words})",
@@ -210,7 +210,7 @@ def perturbation_question(runs: list[Perturbed], value: float, onset: float, eu:
         words += (f" {best.measured.label} is the less sensitive: it moves by {amount(best.peak, eu)} at most against "
                   f"{amount(worst.peak, eu)} for {worst.measured.label}.")
     sentences = [words] + [f"{p.measured.label}: over the last period the perturbation leaves {amount(p.final, eu)}; "
-                           f"the perturbed run is {p.measured.status}." for p in runs]
+                           f"the perturbed run {p.measured.status}." for p in runs]
     rows = tuple((p.measured.label, amount(p.rms, eu), amount(p.peak, eu), amount(p.recovery, "s"),
                   amount(p.final, eu), p.measured.row.outcome) for p in runs)
     table = Table("Departure |x − x0| from the unperturbed run after the perturbation step",
@@ -262,7 +262,7 @@ def robustness_question(runs: list[Measured], larger_words: str, eu: str) -> Que
         rows.append((d.label, d.row.outcome if not d.row.detail else f"{d.row.outcome}: {d.row.detail}",
                      amount(d.metrics.get("rms_deviation"), eu), amount(d.metrics.get("reconvergence"), "s"),
                      "yes" if bounded else "no"))
-        sentences.append(f"{d.label}: {d.status}" + (f"; departure {amount(d.metrics.get('rms_deviation'), eu)} RMS, "
+        sentences.append(f"{d.label} {d.status}" + (f"; departure {amount(d.metrics.get('rms_deviation'), eu)} RMS, "
                                                      f"re-converged {amount(d.metrics.get('reconvergence'), 's')} "
                                                      "after the change." if bounded else "."))
     table = Table("Each controller through the larger change",

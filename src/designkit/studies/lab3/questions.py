@@ -63,7 +63,7 @@ def importance_question(runs: dict[str, list[tuple[Any, list[Measured]]]], by_la
             for d in done:
                 v = d.metrics
                 rows.append(cells(label, f"{knob.key} ×{fmt_number(d.row.factor, 3)}", _outcome(d.row), v))
-                text = f"{knob.meaning} ×{fmt_number(d.row.factor, 3)} is {d.status}"
+                text = f"{knob.meaning} ×{fmt_number(d.row.factor, 3)}: the run {d.status}"
                 if d.row.outcome in ("verified", "failed", "undecided"):
                     moved = [f"{what} {amount(base.get(key), u)} → {amount(v.get(key), u)}" for what, key, u in
                              (("settling", "settling_time", "s"), ("peak command", "command_peak", cu),
@@ -156,7 +156,7 @@ def perturbation_question(effects: dict[str, LoadEffect | None], eu: str) -> Que
                      else "its family predicts no static offset in closed form")
         sentences.append(f"{label}: the {amount(e.value, 'N*m')} load from {amount(e.onset, 's')} moves the controlled "
                          f"position by {amount(e.peak, eu, 4)} at most and leaves {amount(e.final, eu, 4)} at the end "
-                         f"of the run; {predicted}. The run without the load is {e.measured.status}.")
+                         f"of the run; {predicted}. The run without the load {e.measured.status}.")
     table = Table("The load step's effect: |x − x0| against the same design's run without it",
                   ("controller", "largest", "left at the end", "predicted static offset"), tuple(rows))
     return Question("How sensitive is each to an external perturbation?", tuple(sentences), (table,) if rows else ())
