@@ -12,7 +12,7 @@ say it in words.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from designkit.display.section import ReportSection
@@ -41,6 +41,8 @@ class Row:
         One of :data:`OUTCOMES`.
     detail : str
         The checks that failed or are undecided (their labels), or why the variant was not run.
+    seconds : float
+        Wall time of the variant's run (s); not part of the row's value.
     """
 
     factor: float
@@ -48,6 +50,7 @@ class Row:
     metrics: Mapping[str, float | None]
     outcome: str
     detail: str = ""
+    seconds: float = field(default=0.0, compare=False)
 
     def __post_init__(self) -> None:
         if self.outcome not in OUTCOMES:
@@ -161,6 +164,9 @@ class StudyContext:
         Seconds of work the study may spend on variants.
     earlier : tuple of StudyResult
         What the studies before this one (in report order) returned: a lab answer cites the gain study's rows.
+    processes : int
+        2 shares each batch of independent variants with a forked child on a second core
+        (:func:`designkit.processes.run_tasks`); the rows are the same.
     """
 
     result: Any
@@ -168,6 +174,17 @@ class StudyContext:
     settings: Any = None
     budget: float = 15.0
     earlier: tuple[Any, ...] = ()
+    processes: int = 1
+
+    def run_all(self, tasks: Any, budget: Any) -> list[Any]:
+        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, on :attr:`processes` cores;
+        each row's wall time charged to ``budget``."""
+        from designkit.processes import run_tasks
+
+        rows = run_tasks(list(tasks), processes=self.processes)
+        for row in rows:
+            budget.record(row.seconds)
+        return rows
 
     def study(self, name: str) -> Any:
         """The result of the earlier study ``name``, or None."""
