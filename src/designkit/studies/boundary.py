@@ -182,7 +182,8 @@ def _search(knob: Any, current: float | None, settings: BoundarySettings | None,
 
 
 MIN_RUNS = 3
-"""Fewest runs a search makes; a budget that fits fewer says what the search would need instead."""
+"""Fewest runs a search makes (the range's ends and middle), whatever the budget: never skipped, and a budget that
+fits fewer says what a search needs."""
 
 
 @dataclass(frozen=True)
@@ -221,12 +222,14 @@ def _entry(ctx: StudyContext, knob: Any, budget: Budget, metrics: tuple) -> tupl
     current = knob_value(knob, result.loaded.spec, result.design)
     axis = _axis(ctx, knob, current)
     room = budget.capacity()
-    if room < MIN_RUNS:
-        need = len(search_grid(axis.low, axis.high, 1))
-        words = (f"The search over {axis.name} needs at least {need} runs of about {fmt_number(budget.per_run, 2)} s "
-                 f"each (one a decade); the studies' budget of {fmt_number(ctx.budget, 3)} s fits {room}: it was not "
-                 f"run. Give studies.budget ≥ {fmt_number(need * budget.per_run * 1.2, 2)} s to locate the boundary.")
-        return Entry(axis.name, axis.unit, ()), (words,), (), f"{knob.key}: not run (budget)"
+    if room < MIN_RUNS:  # never skipped: the range's ends and middle, said so
+        budget = dataclasses.replace(budget, seconds=MIN_RUNS * budget.estimate)
+        cut = (f"{knob.key}: three points only (the range's ends and middle): a search of one point a decade needs "
+               f"{len(search_grid(axis.low, axis.high, 1))} runs of about {fmt_number(budget.per_run, 2)} s, more "
+               f"than the studies' budget of {fmt_number(ctx.budget, 3)} s (raise studies.budget to locate the "
+               "boundary)")
+    else:
+        cut = ""
     base = float(current) if current is not None and np.ndim(current) == 0 else None
 
     def run(g: float) -> Row:
@@ -240,6 +243,8 @@ def _entry(ctx: StudyContext, knob: Any, budget: Budget, metrics: tuple) -> tupl
 
     primary = metrics[0] if metrics else None
     rows, pick, nu, reduced = search(axis.low, axis.high, run_many, budget, primary)
+    if cut:
+        reduced = cut
     sentences = _sentences(knob, axis, rows, pick, nu, primary, result, base)
     setting = None
     if pick is not None and knob.path and base is not None:
