@@ -203,8 +203,9 @@ def _run(ctx: StudyContext) -> StudyResult:
                            "passes in the spec's run.")
         finite = [(s, k) for s, k in ranked if math.isfinite(s)]
         if finite and finite[0][0] > 0:
-            summary.append(f"Of the variants that keep every check as it was, the {primary.label} is most sensitive "
-                           f"to {finite[0][1]}" + (f" and least to {finite[-1][1]}" if len(finite) > 1 else "") + ".")
+            summary.append(f"Among the knobs whose variants keep every required check as in the spec's run, the "
+                           f"{primary.label} is most sensitive to {finite[0][1]}"
+                           + (f" and least to {finite[-1][1]}" if len(finite) > 1 else "") + ".")
     locus_sentences, figures = _locus(ctx, [k for k, *_ in kept if k.gain])
     if unset:
         questions.append(Question("Which knobs were not varied?", (
