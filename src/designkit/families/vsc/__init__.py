@@ -63,7 +63,7 @@ from designkit.families.vsc.surface import (
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import Knob
+from designkit.synthesis.knobs import COMMAND_VARIATION, SETTLED_ERROR, Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -291,4 +291,5 @@ FAMILY = Family(
            Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
                 path="controller.margin")),
     traits=("switching",),
+    metrics=(SETTLED_ERROR, COMMAND_VARIATION),
 )
