@@ -391,9 +391,9 @@ class Design:
 
         Examples
         --------
-        >>> from designkit.families.pid_servo import design
+        >>> from designkit.synthesis.servo_loop import servo_design
         >>> from designkit.models.link import LinkPlant
-        >>> sys = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).to_control()
+        >>> sys = servo_design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0, kind="servo").to_control()
         >>> sys.input_labels[:1], sys.output_labels
         (['xD'], ['x1', 'u'])
         """
@@ -468,9 +468,9 @@ class Design:
 
         Examples
         --------
-        >>> from designkit.families.pid_servo import design
+        >>> from designkit.synthesis.servo_loop import servo_design
         >>> from designkit.models.link import LinkPlant
-        >>> L = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).loop_transfer()
+        >>> L = servo_design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0, kind="servo").loop_transfer()
         >>> [round(float(c), 9) for c in L.num_array[0][0]], [round(float(c), 9) for c in L.den_array[0][0]]
         ([27.0, 200.0, 400.0], [1.0, 2.0, 0.0, 0.0])
         """

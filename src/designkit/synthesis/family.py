@@ -108,6 +108,10 @@ class Family:
         ``result -> Mapping``: top-level fields it adds to ``synth --json`` / ``verify --json`` (what its
         results are, for checking from outside: an adaptive law's initial and final parameters, a learning
         law's error per trial), JSON types only.
+    per_joint_fields : tuple of str
+        Names of its ``controller`` fields that hold one value for every joint or a list with one per joint (or per
+        task coordinate, as many): the loader refuses a list of another length before the plant's model is built
+        (:func:`designkit.schema.joint_count.check_joint_lists`).
     """
 
     kind: str
@@ -125,6 +129,7 @@ class Family:
     diagnoses: tuple[Callable[[Any, Any], Any], ...] = ()
     motion: Callable[[Any, Design], Any] | None = None
     json: Callable[[Any], Any] | None = None
+    per_joint_fields: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):

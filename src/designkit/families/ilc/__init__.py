@@ -33,7 +33,6 @@ import casadi as ca
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
 
-from designkit.families import computed_torque as ct
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
 from designkit.families.ilc.figures import error_norm_figure, learned_figure, tracking_error_figure
@@ -41,13 +40,15 @@ from designkit.families.ilc.learning import check_size, lifted_of, operator_of, 
 from designkit.families.ilc.lifted import lifted_model
 from designkit.families.ilc.operators import contraction, learning_operator
 from designkit.simulation.trials import MAX_TRIALS, Learning
-from designkit.spec.fields import Finite, Section
+from designkit.spec.computed_torque import PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
+from designkit.spec.fields import Finite, Section, joint_values
 from designkit.spec.ranges import Ranged, RangedInt
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import TRAJECTORY_REFERENCES, Display, Family
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.model import controller_model
+from designkit.synthesis.pole_placement import error_gains
 
 KIND = "ilc"
 
@@ -82,7 +83,7 @@ class LearningSpec(Section):
         return v
 
 
-class ILCSpec(ct.ComputedTorqueSpec):
+class ILCSpec(ComputedTorqueSpec):
     """Computed torque with a learned acceleration ``d_k``, updated between trials by ``d_{k+1} = d_k + Q e_k``.
 
     The error poles and the controller's ``model`` as for ``computed_torque``; ``trials`` (1 to 200, default
@@ -130,14 +131,13 @@ def synthesize(spec: Any, plant: Any) -> Design:
     ctrl = spec.controller
     model = controller_model(plant, ctrl.model)
     n = model.n_joints
-    pairs = ct.error_poles(spec, n)
-    K1 = tuple(float((p1 * p2).real) for p1, p2 in pairs)
-    K2 = tuple(float((-(p1 + p2)).real) for p1, p2 in pairs)
+    pairs = error_poles(spec, n)
+    K1, K2 = error_gains(pairs)
     feedback = [Gain("K1", list(K1), "1/s^2", "position error gain (wn^2)"),
                 Gain("K2", list(K2), "1/s", "velocity error gain (2 zeta wn)")]
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
-        q0 = np.array(ct.joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
+        q0 = np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
     design = Design(kind=KIND, plant=model, gains=Gains.of(feedback), poles=tuple(p for pr in pairs for p in pr),
                     reference="trajectory", extra={"codegen_terms": ["D_hat", "h_hat"]})
     design = with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
@@ -217,6 +217,7 @@ FAMILY = Family(
     figures=(error_norm_figure, tracking_error_figure, learned_figure),
     diagnoses=(diagnose,),
     json=_json,
+    per_joint_fields=PER_JOINT_FIELDS,
 )
 
 __all__ = ["FAMILY", "ILCSpec", "law", "synthesize"]
