@@ -36,7 +36,7 @@ from pydantic import Field, ValidationInfo, field_validator
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
 from designkit.families.ilc.figures import error_norm_figure, learned_figure, tracking_error_figure
-from designkit.families.ilc.learning import check_size, lifted_of, operator_of, trial_grid, update_rule
+from designkit.families.ilc.learning import IlcData, check_size, lifted_of, operator_of, trial_grid, update_rule
 from designkit.families.ilc.lifted import lifted_model
 from designkit.families.ilc.operators import contraction, learning_operator
 from designkit.simulation.trials import MAX_TRIALS, Learning
@@ -156,8 +156,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
     else:
         name, unit, meaning = "gamma", "1/s^2", "learning gain of the P-type update (one-step advance)"
         value, source = float(learning.gain), "controller.learning.gain"
-    info = {"samples": timing.n_samples, "dt": timing.dt, "integrator": timing.integrator, "trials": ctrl.trials,
-            "learning": learning.kind, "value": value, "value_source": source}
+    info = IlcData(samples=timing.n_samples, dt=timing.dt, integrator=timing.integrator, trials=ctrl.trials,
+                   learning=learning.kind, value=value, value_source=source, model_differs=ctrl.model is not None)
     notes = [f"Learning: {learning.kind.replace('_', '-')} update, {name} = {value:.6g} {unit} ({source}); "
              f"{ctrl.trials} trials of {timing.n_samples} samples (dt = {timing.dt:g} s, {timing.integrator})."]
     if ctrl.model is not None:
@@ -168,7 +168,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                        "the true plant and measure the difference.")
     design = dataclasses.replace(
         design, gains=Gains.of([*feedback, Gain(name, value, unit, meaning)]), notes=tuple(notes),
-        extra={**design.extra, "model_differs": ctrl.model is not None, "lifted": info},
+        data=info,
         formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
                   "u = M̂(q) (a* + d_k) + ĥ(q, q̇)  (d_k the trial's learned acceleration)",
                   "e_k = H (d − d_k),  H(s) = 1/(s² + K2 s + K1) per joint when M̂ = M",
