@@ -19,6 +19,7 @@ model, the simulation runs on the true plant, and the checks measure what the mi
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import casadi as ca
@@ -27,7 +28,7 @@ import numpy as np
 from designkit.spec.computed_torque import FRICTION_LAYER, PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
 from designkit.spec.fields import joint_values
 from designkit.synthesis.closed_loop import with_closed_loop
-from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.friction_layer import DEFAULT_LAYER, coulomb_levels, layer_formulas, layer_words, smoothed
 from designkit.synthesis.law import Law, stateless_law
@@ -57,9 +58,25 @@ class ComputedTorqueLawSpec(ComputedTorqueSpec):
     friction_layer: FRICTION_LAYER = DEFAULT_LAYER
 
 
+@dataclass(frozen=True)
+class ComputedTorqueData(FamilyData):
+    """The computed-torque family's design data (:attr:`~designkit.synthesis.design.Design.data`).
+
+    Attributes
+    ----------
+    friction_layer : float
+        The boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``).
+    model_differs : bool
+        Whether the controller's model differs from the true plant (``controller.model`` given).
+    """
+
+    friction_layer: float = 0.0
+    model_differs: bool = False
+
+
 def friction_layer_of(design: Design) -> float:
     """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``)."""
-    return float(design.extra.get("friction_layer", 0.0))
+    return float(design.data.friction_layer)
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -115,8 +132,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
                   "ë + K2 ė + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)",
                   *layer_formulas(fc, layer)),
         notes=tuple(notes),
-        extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"],
-               "friction_layer": layer},
+        extra={"codegen_terms": ["D_hat", "h_hat"]},
+        data=ComputedTorqueData(friction_layer=layer, model_differs=spec.controller.model is not None),
     )
     return with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
                             field="simulation.initial_position")

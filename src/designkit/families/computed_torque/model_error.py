@@ -88,7 +88,7 @@ def _model_based(result: Any) -> bool:
     from designkit.families.computed_torque import KIND
 
     design, plant = result.design, result.plant
-    if design.kind != KIND or plant is None or plant is design.plant or not (design.extra or {}).get("model_differs"):
+    if design.kind != KIND or plant is None or plant is design.plant or not design.data.model_differs:
         return False
     if not all(hasattr(p, "robot") for p in (plant, design.plant)) or result.simulation is None:
         return False
