@@ -15,6 +15,7 @@ family's declaration.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from pydantic import field_validator, model_validator
@@ -24,7 +25,7 @@ from designkit.spec.fields import Finite
 from designkit.spec.ranges import Ranged
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
-from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.law import Law
 from designkit.synthesis.pid import GAIN_INFO
@@ -82,6 +83,35 @@ def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, n
     return servo_design(plant, poles, zero, kind=KIND, notes=notes, extra=extra)
 
 
+@dataclass(frozen=True)
+class ElasticServoData(FamilyData):
+    """The elastic joint's servo design data (:attr:`~designkit.synthesis.design.Design.data`).
+
+    Attributes
+    ----------
+    rigid_Km, rigid_tau : float
+        The rigid approximation the gains are placed on ((rad/s) per input unit, s).
+    requested_poles : tuple of complex
+        The poles placed on the rigid approximation (1/s).
+    zero : float
+        The zero of ``x3/xD`` there (1/s).
+    loop_poles : tuple of complex
+        The poles of the loop with the elastic transmission (1/s).
+    elastic_mode_damping : float
+        The damping ratio of its most oscillatory pole (dimensionless).
+    controlled : str
+        What the servo controls, in words.
+    """
+
+    rigid_Km: float
+    rigid_tau: float
+    requested_poles: tuple[complex, ...]
+    zero: float
+    loop_poles: tuple[complex, ...]
+    elastic_mode_damping: float
+    controlled: str
+
+
 def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, notes: tuple[str, ...] = (),
                    extra: dict | None = None) -> Design:
     """The PID servo of the **load** position ``x3`` (rate feedback on the load speed ``x4``) of the elastic joint
@@ -91,8 +121,8 @@ def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, 
     The loop with the transmission has five poles (the integral, the link and the lightly damped elastic mode),
     not the three requested: the design carries no requested poles (``pole_placement`` and ``routh_hurwitz`` are
     statements about the rigid link), and the generic checks judge the true loop (``lyapunov``, ``robustness``,
-    ``loop_margins``, ``designed_loop``, ``time_domain``); its poles are in the notes and in
-    ``extra["pid_servo_elastic"]``.
+    ``loop_margins``, ``designed_loop``, ``time_domain``); its poles are in the notes and in its
+    :class:`ElasticServoData`.
     """
     import numpy as np
 
@@ -117,12 +147,12 @@ def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, 
             f"{', '.join(f'{complex(p).real:.4g}' for p in poles)} 1/s and zero {z:.4g} 1/s there. With the elastic "
             f"transmission the loop has the poles {fmt} 1/s (elastic mode damping {damping:.3g}); "
             + ("it is stable." if slowest < 0 else "it is UNSTABLE: slow the poles down."))
-    info = {"rigid": {"Km": Km_r, "tau": tau_r}, "requested_poles": [[complex(p).real, complex(p).imag] for p in poles],
-            "zero": z, "loop_poles": [[complex(p).real, complex(p).imag] for p in true_poles],
-            "elastic_mode_damping": damping, "controlled": "load position x3 (rate feedback on x4)"}
+    info = ElasticServoData(rigid_Km=Km_r, rigid_tau=tau_r, requested_poles=tuple(complex(p) for p in poles), zero=z,
+                            loop_poles=tuple(complex(p) for p in true_poles), elastic_mode_damping=damping,
+                            controlled="load position x3 (rate feedback on x4)")
     import dataclasses
 
-    return dataclasses.replace(d, notes=(*d.notes, note), extra={**d.extra, "pid_servo_elastic": info})
+    return dataclasses.replace(d, notes=(*d.notes, note), data=info)
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
