@@ -75,8 +75,10 @@ class ComputedTorqueData(FamilyData):
 
 
 def friction_layer_of(design: Design) -> float:
-    """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``)."""
-    return float(design.data.friction_layer)
+    """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``, also for a design
+    without :class:`ComputedTorqueData`, such as the learning family's whose feedback is this law)."""
+    data = design.data
+    return float(data.friction_layer) if isinstance(data, ComputedTorqueData) else 0.0
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
