@@ -125,6 +125,10 @@ class Family:
         ``(design, gains, anti_windup) -> Design``: the design with other gains (its law, its closed loop and
         its per-joint loops rebuilt), for a family whose design the generic rebuild
         (:func:`designkit.runner.variants.with_gains`) cannot redo, e.g. one with per-joint loops.
+    per_joint_fields : tuple of str
+        Names of its ``controller`` fields that hold one value for every joint or a list with one per joint (or per
+        task coordinate, as many): the loader refuses a list of another length before the plant's model is built
+        (:func:`designkit.schema.joint_count.check_joint_lists`).
     """
 
     kind: str
@@ -146,6 +150,7 @@ class Family:
     metrics: tuple[Metric, ...] = ()
     traits: frozenset[str] = frozenset()
     regain: Callable[[Design, Any, Any], Design] | None = None
+    per_joint_fields: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):
