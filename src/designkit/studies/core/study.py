@@ -11,6 +11,7 @@ say it in words.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -62,8 +63,11 @@ class Row:
         return self.outcome == "verified"
 
     def to_json(self) -> dict[str, Any]:
+        """JSON types only: a metric that is infinite (a run that diverged, a response that never settles) or
+        undefined is ``null``, the outcome and detail say which."""
         value = [_json(v) for v in self.value] if isinstance(self.value, tuple) else _json(self.value)
-        return {"factor": self.factor, "value": value, "metrics": dict(self.metrics), "outcome": self.outcome,
+        metrics = {k: (v if v is not None and math.isfinite(v) else None) for k, v in self.metrics.items()}
+        return {"factor": self.factor, "value": value, "metrics": metrics, "outcome": self.outcome,
                 "detail": self.detail}
 
 
