@@ -37,7 +37,7 @@ def main() -> None:
     import designkit as dk
     from designkit.analysis.diagnosis import diagnose
     from designkit.analysis.diagnosis.fixes import check_fixes
-    from designkit.analysis.diagnosis.resimulate import changed_spec
+    from designkit.runner.variants import changed_spec
 
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=3)

@@ -40,13 +40,12 @@ def test_elastic_design_loop_poles_and_stiff_limit():
     Acl[:4, 3] -= K2 * b
     Acl[:4, 4] = -K3 * b
     Acl[4, 2] = 1.0
-    got = np.sort_complex(np.array([complex(*p) for p in d.extra["pid_servo_elastic"]["loop_poles"]]))
+    got = np.sort_complex(np.array(d.data.loop_poles))
     assert got == pytest.approx(np.sort_complex(np.linalg.eigvals(Acl)), rel=1e-8)
     assert max(got.real) < 0
     # with a stiff transmission the same gains place the requested poles (the rigid model is the limit)
     stiff = elastic_design(ElasticJointPlant(elastic_link(KR=1e7)), poles, -5.5)
-    near = sorted(complex(*p).real for p in stiff.extra["pid_servo_elastic"]["loop_poles"]
-                  if abs(complex(*p)) < 100)
+    near = sorted(p.real for p in stiff.data.loop_poles if abs(p) < 100)
     assert near == pytest.approx(sorted(poles), abs=2e-3)
 
 

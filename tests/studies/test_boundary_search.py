@@ -14,16 +14,19 @@ from designkit.studies.core.study import Row
 from designkit.synthesis.knobs import Metric
 
 
-def _planted(passing, metric=lambda v: abs(math.log10(v) - 1.5)):
-    """``run(value) -> Row``: verified where ``passing(value)``, with a metric; counts its calls."""
+def _planted(passing, metric=lambda v: abs(math.log10(v) - 1.5), budget=None):
+    """``run_many(values) -> rows``: verified where ``passing(value)``, with a metric; counts its calls and charges
+    ``budget`` one second a run."""
     calls = []
 
     def run(v: float) -> Row:
         calls.append(v)
+        if budget is not None:
+            budget.record(1.0)
         ok = passing(v)
         return Row(1.0, float(v), {"m": metric(v)}, "verified" if ok else "failed", "" if ok else "planted")
 
-    return run, calls
+    return (lambda values: [run(v) for v in values]), calls
 
 
 METRIC = Metric("m", "planted metric", "", lambda r: None)
@@ -75,14 +78,9 @@ def test_the_grid_is_anchored_on_decades():
 
 
 def test_a_small_budget_thins_the_grid_and_says_so():
-    run, calls = _planted(lambda v: v < 50.0)
     budget = Budget(5.0, 1.0)  # five runs of 1 s
-
-    def counted(v: float) -> Row:
-        budget.record(1.0)
-        return run(v)
-
-    rows, _, _, reduced = search(1.0, 1e6, counted, budget, METRIC)
+    run, calls = _planted(lambda v: v < 50.0, budget=budget)
+    rows, _, _, reduced = search(1.0, 1e6, run, budget, METRIC)
     assert "budget" in reduced
     assert len(calls) <= 5 + 1  # the grid fits the budget (a thinned grid keeps at least its two ends)
 

@@ -47,3 +47,4 @@ def test_a_valid_section_runs_the_study_as_asked(tmp_path, capsys):
     assert [s["parameter"] for s in gains] == ["K3"]
     assert [r["factor"] for r in gains[0]["rows"]] == [0.5, 1.0]
     assert all(set(r) == {"factor", "value", "metrics", "outcome", "detail"} for r in gains[0]["rows"])
+    json.dumps(payload["studies"], allow_nan=False)  # JSON's own numbers: an infinite metric is null

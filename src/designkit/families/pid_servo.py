@@ -7,12 +7,15 @@ integral ``x3' = x1 - xD``::
 
 Gains from three closed-loop poles and the zero of ``x1/xD`` by matching the characteristic
 polynomial (derivation in :mod:`designkit.synthesis.pid`); K1 N*m/rad, K2 N*m*s/rad,
-K3 N*m/(rad*s), K4 s.
+K3 N*m/(rad*s), K4 s.  The loop (gains, characteristic polynomial, law, closed loop) is
+:mod:`designkit.synthesis.servo_loop`'s; this module adds the spec, the elastic joint and the
+family's declaration.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, Literal
 
 from pydantic import field_validator, model_validator
@@ -22,21 +25,15 @@ from designkit.spec.fields import Finite
 from designkit.spec.ranges import Ranged
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
-from designkit.synthesis.design import Characteristic, Design, Gain, Gains
+from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob, Metric, gain_knobs
-from designkit.synthesis.law import Law, integral_law
+from designkit.synthesis.law import Law
+from designkit.synthesis.pid import GAIN_INFO
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
+from designkit.synthesis.servo_loop import servo_design, servo_law
 
 KIND = "pid_servo"
-
-GAIN_INFO = {
-    "K1": ("N*m/rad", "proportional"),
-    "K2": ("N*m*s/rad", "derivative (rate feedback)"),
-    "K3": ("N*m/(rad*s)", "integral"),
-    "K4": ("s", "reference feedforward (places the zero)"),
-}
-
 
 class PidServoSpec(PoleRequirementsController):
     """PID position servo ``u = -K1 (x1 - xD) - K2 x2 - K3 int(x1 - xD) + K3 K4 xD``.
@@ -64,40 +61,16 @@ class PidServoSpec(PoleRequirementsController):
         return self
 
 
-def gains(plant: Any, poles: Sequence[complex], zero: float | None) -> Gains:
-    """The servo's named gains on the link ``plant`` (see :func:`designkit.synthesis.pid.servo_gains`)."""
-    values = pid.servo_gains(plant, poles, zero)
-    return Gains.of(Gain(k, v, *GAIN_INFO[k]) for k, v in values.items())
-
-
-CHARACTERISTIC_LABELS = ("tau", "1 + Km K2", "Km K1", "Km K3")
-
-
-def characteristic() -> Characteristic:
-    """``tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3`` as a function of ``(Km, tau)``."""
-    return Characteristic(
-        parameters=("Km", "tau"),
-        coefficients=lambda g, Km, tau: pid.servo_characteristic(dict(g), Km, tau),
-        labels=CHARACTERISTIC_LABELS,
-        gain_labels={"a1": ("K2", "K2 > -1/Km"), "a2": ("K1", "K1 > tau K3/(1 + Km K2)"), "a3": ("K3", "K3 > 0")},
-        linear_conditions=lambda g: pid.servo_conditions(dict(g)),
-    )
-
-
 def law(design: Design, anti_windup: Any = None) -> Law:
-    """``u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD``, ``x3' = x1 - xD`` (N*m)."""
-    K1, K2, K3, K4 = (float(design.gains[k]) for k in ("K1", "K2", "K3", "K4"))
-    v = design.plant.velocities[0]
-    return integral_law(
-        KIND, design.plant, [K3], anti_windup,
-        lambda y, xc, r, e: -K1 * e[0] - K2 * y[v] - K3 * xc[0] + K3 * K4 * r[0],
-        {"gains": design.gains.to_json()},
-    )
+    """``u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD``, ``x3' = x1 - xD`` (N*m;
+    :func:`~designkit.synthesis.servo_loop.servo_law`)."""
+    return servo_law(design, anti_windup)
 
 
 def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, notes: tuple[str, ...] = (),
            extra: dict | None = None) -> Design:
-    """The PID servo of the link ``plant`` placing ``poles`` (1/s) and ``zero`` (1/s).
+    """The PID servo of the link ``plant`` placing ``poles`` (1/s) and ``zero`` (1/s)
+    (:func:`~designkit.synthesis.servo_loop.servo_design`).
 
     Examples
     --------
@@ -108,18 +81,36 @@ def design(plant: Any, poles: Sequence[complex], zero: float | None = None, *, n
     >>> sorted(round(float(p.real), 6) for p in d.closed_loop.poles)
     [-20.0, -5.0, -4.0]
     """
-    g = gains(plant, poles, zero)
-    notes_out = list(notes)
-    if zero is None:
-        z = -float(g["K3"]) / float(g["K1"])
-        notes_out.append(f"No zero given: K4 = 0, so x1/xD has its zero at -K3/K1 = {z:.6g} 1/s.")
-    else:
-        z = zero
-    d = Design(
-        kind=KIND, plant=plant, gains=g, poles=tuple(poles), zeros=(complex(z),), reference="step",
-        characteristic=characteristic(), formulas=pid.SERVO_FORMULAS, notes=tuple(notes_out), extra=extra or {},
-    )
-    return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
+    return servo_design(plant, poles, zero, kind=KIND, notes=notes, extra=extra)
+
+
+@dataclass(frozen=True)
+class ElasticServoData(FamilyData):
+    """The elastic joint's servo design data (:attr:`~designkit.synthesis.design.Design.data`).
+
+    Attributes
+    ----------
+    rigid_Km, rigid_tau : float
+        The rigid approximation the gains are placed on ((rad/s) per input unit, s).
+    requested_poles : tuple of complex
+        The poles placed on the rigid approximation (1/s).
+    zero : float
+        The zero of ``x3/xD`` there (1/s).
+    loop_poles : tuple of complex
+        The poles of the loop with the elastic transmission (1/s).
+    elastic_mode_damping : float
+        The damping ratio of its most oscillatory pole (dimensionless).
+    controlled : str
+        What the servo controls, in words.
+    """
+
+    rigid_Km: float
+    rigid_tau: float
+    requested_poles: tuple[complex, ...]
+    zero: float
+    loop_poles: tuple[complex, ...]
+    elastic_mode_damping: float
+    controlled: str
 
 
 def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, notes: tuple[str, ...] = (),
@@ -131,8 +122,8 @@ def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, 
     The loop with the transmission has five poles (the integral, the link and the lightly damped elastic mode),
     not the three requested: the design carries no requested poles (``pole_placement`` and ``routh_hurwitz`` are
     statements about the rigid link), and the generic checks judge the true loop (``lyapunov``, ``robustness``,
-    ``loop_margins``, ``designed_loop``, ``time_domain``); its poles are in the notes and in
-    ``extra["pid_servo_elastic"]``.
+    ``loop_margins``, ``designed_loop``, ``time_domain``); its poles are in the notes and in its
+    :class:`ElasticServoData`.
     """
     import numpy as np
 
@@ -157,12 +148,12 @@ def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, 
             f"{', '.join(f'{complex(p).real:.4g}' for p in poles)} 1/s and zero {z:.4g} 1/s there. With the elastic "
             f"transmission the loop has the poles {fmt} 1/s (elastic mode damping {damping:.3g}); "
             + ("it is stable." if slowest < 0 else "it is UNSTABLE: slow the poles down."))
-    info = {"rigid": {"Km": Km_r, "tau": tau_r}, "requested_poles": [[complex(p).real, complex(p).imag] for p in poles],
-            "zero": z, "loop_poles": [[complex(p).real, complex(p).imag] for p in true_poles],
-            "elastic_mode_damping": damping, "controlled": "load position x3 (rate feedback on x4)"}
+    info = ElasticServoData(rigid_Km=Km_r, rigid_tau=tau_r, requested_poles=tuple(complex(p) for p in poles), zero=z,
+                            loop_poles=tuple(complex(p) for p in true_poles), elastic_mode_damping=damping,
+                            controlled="load position x3 (rate feedback on x4)")
     import dataclasses
 
-    return dataclasses.replace(d, notes=(*d.notes, note), extra={**d.extra, "pid_servo_elastic": info})
+    return dataclasses.replace(d, notes=(*d.notes, note), data=info)
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
@@ -174,8 +165,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
     if plant.kind == "elastic_joint":
-        from designkit.families.state_regulator.gains import check_controllable
-        from designkit.families.vsc.surface import linear_model
+        from designkit.synthesis.state_space import check_controllable, linear_model
 
         model = linear_model(plant)
         unc = spec.plant.uncertainty
@@ -192,16 +182,14 @@ def strategy(result: Any) -> tuple[str, ...]:
 
     d = result.design
     poles, zero = fmt_poles(d.poles), fmt_number(d.zeros[0].real if d.zeros else None, 4)
-    info = d.extra.get("pid_servo_elastic")
+    info = d.data if isinstance(d.data, ElasticServoData) else None
     if info is not None:
-        rigid = info["rigid"]
-        poles, zero = fmt_poles(complex(a, b) for a, b in info["requested_poles"]), fmt_number(info["zero"], 4)
+        poles, zero = fmt_poles(info.requested_poles), fmt_number(info.zero, 4)
         return (f"u = −K1 (x3 − xD) − K2 x4 − K3 ∫(x3 − xD) dt + K3 K4 xD on the link's position and speed: its gains "
                 f"place the poles {poles} 1/s and the zero {zero} 1/s on the rigid approximation (Km = "
-                f"{fmt_number(rigid['Km'], 4)}, τ = {fmt_number(rigid['tau'], 4)} s) by matching the characteristic "
-                f"polynomial; with the elastic transmission the loop's poles are "
-                f"{fmt_poles(complex(a, b) for a, b in info['loop_poles'])} 1/s. Its integral action removes a "
-                "constant load's offset.",)
+                f"{fmt_number(info.rigid_Km, 4)}, τ = {fmt_number(info.rigid_tau, 4)} s) by matching the "
+                f"characteristic polynomial; with the elastic transmission the loop's poles are "
+                f"{fmt_poles(info.loop_poles)} 1/s. Its integral action removes a constant load's offset.",)
     return (f"u = −K1 (x1 − xD) − K2 x2 − K3 ∫(x1 − xD) dt + K3 K4 xD: its gains place the poles {poles} 1/s and "
             f"the zero {zero} 1/s by matching the characteristic polynomial on the link (notes §3.2). Its integral "
             "action removes a constant load's offset.",)

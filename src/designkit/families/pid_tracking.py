@@ -14,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, Literal
 
-from designkit.families.pid_servo import GAIN_INFO
 from designkit.spec.controllers import PoleRequirementsController
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
@@ -22,6 +21,7 @@ from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
+from designkit.synthesis.pid import GAIN_INFO
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
 KIND = "pid_tracking"

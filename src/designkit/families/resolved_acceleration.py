@@ -11,7 +11,7 @@ coordinates ``x(q)`` (position, and the orientation as ``-e_o`` when it is contr
 
 On an exact model ``J qdd + Jdot qd = a*``: every task coordinate's error obeys
 ``e'' + K2 e' + K1 e = 0`` (exactly for position; for the orientation error to first order about
-the held orientation), with the gains of :mod:`designkit.families.computed_torque` per
+the held orientation), with computed torque's gains (:func:`designkit.synthesis.pole_placement.error_gains`) per
 coordinate.  ``J^-1`` exists only away from singular configurations; with
 ``damped_least_squares: {damping: lambda}`` the resolution is
 ``qdd* = (J^T J + lambda^2 I)^-1 J^T (a* - Jdot qd)`` (Wampler 1986; Nakamura and Hanafusa
@@ -36,23 +36,18 @@ import numpy as np
 from pydantic import Field
 
 from designkit.errors import ModelError, SpecError
-from designkit.families import computed_torque
-from designkit.families.computed_torque.friction_layer import (
-    DEFAULT_LAYER,
-    coulomb_levels,
-    layer_formulas,
-    layer_words,
-    smoothed,
-)
 from designkit.models.task import TaskSpace, check_path, joint_path, task_functions, task_space
-from designkit.spec.fields import PositiveFinite, Section
+from designkit.spec.computed_torque import FRICTION_LAYER, PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
+from designkit.spec.fields import PositiveFinite, Section, joint_values
 from designkit.spec.ranges import Ranged
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.friction_layer import DEFAULT_LAYER, coulomb_levels, layer_formulas, layer_words, smoothed
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, stateless_law
 from designkit.synthesis.model import controller_model
+from designkit.synthesis.pole_placement import error_gains
 
 KIND = "resolved_acceleration"
 PATH_SAMPLES = 401
@@ -65,7 +60,7 @@ class DampedLeastSquares(Section):
     damping: Ranged(1e-6, 1e3, "m/rad", base=PositiveFinite)
 
 
-class ResolvedAccelerationSpec(computed_torque.ComputedTorqueSpec):
+class ResolvedAccelerationSpec(ComputedTorqueSpec):
     """Resolved acceleration: task-space PD, ``qdd* = J^-1(a* - Jdot qd)``, the model's inverse dynamics.
 
     Error poles as for ``computed_torque``, one pair per task coordinate.  ``orientation``:
@@ -80,13 +75,13 @@ class ResolvedAccelerationSpec(computed_torque.ComputedTorqueSpec):
     damped_least_squares: DampedLeastSquares | None = None
     max_condition: Ranged(1, 1e12, "", low_open=True) = Field(default=100.0, description="Condition number of J "
                                                               "counted as near-singular.")
-    friction_layer: computed_torque.FRICTION_LAYER = DEFAULT_LAYER
+    friction_layer: FRICTION_LAYER = DEFAULT_LAYER
 
 
 def _q0(spec: Any, n: int) -> np.ndarray:
     if spec.simulation.initial_position is None:
         return np.zeros(n)
-    return np.array(computed_torque.joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
+    return np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
 
 
 def _space(design: Design) -> TaskSpace:
@@ -104,7 +99,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     fns = task_functions(plant.robot, p, _space(design))
     inverse_dynamics = plant.robot.functions["inverse_dynamics"]
     damping = design.extra.get("damping")
-    layer = computed_torque.friction_layer_of(design)
+    layer = float(design.extra.get("friction_layer", 0.0))
     fc = coulomb_levels(plant.robot, p)
 
     def output(y: ca.SX, r: ca.SX) -> ca.SX:
@@ -132,11 +127,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
                 "leave the orientation free (orientation: none)")
         raise SpecError("controller.orientation", f"the task space must be square: {space.m} controlled "
                         f"coordinates ({', '.join(space.names)}) for {n} joints; {hint}")
-    pairs = computed_torque.error_poles(spec, n, "task coordinate")
-    K1 = [float((p1 * p2).real) for p1, p2 in pairs]
-    K2 = [float((-(p1 + p2)).real) for p1, p2 in pairs]
-    gains = Gains.of([Gain("K1", K1, "1/s^2", "task position error gain (wn^2), per coordinate"),
-                      Gain("K2", K2, "1/s", "task velocity error gain (2 zeta wn), per coordinate")])
+    pairs = error_poles(spec, n, "task coordinate")
+    K1, K2 = error_gains(pairs)
+    gains = Gains.of([Gain("K1", list(K1), "1/s^2", "task position error gain (wn^2), per coordinate"),
+                      Gain("K2", list(K2), "1/s", "task velocity error gain (2 zeta wn), per coordinate")])
     damping = ctrl.damped_least_squares.damping if ctrl.damped_least_squares is not None else None
     notes = [f"Task coordinates {', '.join(f'{a} ({u})' for a, u in zip(space.names, space.units, strict=True))}"
              + ("; the initial orientation is held" if space.orientation_rows else "") + "."]
@@ -236,4 +230,5 @@ FAMILY = Family(
     knobs=gain_knobs({"K1": ("1/s^2", "task position error gain (wn^2)"),
                       "K2": ("1/s", "task velocity error gain (2 zeta wn)")}, ("K1", "K2")),
     traits=("model_based",),
+    per_joint_fields=PER_JOINT_FIELDS,
 )

@@ -1,4 +1,5 @@
-"""Independent report tasks (the figures) shared with a forked child process, on a second core.
+"""Independent report tasks (the figures) shared with a forked child process, on a second core
+(:func:`designkit.processes.run_tasks`).
 
 Drawing a report's figures with matplotlib is most of the time the report takes (0.1-0.25 s a
 figure on a 2-core machine), and the figures are independent of one another.  With ``processes=2``
@@ -22,86 +23,6 @@ each figure's SVG depends only on its own drawing (ids are salted deterministica
 
 from __future__ import annotations
 
-import os
-import pickle
-from collections.abc import Callable, Sequence
-from typing import Any, TypeVar
-
-from designkit.processes import available_cores, can_fork
+from designkit.processes import available_cores, run_tasks
 
 __all__ = ["available_cores", "run_tasks"]
-
-T = TypeVar("T")
-
-
-def _can_fork() -> bool:
-    return can_fork() and available_cores() >= 2
-
-
-def _delivered(data: bytes) -> dict[int, Any]:
-    """The results the child sent (task index -> result); none when its message is empty or broken."""
-    try:
-        sent = pickle.loads(data)  # noqa: S301 - our own forked child, a private pipe
-    except (pickle.UnpicklingError, EOFError, ValueError, TypeError):
-        return {}
-    return {k: value for k, ok, value in sent if ok}
-
-
-def run_tasks(tasks: Sequence[Callable[[], T]], *, processes: int = 1) -> list[T]:
-    """``[task() for task in tasks]``, with the second half of the tasks run in a forked child when
-    ``processes >= 2`` and forking is safe (module docstring).
-
-    Parameters
-    ----------
-    tasks : sequence of callables
-        Independent, side-effect-free tasks whose results can be pickled.
-    processes : int
-        1 runs everything here; 2 or more shares the tasks with one forked child.
-
-    Returns
-    -------
-    list
-        The tasks' results, in order.
-    """
-    tasks = list(tasks)
-    if processes < 2 or len(tasks) < 2 or not _can_fork():
-        return [task() for task in tasks]
-    split = (len(tasks) + 1) // 2
-    read_fd, write_fd = os.pipe()
-    try:
-        pid = os.fork()
-    except OSError:
-        os.close(read_fd)
-        os.close(write_fd)
-        return [task() for task in tasks]
-    if pid == 0:  # the child: run its half, send it, leave at once
-        status = 1
-        try:
-            os.close(read_fd)
-            out: list[tuple[int, bool, Any]] = []
-            for k in range(split, len(tasks)):
-                try:
-                    out.append((k, True, tasks[k]()))
-                except BaseException:  # noqa: BLE001 - the parent reruns it and raises it there
-                    out.append((k, False, None))
-            data = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
-            with os.fdopen(write_fd, "wb") as pipe:
-                pipe.write(data)
-            status = 0
-        finally:
-            os._exit(status)
-    os.close(write_fd)
-    try:
-        results: dict[int, Any] = {k: tasks[k]() for k in range(split)}
-    except BaseException:
-        os.close(read_fd)
-        os.waitpid(pid, 0)
-        raise
-    with os.fdopen(read_fd, "rb") as pipe:
-        data = pipe.read()
-    os.waitpid(pid, 0)
-    results.update(_delivered(data))
-    for k in range(split, len(tasks)):  # whatever the child did not deliver
-        if k not in results:
-            results[k] = tasks[k]()
-    return [results[k] for k in range(len(tasks))]

@@ -2,8 +2,8 @@
 anything is built.
 
 Building a robot's symbolic model grows like ``n^3.5`` (:mod:`designkit.schema.budget`): a 40-joint
-chain takes tens of seconds.  A list with the wrong number of entries (``simulation.initial_position``
-with 39 values for 40 joints) used to be refused only when the model was there to count its joints.
+chain takes tens of seconds, and a list with the wrong number of entries (``simulation.initial_position``
+with 39 values for 40 joints) should not wait for the model to count its joints.
 :func:`joint_count` reads ``n`` from what the spec gives -- a built-in robot's published table, the
 rows of a DH table, the joints of a URDF's chain (parsed, no model built) -- and
 :func:`check_joint_lists` refuses a per-joint list of another length with the message the later stages
@@ -16,22 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from designkit.errors import SpecError
+from designkit.families import FAMILIES
 
-__all__ = ["PER_JOINT_GAINS", "check_joint_lists", "joint_count"]
-
-
-
-def _per_joint_gain_kinds() -> tuple[str, ...]:
-    from designkit.families.computed_torque import KIND as COMPUTED_TORQUE
-    from designkit.families.ilc import KIND as ILC
-    from designkit.families.resolved_acceleration import KIND as RESOLVED_ACCELERATION
-
-    return (COMPUTED_TORQUE, RESOLVED_ACCELERATION, ILC)
-
-
-PER_JOINT_GAINS = _per_joint_gain_kinds()
-"""Families whose ``damping`` and ``natural_frequency`` are per joint (or per task coordinate, as many); each
-kind is imported from its family, where it is written once."""
+__all__ = ["check_joint_lists", "joint_count"]
 
 
 def joint_count(plant: Any, base_dir: Path | None = None) -> int | None:
@@ -77,9 +64,10 @@ def check_joint_lists(spec: Any, n: int) -> None:
 
     Only a robot's lists are checked here (a link or an elastic joint is built in milliseconds, and its own
     stages say what its lists mean): ``simulation.step``, ``simulation.initial_position``, the trajectories'
-    ``amplitude``, ``max_velocity``, ``max_acceleration`` and ``points[k]``, ``controller.damping`` and
-    ``controller.natural_frequency`` of the model-based families (:data:`PER_JOINT_GAINS`), ``plant.limits``, the
-    nonlinear element's levels and ``requirements.max_control`` (one value per input: a robot has one per joint).
+    ``amplitude``, ``max_velocity``, ``max_acceleration`` and ``points[k]``, the ``controller`` fields its family
+    declares per joint (:attr:`~designkit.synthesis.family.Family.per_joint_fields`: the model-based families'
+    ``damping`` and ``natural_frequency``), ``plant.limits``, the nonlinear element's levels and
+    ``requirements.max_control`` (one value per input: a robot has one per joint).
     """
     if getattr(spec.plant, "kind", None) != "robot":
         return
@@ -94,9 +82,9 @@ def check_joint_lists(spec: Any, n: int) -> None:
         for k, point in enumerate(getattr(traj, "points", None) or ()):
             _refuse(f"simulation.trajectory.points[{k}]", point, n)
     ctrl = getattr(spec, "controller", None)
-    if getattr(ctrl, "kind", None) in PER_JOINT_GAINS:
-        for key in ("damping", "natural_frequency"):
-            _refuse(f"controller.{key}", getattr(ctrl, key, None), n)
+    fam = FAMILIES.get(getattr(ctrl, "kind", None))
+    for key in fam.per_joint_fields if fam is not None else ():
+        _refuse(f"controller.{key}", getattr(ctrl, key, None), n)
     limits = getattr(spec.plant, "limits", None)
     if limits is not None:
         for key in ("velocity", "acceleration", "torque"):

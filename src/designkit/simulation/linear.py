@@ -150,8 +150,8 @@ def linear_step(design: Design, duration: float, n: int = 501, *, amplitude: Any
     Examples
     --------
     >>> from designkit.models.link import LinkPlant
-    >>> from designkit.families.pid_servo import design
-    >>> d = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0)
+    >>> from designkit.synthesis.servo_loop import servo_design
+    >>> d = servo_design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0, kind="servo")
     >>> t, x1, u = linear_step(d, 5.0)
     >>> round(float(x1[-1, 0]), 4), round(float(u[0, 0]), 4)
     (1.0, 33.3333)

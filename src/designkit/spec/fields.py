@@ -25,11 +25,11 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from designkit.errors import short_repr
+from designkit.errors import SpecError, short_repr
 
 __all__ = [
     "Finite", "NonNegativeFinite", "PerJoint", "Pole", "PositiveFinite", "Section", "check_conjugates", "fmt_pole",
-    "parse_pole", "per_joint", "spec_argument",
+    "joint_values", "parse_pole", "per_joint", "spec_argument",
 ]
 
 
@@ -256,6 +256,16 @@ def per_joint(value: float | list[float] | tuple[float, ...], n: int, path: str)
             raise ValueError(f"{path}: needs one value per joint ({n}), got {len(value)}")
         return tuple(float(v) for v in value)
     return (float(value),) * n
+
+
+def joint_values(value: float | list[float] | tuple[float, ...], n: int, path: str) -> tuple[float, ...]:
+    """:func:`per_joint` for a stage that reads the spec after it was validated: a list of the wrong length is
+    refused with a :class:`~designkit.errors.SpecError` naming ``path`` (units those of ``value``)."""
+    try:
+        return per_joint(value, n, path)
+    except ValueError as exc:
+        key, msg = str(exc).split(": ", 1)
+        raise SpecError(key, msg) from None
 
 
 def spec_argument(spec: Any, name: str = "spec") -> Any:

@@ -19,6 +19,7 @@ when none does, and the report says so.  The knob's value in the spec is judged 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -181,7 +182,8 @@ def _search(knob: Any, current: float | None, settings: BoundarySettings | None,
 
 
 MIN_RUNS = 3
-"""Fewest runs a search makes; a budget that fits fewer says what the search would need instead."""
+"""Fewest runs a search makes (the range's ends and middle), whatever the budget: never skipped, and a budget that
+fits fewer says what a search needs."""
 
 
 @dataclass(frozen=True)
@@ -220,22 +222,29 @@ def _entry(ctx: StudyContext, knob: Any, budget: Budget, metrics: tuple) -> tupl
     current = knob_value(knob, result.loaded.spec, result.design)
     axis = _axis(ctx, knob, current)
     room = budget.capacity()
-    if room < MIN_RUNS:
-        need = len(search_grid(axis.low, axis.high, 1))
-        words = (f"The search over {axis.name} needs at least {need} runs of about {fmt_number(budget.per_run, 2)} s "
-                 f"each (one a decade); the studies' budget of {fmt_number(ctx.budget, 3)} s fits {room}: it was not "
-                 f"run. Give studies.budget ≥ {fmt_number(need * budget.per_run * 1.2, 2)} s to locate the boundary.")
-        return Entry(axis.name, axis.unit, ()), (words,), (), f"{knob.key}: not run (budget)"
+    if room < MIN_RUNS:  # never skipped: the range's ends and middle, said so
+        budget = dataclasses.replace(budget, seconds=MIN_RUNS * budget.estimate)
+        cut = (f"{knob.key}: three points only (the range's ends and middle): a search of one point a decade needs "
+               f"{len(search_grid(axis.low, axis.high, 1))} runs of about {fmt_number(budget.per_run, 2)} s, more "
+               f"than the studies' budget of {fmt_number(ctx.budget, 3)} s (raise studies.budget to locate the "
+               "boundary)")
+    else:
+        cut = ""
     base = float(current) if current is not None and np.ndim(current) == 0 else None
 
     def run(g: float) -> Row:
         value = axis.to_value(g)
         factor = float(value / base) if base else float(g)
-        row = run_variant(result, knob, value, factor, metrics, budget)
-        return Row(row.factor, float(g), row.metrics, row.outcome, row.detail)
+        row = run_variant(result, knob, value, factor, metrics)
+        return dataclasses.replace(row, value=float(g))
+
+    def run_many(values: Any) -> list[Row]:
+        return ctx.run_all([(lambda g=g: run(g)) for g in values], budget)
 
     primary = metrics[0] if metrics else None
-    rows, pick, nu, reduced = search(axis.low, axis.high, run, budget, primary)
+    rows, pick, nu, reduced = search(axis.low, axis.high, run_many, budget, primary)
+    if cut:
+        reduced = cut
     sentences = _sentences(knob, axis, rows, pick, nu, primary, result, base)
     setting = None
     if pick is not None and knob.path and base is not None:
@@ -266,9 +275,10 @@ def _coarse_first(n: int) -> list[int]:
     return order
 
 
-def search(low: float, high: float, run: Any, budget: Budget, primary: Any = None
+def search(low: float, high: float, run_many: Any, budget: Budget, primary: Any = None
            ) -> tuple[list[Row], Recommended | None, float, str]:
-    """The search of the module docstring over ``[low, high]`` with ``run(value) -> Row``.
+    """The search of the module docstring over ``[low, high]`` with ``run_many(values) -> rows`` (independent
+    runs, in the order given; a batch may run on two cores).
 
     Returns
     -------
@@ -291,20 +301,20 @@ def search(low: float, high: float, run: Any, budget: Budget, primary: Any = Non
         if len(grid) > room:
             grid = grid[np.linspace(0, len(grid) - 1, max(room, 2)).round().astype(int)]
             reduced = f"{max(room, 2)} points over the range (the budget fits no more)"
-    rows = []
-    for k, i in enumerate(_coarse_first(len(grid))):  # a grid cut short by the budget still spans the range
-        if rows and budget.overrun:  # the safety net: far more wall time than estimated
-            reduced = (reduced + "; " if reduced else "") + (f"the grid stopped after {k} of {len(grid)} points: "
-                                                             + budget.overrun_words())
-            break
-        rows.append(run(grid[i]))
+    order = _coarse_first(len(grid))  # the grid's ends and middle first: a grid cut short still spans the range
+    rows = list(run_many([grid[i] for i in order[:2]]))
+    if len(order) > 2 and not budget.overrun:
+        rows += run_many([grid[i] for i in order[2:]])
+    elif len(order) > 2:
+        reduced = (reduced + "; " if reduced else "") + f"the grid stopped after 2 of {len(grid)} points: " \
+            + budget.overrun_words()
     for _ in range(REFINE):
         pairs = boundary_points(rows)
         if not pairs or not budget.affords(len(pairs)):
             if pairs:
                 reduced = (reduced + "; " if reduced else "") + "the last refinement was left out (budget)"
             break
-        rows += [run(math.sqrt(a * b)) for a, b in pairs]
+        rows += run_many([math.sqrt(a * b) for a, b in pairs])
     # A recommendation: the best candidates, each run with both ends of its neighbourhood until one passes.
     nu = neighbourhood(per_decade)
     pick = None
@@ -313,7 +323,7 @@ def search(low: float, high: float, run: Any, budget: Budget, primary: Any = Non
         if not budget.affords(len(missing)):
             reduced = (reduced + "; " if reduced else "") + "the recommendation's neighbourhood was not run (budget)"
             break
-        rows += [run(v) for v in missing]
+        rows += run_many(missing)
         first = [r for r in rows if abs(r.value - g) <= 1e-9 * g]
         pick = recommend(first + [r for r in rows if r not in first], nu)
         if pick is not None and abs(pick.value - g) <= 1e-9 * g:

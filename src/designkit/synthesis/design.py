@@ -12,7 +12,7 @@ each per-joint loop; ``input_loop`` -> loop margins.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -20,8 +20,8 @@ import numpy as np
 from designkit.models.linear_system import LinearSystem
 from designkit.synthesis.linearization import EXACT, Linearization
 
-__all__ = ["Characteristic", "Design", "FrozenDict", "Gain", "Gains", "LinearCondition", "freeze", "loop_matrices",
-           "thaw"]
+__all__ = ["Characteristic", "Design", "FamilyData", "FrozenDict", "Gain", "Gains", "LinearCondition", "freeze",
+           "loop_matrices", "thaw"]
 
 
 class FrozenDict(dict):
@@ -48,6 +48,21 @@ def freeze(value: Any) -> Any:
         out.setflags(write=False)
         return out
     return value
+
+
+@dataclass(frozen=True)
+class FamilyData:
+    """Base of a family's design data (:attr:`Design.data`): a frozen dataclass whose fields are deeply frozen on
+    construction (:func:`freeze`: mappings -> :class:`FrozenDict`, lists -> tuples, arrays read-only), so a design
+    stays immutable whatever its family stores."""
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, freeze(getattr(self, f.name)))
+
+    def to_json(self) -> dict[str, Any]:
+        """The fields in JSON types (:func:`thaw`), by name."""
+        return {f.name: thaw(getattr(self, f.name)) for f in fields(self)}
 
 
 def thaw(value: Any) -> Any:
@@ -292,7 +307,9 @@ class Design:
     formulas, notes : tuple of str
         Design equations and the choices made on the user's behalf.
     extra : Mapping
-        Family-specific data (deeply frozen).
+        Data keyed by strings (deeply frozen): what the generic layers read of a design by name
+        (``codegen_terms``, the requirements' ``zeta`` and ``wn``, ...), and the family data of a family
+        that does not declare :attr:`data`.
     law : Law or None
         The control law as designed (no anti-windup; the simulation adds the spec's), set with the
         closed loop (:func:`~designkit.synthesis.closed_loop.with_closed_loop`) or alone
@@ -310,6 +327,9 @@ class Design:
         ``None`` for a design run once.
     label : str
         The family in words (``"PID position servo"``), for views of the design alone.
+    data : Any
+        The family's own design data: a frozen dataclass the family declares (its modules read typed attributes
+        of it, with units in its docstring), or ``None``.
     """
 
     kind: str
@@ -332,6 +352,7 @@ class Design:
     motion: Any = None
     learning: Any = None
     label: str = ""
+    data: Any = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "poles", tuple(complex(p) for p in self.poles))
@@ -391,9 +412,9 @@ class Design:
 
         Examples
         --------
-        >>> from designkit.families.pid_servo import design
+        >>> from designkit.synthesis.servo_loop import servo_design
         >>> from designkit.models.link import LinkPlant
-        >>> sys = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).to_control()
+        >>> sys = servo_design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0, kind="servo").to_control()
         >>> sys.input_labels[:1], sys.output_labels
         (['xD'], ['x1', 'u'])
         """
@@ -468,9 +489,9 @@ class Design:
 
         Examples
         --------
-        >>> from designkit.families.pid_servo import design
+        >>> from designkit.synthesis.servo_loop import servo_design
         >>> from designkit.models.link import LinkPlant
-        >>> L = design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0).loop_transfer()
+        >>> L = servo_design(LinkPlant(Km=2.0, tau=0.5), [-4, -5, -20], -3.0, kind="servo").loop_transfer()
         >>> [round(float(c), 9) for c in L.num_array[0][0]], [round(float(c), 9) for c in L.den_array[0][0]]
         ([27.0, 200.0, 400.0], [1.0, 2.0, 0.0, 0.0])
         """

@@ -126,12 +126,17 @@ class Family:
         The numbers meaningful for its law (:class:`~designkit.synthesis.knobs.Metric`), the first the one a
         study ranks by; empty: a study measures the tracking error and the command.
     traits : frozenset of str
-        What a study may match it on (``"pid"``: a classical PID, the notes' experiment 1; ``"adaptive"``,
-        ``"switching"``, ``"learning"``, ``"model_based"``).
+        What a study may match it on, words for the law, never a spec or a kind (``"pid"``: a classical PID, the
+        notes' experiment 1; ``"adaptive"``, ``"switching"``, ``"learning"``, ``"model_based"``,
+        ``"model_reference"``, ``"certainty_equivalence"``, ``"state_feedback"``).
     regain : callable or None
         ``(design, gains, anti_windup) -> Design``: the design with other gains (its law, its closed loop and
         its per-joint loops rebuilt), for a family whose design the generic rebuild
         (:func:`designkit.runner.variants.with_gains`) cannot redo, e.g. one with per-joint loops.
+    per_joint_fields : tuple of str
+        Names of its ``controller`` fields that hold one value for every joint or a list with one per joint (or per
+        task coordinate, as many): the loader refuses a list of another length before the plant's model is built
+        (:func:`designkit.schema.joint_count.check_joint_lists`).
     answers : tuple of (str, callable)
         ``(topic, result -> tuple of str)``: what the family says of one of its runs when a study asks about a
         topic of :data:`ANSWER_TOPICS` (a comparison's lab answer asks every member), one sentence each, numbers
@@ -164,6 +169,7 @@ class Family:
     metrics: tuple[Metric, ...] = ()
     traits: frozenset[str] = frozenset()
     regain: Callable[[Design, Any, Any], Design] | None = None
+    per_joint_fields: tuple[str, ...] = ()
     answers: tuple[tuple[str, Callable[[Any], tuple[str, ...]]], ...] = ()
     predictions: tuple[Metric, ...] = ()
     variants: tuple[Variant, ...] = ()

@@ -23,7 +23,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["GAIN_FACTORS", "ROLES", "VARIANT_ROLES", "Knob", "Metric", "Variant", "gain_knobs"]
+__all__ = ["COMMAND_VARIATION", "GAIN_FACTORS", "ROLES", "SETTLED_ERROR", "VARIANT_ROLES", "Knob", "Metric",
+           "Variant", "gain_knobs"]
 
 ROLES = ("gain", "adaptation", "learning", "forgetting", "switching")
 """What a knob is to its law: a fixed gain, an adaptation gain, a learning gain, a forgetting factor (its
@@ -171,6 +172,45 @@ class Metric:
             return None
         v = float(v)
         return v if math.isfinite(v) else math.inf
+
+
+SETTLED_FRACTION = 0.1
+"""The settled error is measured over this last fraction of the run."""
+
+
+def _settled(run: Any) -> float | None:
+    import numpy as np
+
+    sim = run.simulation
+    if sim is None:
+        return None
+    t = np.asarray(sim.time, dtype=float)
+    e = np.abs(np.asarray(sim.tracking_errors, dtype=float).reshape(t.size, -1))
+    tail = e[t >= t[-1] - SETTLED_FRACTION * (t[-1] - t[0])]
+    return float(np.max(np.mean(tail, axis=0))) if np.all(np.isfinite(tail)) else math.inf
+
+
+def _variation(run: Any) -> float | None:
+    import numpy as np
+
+    sim = run.simulation
+    if sim is None:
+        return None
+    t = np.asarray(sim.time, dtype=float)
+    u = np.asarray(sim.u_command, dtype=float).reshape(t.size, -1)
+    if not np.all(np.isfinite(u)) or t[-1] <= t[0]:
+        return math.inf
+    return float(np.max(np.sum(np.abs(np.diff(u, axis=0)), axis=0)) / (t[-1] - t[0]))
+
+
+SETTLED_ERROR = Metric("settled_error", "settled error", "rad", _settled,
+                       f"mean |x − xD| over the last {SETTLED_FRACTION:.0%} of the run, the largest over the "
+                       "tracked coordinates: the precision a switching law holds")
+"""The precision a law holds at the end of its run (a switching law's sliding precision)."""
+COMMAND_VARIATION = Metric("command_variation", "command variation per second", "input/s", _variation,
+                           "total variation of the command over the run divided by its length, the largest over "
+                           "the inputs: how hard the actuator works (a chattering relay's cost)")
+"""How hard the actuator works: the command's total variation per second."""
 
 
 @dataclass(frozen=True)

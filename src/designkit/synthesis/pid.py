@@ -34,6 +34,14 @@ import numpy as np
 from designkit.models.link import LinkPlant
 from designkit.synthesis.design import LinearCondition
 
+GAIN_INFO = {
+    "K1": ("N*m/rad", "proportional"),
+    "K2": ("N*m*s/rad", "derivative (rate feedback)"),
+    "K3": ("N*m/(rad*s)", "integral"),
+    "K4": ("s", "reference feedforward (places the zero)"),
+}
+"""Gain name -> (unit, role) of the PID servo's gains; the tracker's ``K1``..``K3`` have the same units and roles."""
+
 
 def _symmetric_functions(poles: Sequence[complex]) -> tuple[float, float, float]:
     p1, p2, p3 = (complex(p) for p in poles)

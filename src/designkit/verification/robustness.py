@@ -251,8 +251,8 @@ def stable_fraction(design: Any, samples: dict[str, Any]) -> np.ndarray:
     Examples
     --------
     >>> from designkit.models.link import LinkPlant
-    >>> from designkit.families.pid_servo import design
-    >>> d = design(LinkPlant(2.0, 0.5), [-4, -5, -20], -3.0)
+    >>> from designkit.synthesis.servo_loop import servo_design
+    >>> d = servo_design(LinkPlant(2.0, 0.5), [-4, -5, -20], -3.0, kind="servo")
     >>> stable_fraction(d, {"Km": [1.0, 2.0, 4.0], "tau": 0.5}).tolist()
     [True, True, True]
     """

@@ -17,13 +17,13 @@ def _check(result, name):
 def _V_from_record(result) -> np.ndarray:
     """V recomputed from the recorded errors and estimates with the closed-form KYP matrix (independently of the
     law's own signal)."""
-    sim, a = result.simulation, result.design.extra["adaptation"]
-    K1, K2, psi, K = (np.asarray(a[k], dtype=float) for k in ("K1", "K2", "psi", "gain"))
+    sim, a = result.simulation, result.design.data.adaptation
+    K1, K2, psi, K = (np.asarray(getattr(a, k), dtype=float) for k in ("K1", "K2", "psi", "gain"))
     ref = np.asarray(sim.reference)
     x = np.asarray(sim.state)
     n = len(K1)
     e, ed = ref[:, :, 0] - x[:, :n], ref[:, :, 1] - x[:, n:2 * n]
-    phi = np.asarray(result.design.extra["true"]) - estimates(sim, a["adapt"])
+    phi = np.asarray(result.design.data.true) - estimates(sim, a.names)
     return np.sum((K2 + psi * K1) * e**2 + 2 * e * ed + psi * ed**2, axis=1) + np.sum(phi**2 / K, axis=1)
 
 

@@ -13,6 +13,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.linalg as sl
@@ -124,7 +126,7 @@ def test_trials_on_the_exact_arm_fall_as_certified(arm, fraction, kind):
     design, sim, lifted, d0 = arm
     smax = max(s.estimate for s in lifted.sigma_max)
     value = fraction * 2 / smax**2 if kind == "adjoint" else fraction * 1e3
-    info = {**design.extra["lifted"], "learning": kind, "value": value}
+    info = dataclasses.replace(design.data, learning=kind, value=value)
     op = Adjoint(value) if kind == "adjoint" else PType(value)
     c = contraction(lifted, op)
     K1, K2 = tuple(design.gains["K1"]), tuple(design.gains["K2"])

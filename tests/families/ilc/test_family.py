@@ -60,8 +60,8 @@ def test_the_example_verifies_and_its_error_falls_every_trial(example):
     assert norms[-1] < 0.01 * norms[0]
     rho = _check(example, "ilc_convergence")
     assert rho.passed is True and 0 < rho.margin < 1e-9 and rho.achieved < 1  # monotone, no useful rate
-    info = example.design.extra["lifted"]  # the grid synthesis chose is the simulator's
-    assert info["samples"] == example.simulation.time.size and info["dt"] == example.simulation.settings["dt"]
+    info = example.design.data  # the grid synthesis chose is the simulator's
+    assert info.samples == example.simulation.time.size and info.dt == example.simulation.settings["dt"]
 
 
 def test_json_contract(example):
@@ -122,11 +122,11 @@ def test_the_update_is_the_adjoint_with_the_last_sample_held():
     lifted = lifted_of(design)
     N, L = lifted.samples, lifted.L
     rng = np.random.default_rng(6)
-    t = design.extra["lifted"]["dt"] * np.arange(N)
+    t = design.data.dt * np.arange(N)
     desired, measured = rng.standard_normal((N, 2)), rng.standard_normal((N, 4))
     result = SimpleNamespace(time=t, desired=desired, measured=measured, positions=design.plant.positions)
     d = rng.standard_normal((N, 2))
-    nxt = update_rule(tuple(design.gains["K1"]), tuple(design.gains["K2"]), design.extra["lifted"])(result, d)
+    nxt = update_rule(tuple(design.gains["K1"]), tuple(design.gains["K2"]), design.data)(result, d)
     e = (desired - measured[:, list(design.plant.positions)])[1:]  # qD - q at samples 1 .. N-1
     for j in range(2):
         H = sl.toeplitz(lifted.markov[j], np.zeros(L))

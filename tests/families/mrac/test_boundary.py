@@ -47,7 +47,7 @@ def test_the_frozen_signal_bound_is_where_the_frozen_loop_crosses_the_imaginary_
     ym = sim.controller_state[:, [names.index("ym1"), names.index("ym2")]][i]
     S = sensitivities(sim)[i]
     r = sim.reference[i, 0, 0]
-    Gamma, Q = np.diag(d.extra["gamma"]), np.array(d.extra["Q"])
+    Gamma, Q = np.diag(d.data.gamma), np.array(d.data.Q)
     # the frozen linearization about the matched trajectory, assembled here: dx' = A_m dx + k b phi' alpha~,
     # alpha~' = -s Gamma S' Q dx (b = (0, 1), phi = (r - ym1, -ym2))
     A = np.zeros((4, 4))

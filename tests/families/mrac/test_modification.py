@@ -137,10 +137,10 @@ def test_each_modification_changes_the_run_as_derived(runs):
 
 def test_the_modification_is_in_the_design_and_its_words(runs):
     d = runs["normalized"].design
-    assert d.extra["modification"] == {"kind": "normalized", "rate": 2.0}
+    assert dict(d.data.modification) == {"kind": "normalized", "rate": 2.0}
     assert "normalised gradient rule" in d.formulas[-1]
     default = run(parse_spec(SPEC.replace("MODIFICATION", "{kind: normalized}"))).design
-    assert default.extra["modification"]["rate"] == pytest.approx(math.sqrt(20.0))  # the model's natural frequency
+    assert default.data.modification["rate"] == pytest.approx(math.sqrt(20.0))  # the model's natural frequency
 
 
 @pytest.mark.parametrize(("text", "path"), [

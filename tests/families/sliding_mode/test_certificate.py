@@ -40,7 +40,7 @@ def test_designed_gains_are_certified_with_labelled_conditions(link_result):
 
 def test_vertex_minimum_is_the_minimum_over_a_dense_grid(link_result):
     d = link_result.design
-    g, xi_bar = gains_of(d), d.extra["sliding"]["xi_bar"]
+    g, xi_bar = gains_of(d), d.data.xi_bar
     grid = _grid_values(g, xi_bar)
     for name in NAMES:
         entries = check(link_result, name).certificate["conditions"]

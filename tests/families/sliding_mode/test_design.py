@@ -92,11 +92,11 @@ def test_design_gains_units_step_and_law(link_result):
     assert list(d.gains) == ["alpha", "beta", "M", "c"]
     assert {k: d.gains.unit(k) for k in d.gains} == {"alpha": "N*m/rad", "beta": "N*m/rad", "M": "N*m", "c": "1/s"}
     assert (d.gains["alpha"], d.gains["beta"], d.gains["M"]) == pytest.approx(closed_form(C, XI, MARGIN), rel=1e-7)
-    info = d.extra["sliding"]
-    assert info["band"] == pytest.approx(1e-3 * C * E_MAX)
-    assert info["max_step"] * info["sdot_max"] == pytest.approx(info["band"])
+    info = d.data
+    assert info.band == pytest.approx(1e-3 * C * E_MAX)
+    assert info.max_step * info.sdot_max == pytest.approx(info.band)
     law = d.law
-    assert law.discontinuous and law.max_step == pytest.approx(info["max_step"]) and law.signal_names == ("s", "psi")
+    assert law.discontinuous and law.max_step == pytest.approx(info.max_step) and law.signal_names == ("s", "psi")
     assert d.linearization.kind == "none" and d.closed_loop is None and d.input_loop is None
     assert link_result.simulation.settings["dt"] <= law.max_step
     rng = np.random.default_rng(2)
@@ -131,9 +131,9 @@ def test_widened_box_and_given_bound(tmp_path):
 
     text = spec_text(perturbation_bound=1.5).replace("tau: [0.35, 0.65]", "tau: [0.55, 0.65]")
     d = synthesize(parse_spec(text).spec)
-    info = d.extra["sliding"]
-    assert info["box"]["tau"] == (0.5, 0.65)  # widened to hold the nominal tau = 0.5
-    assert info["xi_bar"] == 1.5 and d.gains["M"] == pytest.approx(1.8, rel=1e-7)
+    info = d.data
+    assert info.box["tau"] == (0.5, 0.65)  # widened to hold the nominal tau = 0.5
+    assert info.xi_bar == 1.5 and d.gains["M"] == pytest.approx(1.8, rel=1e-7)
     assert any("widened" in n for n in d.notes)
 
 

@@ -37,7 +37,7 @@ def _assert_invariant(sim, design) -> tuple[float, float]:
     """|s| enters the band dt * max|s'| and never leaves it; returns (reaching time, band)."""
     s = _s_of(sim)
     e = sim.state[:, 0] - sim.reference[:, 0, 0]
-    band = sim.settings["dt"] * _sdot_max(design, max(1.0, float(np.max(np.abs(e)))), design.extra["sliding"]["band"])
+    band = sim.settings["dt"] * _sdot_max(design, max(1.0, float(np.max(np.abs(e)))), design.data.band)
     inside = np.flatnonzero(np.abs(s) <= band)
     assert inside.size, "never reached the band"
     k = int(inside[0])
@@ -161,7 +161,7 @@ def test_boundary_layer_stops_the_switching_and_leaves_the_layer_error():
     s_eq = XI / (g["alpha"] / C + g["M"] / eps)  # x2 = 0, s = c e: -alpha e - M s/eps + xi = 0
     assert s[-1] == pytest.approx(s_eq, rel=1e-3)
     assert (sim.state[-1, 0] - sim.reference[-1, 0, 0]) == pytest.approx(s_eq / C, rel=1e-3)
-    assert d.extra["sliding"]["max_step"] == pytest.approx(eps / (10 * d.extra["sliding"]["sdot_max"]))
+    assert d.data.max_step == pytest.approx(eps / (10 * d.data.sdot_max))
 
 
 def _square(**controller):
@@ -189,7 +189,7 @@ def test_square_wave_with_a_reaching_frequency_slides_after_every_switch():
     r = _square(reaching_frequency=5)
     d = r.design
     assert d.gains["alpha"] == pytest.approx(25 * BOX["tau"][1] / BOX["Km"][0], rel=1e-7)  # b alpha >= 5^2
-    assert d.extra["sliding"]["e_max"] == 1.0  # the error jumps by 2 A at a switch
+    assert d.data.e_max == 1.0  # the error jumps by 2 A at a switch
     m = measure(d, r.simulation)
     assert m.reached and max(m.reaching_times) < 0.2
     assert check(r, "sliding_band").passed is True and check(r, "reaching_time").passed is True

@@ -152,7 +152,7 @@ def test_the_step_raises_v_and_it_falls_again(simnog_result):
     plant = simnog_result.design.plant
     t, est = _record(simnog_result)
     beta = np.where((t >= 40.0)[:, None], _beta({**DEFAULTS, "m2": 4.0}, plant), _beta(DEFAULTS, plant))
-    gamma = np.asarray(simnog_result.design.extra["gamma"])
+    gamma = np.asarray(simnog_result.design.data.gamma)
     V = np.einsum("kp,p,kp->k", beta - est, 1.0 / gamma, beta - est)
     k = np.searchsorted(t, 40.0)
     assert V[k] > 100 * V[k - 1]
@@ -185,8 +185,8 @@ def test_subset_with_the_others_known(tmp_path):
     beta = dict(zip(NAMES, _beta(DEFAULTS, result.design.plant), strict=True))
     for x in ("Izz1R", "Izz2R", "fv1", "fv2"):
         assert result.simulation.signals[f"{x}_hat"][-1] == pytest.approx(beta[x], abs=1e-3)
-    known = dict(result.design.extra["identifier"]["known"])
-    assert {result.design.extra["base_names"][c]: v for c, v in known.items()} == pytest.approx(
+    known = dict(result.design.data.identifier.known)
+    assert {result.design.data.base_names[c]: v for c, v in known.items()} == pytest.approx(
         {x: beta[x] for x in NAMES if x not in ("Izz1R", "Izz2R", "fv1", "fv2")}, abs=1e-9)
     assert result.verified is True
 

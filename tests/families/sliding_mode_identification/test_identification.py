@@ -68,8 +68,8 @@ def test_lyapunov_function_does_not_increase(tmp_path_factory, Km, tau, K1, K2, 
     assert rise.max() <= 1e-6 * V[0] + 1e-9, (rise.max(), V[0])  # O(Ts^2) reconstruction: see checks.V_FLOOR
     # the observer's condition: c, d above the largest estimation errors along the run
     ah, bh = np.asarray(sim.signals["a_hat"]), np.asarray(sim.signals["b_hat"])
-    x = result.design.extra
-    assert x["c"] > np.max(np.abs(a - ah)) and x["d"] > np.max(np.abs(b - bh))
+    x = result.design.data
+    assert x.c > np.max(np.abs(a - ah)) and x.d > np.max(np.abs(b - bh))
     assert {c.name: c.passed for c in result.checks}["identification_lyapunov"] is True
 
 

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from designkit.cli import main
-from designkit.families.state_regulator.gains import ackermann, reference_gain
+from designkit.families.state_regulator.gains import reference_gain
 from designkit.models.elastic import elastic_state_space
 from designkit.models.robots.elastic_link import DEFAULTS, elastic_link
+from designkit.synthesis.pole_placement import ackermann
 from tests.cli_input import assert_bad_input
 
 SPEC = Path(__file__).resolve().parents[3] / "specs" / "state-regulator-elastic-joint.yaml"

@@ -12,10 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from designkit.families.vsc.gains import VscGains, bound_ranges, condition_sets, design_gains, rational_forms
-from designkit.families.vsc.surface import linear_model, sliding_surface
+from designkit.families.vsc.surface import sliding_surface
 from designkit.models.elastic import ElasticJointPlant, elastic_state_space
 from designkit.models.link import LinkPlant
 from designkit.models.robots.elastic_link import DEFAULTS
+from designkit.synthesis.state_space import linear_model
 from designkit.verification.conditions import certify
 
 POLES = [-8.0, -10.0, -12.0]

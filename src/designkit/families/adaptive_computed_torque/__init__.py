@@ -33,7 +33,14 @@ from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
-from designkit.families.adaptive_computed_torque.laws import KIND, Adaptation, Freezer, parameter_units, state_name
+from designkit.families.adaptive_computed_torque.laws import (
+    KIND,
+    Adaptation,
+    AdaptiveData,
+    Freezer,
+    parameter_units,
+    state_name,
+)
 from designkit.families.adaptive_computed_torque.spr import default_psi
 from designkit.families.adaptive_computed_torque.words import unit_text
 from designkit.spec.fields import Finite, NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
@@ -277,7 +284,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     design = Design(
         kind=KIND, plant=plant, gains=gains, poles=poles, reference="trajectory", formulas=formulas,
         notes=tuple(notes),
-        extra={"adaptation": a.to_json(), "units": list(units), "true": [float(true[i]) for i in idx]},
+        data=AdaptiveData(adaptation=a, units=tuple(units), true=tuple(float(true[i]) for i in idx)),
     )
     held = (a.Lambda, a.KD) if a.scheme == "slotine_li" else (a.K1, a.K2)
     lin = Linearization("frozen", reason="the law with the estimated parameters held (no adaptation)",
@@ -288,8 +295,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
 
 
 def law(design: Design, anti_windup: Any = None) -> Any:
-    """The adaptive law of ``design`` (its settings from ``design.extra``)."""
-    return act.adaptive_law(design.plant, Adaptation.from_json(design.extra["adaptation"]))
+    """The adaptive law of ``design`` (its settings from ``design.data``)."""
+    return act.adaptive_law(design.plant, design.data.adaptation)
 
 
 def validate(spec: Any) -> None:

@@ -53,7 +53,7 @@ CONVERGED_REL = 0.05
 
 
 def _craig(design: Any, ctx: Context) -> bool:
-    return design.kind == KIND and design.extra["adaptation"].get("scheme", "craig") == "craig"
+    return design.kind == KIND and design.data.adaptation.scheme == "craig"
 
 
 def _run(design: Any, ctx: Context) -> bool:
@@ -64,9 +64,9 @@ def spr_evidence(design: Any, solver: str = "CLARABEL") -> dict[str, Any]:
     """Per-joint :class:`~.spr.JointSpr` and the block-diagonal KYP verdict of a design's gains."""
     from designkit.verification.kyp import positive_real
 
-    a = design.extra["adaptation"]
-    joints = [joint_spr(k1, k2, psi, solver=solver) for k1, k2, psi in zip(a["K1"], a["K2"], a["psi"], strict=True)]
-    stacked = positive_real(*stacked_realisation(a["K1"], a["K2"], a["psi"]), solver=solver)
+    a = design.data.adaptation
+    joints = [joint_spr(k1, k2, psi, solver=solver) for k1, k2, psi in zip(a.K1, a.K2, a.psi, strict=True)]
+    stacked = positive_real(*stacked_realisation(a.K1, a.K2, a.psi), solver=solver)
     return {"joints": joints, "stacked": stacked}
 
 
@@ -142,8 +142,8 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
     t = np.asarray(sim.time, dtype=float)
     V = np.asarray(sim.signals["V"], dtype=float)
     Vdot = np.asarray(sim.signals["Vdot_bound"], dtype=float)
-    slotine = design.extra["adaptation"].get("scheme", "craig") == "slotine_li"
-    filtered = design.extra["adaptation"]["acceleration"] == "filtered" and not slotine
+    slotine = design.data.adaptation.scheme == "slotine_li"
+    filtered = design.data.adaptation.acceleration == "filtered" and not slotine
     tol = V_TOL_FILTERED if filtered else V_TOL_IDEAL
     if not np.all(np.isfinite(V)):
         return (Check("adaptive_lyapunov", False, "finite V", None, None, "", "V stopped being finite", {}),)
@@ -152,7 +152,7 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
     predicted = float(np.sum(0.5 * (Vdot[1:] + Vdot[:-1]) * np.diff(t)))
     cert = {"V0": float(V[0]), "V_end": float(V[-1]), "largest_rise": rise, "relative_rise": rel,
             "at_s": float(t[k]), "tolerance": tol, "integral_of_Vdot": predicted,
-            "V_end_minus_V0": float(V[-1] - V[0]), "acceleration": design.extra["adaptation"]["acceleration"]}
+            "V_end_minus_V0": float(V[-1] - V[0]), "acceleration": design.data.adaptation.acceleration}
     setting = ("filtered velocity derivative: the theorem's V' = −xᵀQ1x holds only up to the filter's error"
                if filtered else "Slotine–Li: V = ½ sᵀDs + ½ P̃ᵀK⁻¹P̃, V' = −sᵀ KD s exactly" if slotine
                else "ideal accelerometer: V' = −Σ 2K1 e² + 2(ψK2 − 1) ė² exactly, ≤ 0 when ψK2 ≥ 1")
@@ -165,20 +165,20 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 def run_excitation(design: Any, sim: Any) -> Any:
     """The excitation indicators of the run's desired trajectory."""
-    a = design.extra["adaptation"]
-    if a.get("scheme", "craig") == "slotine_li":
-        return excitation(design.plant, a["adapt"], a["KD"], a["gain"], np.asarray(sim.time), np.asarray(sim.reference),
+    a = design.data.adaptation
+    if a.scheme == "slotine_li":
+        return excitation(design.plant, a.names, a.KD, a.gain, np.asarray(sim.time), np.asarray(sim.reference),
                           scheme="slotine_li")
-    return excitation(design.plant, a["adapt"], a["K1"], a["gain"], np.asarray(sim.time), np.asarray(sim.reference))
+    return excitation(design.plant, a.names, a.K1, a.gain, np.asarray(sim.time), np.asarray(sim.reference))
 
 
 def _estimates(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
-    a = design.extra["adaptation"]
-    names, true = list(a["adapt"]), np.asarray(design.extra["true"], dtype=float)
+    a = design.data.adaptation
+    names, true = list(a.names), np.asarray(design.data.true, dtype=float)
     final = estimates(sim, names)[-1]
     rel = np.abs(final - true) / np.where(np.abs(true) > 0, np.abs(true), 1.0)
-    start = np.abs(np.asarray(a["initial"]) - true) / np.where(np.abs(true) > 0, np.abs(true), 1.0)
+    start = np.abs(np.asarray(a.initial) - true) / np.where(np.abs(true) > 0, np.abs(true), 1.0)
     worst = int(np.argmax(rel)) if rel.size else 0
     ex = run_excitation(design, sim)
     ok = bool(np.all(rel <= CONVERGED_REL)) if np.all(np.isfinite(rel)) else False

@@ -50,16 +50,16 @@ def error_figure(result: Any) -> Figure | None:
 
 def _draw_estimates(result: Any) -> Any:
     d, sim = result.design, result.simulation
-    a = d.extra["adaptation"]
-    names, units, true = a["adapt"], d.extra["units"], d.extra["true"]
+    a = d.data.adaptation
+    names, units, true = a.names, d.data.units, d.data.true
     t = np.asarray(sim.time, dtype=float)
     est = estimates(sim, names)
     fig, axes = new_figure(6.8, 1.5 + 1.3 * len(names), rows=len(names))
     for k, ax in enumerate(axes):
         tag(fig, "true", ax.axhline(true[k], color=GREEN, **LIMIT_STYLE, label=f"true {true[k]:.4g}"))
         tag(fig, "estimate", *plot_decimated(ax, t, est[:, k], color=BLUE, label="estimate"))
-        if a["bounds"] is not None and np.isfinite(a["bounds"][k][0]):
-            for b in a["bounds"][k]:
+        if a.bounds is not None and np.isfinite(a.bounds[k][0]):
+            for b in a.bounds[k]:
                 tag(fig, "bound", ax.axhline(b, color=GREY, ls=":", lw=1.0))
         ax.set_ylabel(f"{names[k]} ({unit_text(units[k])})", fontsize=8)
         ax.legend(loc="best", framealpha=0.9, fontsize=7)
@@ -124,10 +124,10 @@ def excitation_figure(result: Any) -> Figure | None:
 
 
 def _draw_spr(result: Any) -> Any:
-    a = result.design.extra["adaptation"]
+    a = result.design.data.adaptation
     fig, (top, bottom) = new_figure(6.8, 4.8, rows=2)
     info: dict[str, Any] = {"negative": False}
-    for j, (k1, k2, psi) in enumerate(zip(a["K1"], a["K2"], a["psi"], strict=True)):
+    for j, (k1, k2, psi) in enumerate(zip(a.K1, a.K2, a.psi, strict=True)):
         color = JOINT_COLORS[j % len(JOINT_COLORS)]
         w = frequency_grid(k1, k2)[1:]
         re = re_h(k1, k2, psi, w)
@@ -147,7 +147,7 @@ def _draw_spr(result: Any) -> Any:
 
 def spr_figure(result: Any) -> Figure | None:
     """Re H(jw) per joint and w^2 Re H(jw), whose limit is the SPR margin psi K2 - 1."""
-    if result.design.kind != KIND or result.design.extra["adaptation"].get("scheme", "craig") != "craig":
+    if result.design.kind != KIND or result.design.data.adaptation.scheme != "craig":
         return None
     svg, keys, info = render_tagged(_draw_spr, result)
     caption = ("Drawn: for each joint, Re H(jω) of H(s) = (1 + ψ s)/(s² + K2 s + K1) scaled by K1 (top; 1 at ω = 0) "

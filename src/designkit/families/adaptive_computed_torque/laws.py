@@ -33,7 +33,7 @@ Projection (optional): after every integration step ``p_i`` is reset to ``l_i`` 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,10 +42,11 @@ import numpy as np
 
 from designkit.families.adaptive_computed_torque import slotine_li
 from designkit.models import regressor
+from designkit.synthesis.design import FamilyData
 from designkit.synthesis.law import Law, LawSymbols, State, dynamic_law
 
-__all__ = ["KIND", "Adaptation", "Freezer", "adaptive_law", "estimated_dynamics", "estimates", "fixed_law",
-           "parameter_units", "settings_of", "state_name", "true_parameters"]
+__all__ = ["KIND", "Adaptation", "AdaptiveData", "Freezer", "adaptive_law", "estimated_dynamics", "estimates",
+           "fixed_law", "parameter_units", "state_name", "true_parameters"]
 
 KIND = "adaptive_computed_torque"
 """The controller kind of this family (the spec's ``controller.kind``)."""
@@ -302,6 +303,20 @@ def estimates(sim: Any, names: Sequence[str]) -> np.ndarray:
     return np.asarray(sim.controller_state, dtype=float)[:, cols]
 
 
-def settings_of(design: Any) -> Mapping[str, Any]:
-    """The design's adaptation settings (``design.extra["adaptation"]``)."""
-    return design.extra["adaptation"]
+@dataclass(frozen=True)
+class AdaptiveData(FamilyData):
+    """The adaptive computed torque's design data (:attr:`~designkit.synthesis.design.Design.data`).
+
+    Attributes
+    ----------
+    adaptation : Adaptation
+        What the law adapts and how (SI units).
+    units : tuple of str
+        The unit of each adapted parameter, in the order of ``adaptation.names``.
+    true : tuple of float
+        The arm's true value of each adapted parameter (its unit).
+    """
+
+    adaptation: Adaptation
+    units: tuple[str, ...]
+    true: tuple[float, ...]

@@ -42,17 +42,17 @@ def json(result: Any) -> dict[str, Any]:
     """``{"adaptation": {parameters, units, initial, final, true, spr: {margin, psi_min}, excitation}}`` (SI units;
     ``final`` and ``excitation`` null without a run)."""
     d, sim = result.design, result.simulation
-    a = d.extra["adaptation"]
-    rows = [] if a.get("scheme", "craig") == "slotine_li" else _spr_rows(result)
+    a = d.data.adaptation
+    rows = [] if a.scheme == "slotine_li" else _spr_rows(result)
     out: dict[str, Any] = {
-        "parameters": list(a["adapt"]), "units": list(d.extra["units"]), "initial": list(a["initial"]),
-        "true": list(d.extra["true"]), "acceleration": a["acceleration"], "scheme": a.get("scheme", "craig"),
+        "parameters": list(a.names), "units": list(d.data.units), "initial": list(a.initial),
+        "true": list(d.data.true), "acceleration": a.acceleration, "scheme": a.scheme,
         "spr": None if not rows else {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows],
                                       "psi_min_s": [r["psi_min_s"] for r in rows]},
         "final": None, "excitation": None,
     }
     if sim is not None:
-        out["final"] = [_num(v) for v in estimates(sim, a["adapt"])[-1]]
+        out["final"] = [_num(v) for v in estimates(sim, a.names)[-1]]
         check = _check(result, "estimate_convergence")
         if check is not None:
             c = check.certificate
@@ -104,12 +104,12 @@ def _tracking_question(result: Any) -> Question:
 
 def _estimates_question(result: Any) -> Question:
     d, sim = result.design, result.simulation
-    a = d.extra["adaptation"]
+    a = d.data.adaptation
     check = _check(result, "estimate_convergence")
-    final = estimates(sim, a["adapt"])[-1]
-    true = np.asarray(d.extra["true"], dtype=float)
+    final = estimates(sim, a.names)[-1]
+    true = np.asarray(d.data.true, dtype=float)
     rows = tuple((describe(x), unit_text(u), _f(i), _f(f), _f(t), _f(100 * abs(f - t) / abs(t) if t else abs(f), 3))
-                 for x, u, i, f, t in zip(a["adapt"], d.extra["units"], a["initial"], final, true, strict=True))
+                 for x, u, i, f, t in zip(a.names, d.data.units, a.initial, final, true, strict=True))
     table = Table("Adapted parameters: the initial estimate, the run's final estimate and the true value",
                   ("Parameter", "Unit", "Initial", "Final", "True", "Final error (%)"), rows)
     c = check.certificate if check is not None else {}
@@ -137,7 +137,7 @@ def _lyapunov_question(result: Any) -> Question:
     if check is None:
         return Question("Is the Lyapunov function of the adaptive loop non-increasing?", ("The run was not judged.",))
     c = check.certificate
-    if result.design.extra["adaptation"].get("scheme", "craig") == "slotine_li":
+    if result.design.data.adaptation.scheme == "slotine_li":
         what = "V = ½ sᵀD(q)s + ½ (P − P̂)ᵀK⁻¹(P − P̂), with s = ė + Λe and the true inertia D(q),"
     else:
         what = ("V = Σⱼ xⱼᵀPⱼxⱼ + (P − P̂)ᵀK⁻¹(P − P̂), with xⱼ = (eⱼ, ėⱼ) and the closed-form KYP matrix "
@@ -150,20 +150,20 @@ def _lyapunov_question(result: Any) -> Question:
 
 
 def _acceleration_question(result: Any) -> Question:
-    a = result.design.extra["adaptation"]
-    if a.get("scheme", "craig") == "slotine_li":
+    a = result.design.data.adaptation
+    if a.scheme == "slotine_li":
         words = ("It needs none: the Slotine–Li law's regressor Y(q, q̇, q̇r, q̈r) uses the reference velocity and "
                  "acceleration q̇r = q̇D + Λe, q̈r = q̈D + Λė, and its update K Yₐᵀ s no inverse of the estimated "
                  "inertia. The price is the Christoffel-consistent Coriolis matrix in the regressor, a larger "
                  "expression than the computed torque's.")
-    elif a["acceleration"] == "ideal":
+    elif a.acceleration == "ideal":
         words = ("An ideal accelerometer: the update reads the arm's own acceleration, which the law can evaluate in "
                  "the simulation because the command does not depend on it (the torque uses the desired acceleration "
                  "and the error feedback only), so there is no algebraic loop. The cost is one forward-dynamics "
                  "evaluation per step, and a sensor a real arm may not have: with the filtered derivative instead, "
                  "the update sees the acceleration late and the proof holds only approximately.")
     else:
-        words = (f"The measured velocity differentiated through a first-order filter of bandwidth {_f(a['bandwidth'])} "
+        words = (f"The measured velocity differentiated through a first-order filter of bandwidth {_f(a.bandwidth)} "
                  f"rad/s: {len(result.design.plant.positions)} more controller states, an integration step bounded by "
                  "that pole, and an acceleration that lags the arm's by about one filter time constant, so the "
                  "Lyapunov function's decrease holds only approximately (the check's tolerance says how much).")
@@ -176,13 +176,13 @@ def section(result: Any) -> ReportSection | None:
 
     if result.design.kind != KIND:
         return None
-    slotine = result.design.extra["adaptation"].get("scheme", "craig") == "slotine_li"
+    slotine = result.design.data.adaptation.scheme == "slotine_li"
     questions = [] if slotine else [_spr_question(result)]
     if result.simulation is not None:
         questions += [_tracking_question(result), _estimates_question(result), _lyapunov_question(result)]
     questions.append(_acceleration_question(result))
-    a = result.design.extra["adaptation"]
-    adapted = "; ".join(describe(x) for x in a["adapt"])
+    a = result.design.data.adaptation
+    adapted = "; ".join(describe(x) for x in a.names)
     intro = ("Craig's adaptive computed torque (notes section 4.4). Adapted: " + adapted
              + ". Every other parameter of the arm's regressor is taken as known, at its true value. The answers are "
                "computed from the design's gains and from the run.")

@@ -19,29 +19,22 @@ model, the simulation runs on the true plant, and the checks measure what the mi
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
-from pydantic import Field, field_validator, model_validator
 
-from designkit.errors import SpecError
-from designkit.families.computed_torque.friction_layer import (
-    DEFAULT_LAYER,
-    coulomb_levels,
-    layer_formulas,
-    layer_words,
-    smoothed,
-)
-from designkit.spec.controllers import ControllerModel
-from designkit.spec.fields import NonNegativeFinite, Section, check_conjugates, parse_pole, per_joint
-from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
+from designkit.spec.computed_torque import FRICTION_LAYER, PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
+from designkit.spec.fields import joint_values
 from designkit.synthesis.closed_loop import with_closed_loop
-from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
+from designkit.synthesis.friction_layer import DEFAULT_LAYER, coulomb_levels, layer_formulas, layer_words, smoothed
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, stateless_law
 from designkit.synthesis.model import controller_model
+from designkit.synthesis.pole_placement import error_gains
 
 KIND = "computed_torque"
 
@@ -56,134 +49,37 @@ def model_error_diagnosis(result: Any, check: Any) -> tuple[str, str] | None:
     return explain(result, check)
 
 
-def _pole(value: Any, where: str) -> complex:
-    try:
-        return parse_pole(value)
-    except ValueError as exc:
-        raise ValueError(f"{where}: {exc}") from None
-
-
-def _pair(poles: list[complex], where: str) -> list[complex]:
-    if len(poles) != 2:
-        raise ValueError(f"{where}must list exactly 2 poles per joint, got {len(poles)}")
-    check_poles(poles, where.removesuffix(": "))
-    try:
-        check_conjugates(poles)
-    except ValueError as exc:
-        raise ValueError(f"{where}{exc}") from None
-    return poles
-
-
-class ComputedTorqueSpec(Section):
-    """Computed torque ``u = M^(q)(qD'' + K1 e + K2 e') + h^(q, qd)``.
-
-    Give the error poles -- ``poles``: two poles (1/s) for every joint, or one pair per joint -- or
-    ``damping`` (1e-6 to 1e3) and ``natural_frequency`` (rad/s, 1e-12 to 1e12), one value or one per
-    joint; either way every ``|p|`` lies between 1e-12 and 1e12 1/s and ``max |p| / min |Re p|`` is at
-    most 1e12 (:func:`~designkit.spec.ranges.check_poles`).  ``model``: the model the controller
-    believes (default: the true plant).
-    """
-
-    kind: Literal["computed_torque"]
-    poles: list[Any] | None = Field(default=None, description="Two error poles (1/s) for every joint, or a pair "
-                                    "per joint.")
-    damping: RangedPerJoint(1e-6, 1e3, "") | None = None
-    natural_frequency: RangedPerJoint(1e-12, 1e12, "rad/s") | None = None
-    model: ControllerModel | None = None
-
-    @field_validator("poles")
-    @classmethod
-    def _pole_pairs(cls, v: list[Any] | None) -> list[Any] | None:
-        if v is None:
-            return v
-        nested = [isinstance(p, list | tuple) for p in v]
-        if any(nested) and not all(nested):
-            raise ValueError("give two poles, or a list of two poles per joint, not a mix")
-        if not all(nested):
-            return _pair([_pole(p, f"[{k}]") for k, p in enumerate(v)], "")
-        if not v:
-            raise ValueError("needs at least one pair of poles")
-        pairs = [_pair([_pole(p, f"[{i}][{k}]") for k, p in enumerate(row)], f"[{i}]: ") for i, row in enumerate(v)]
-        check_poles([p for pair in pairs for p in pair])  # one closed loop: the spread over every joint
-        return pairs
-
-    @model_validator(mode="after")
-    def _one_way(self) -> ComputedTorqueSpec:
-        by_poles = self.poles is not None
-        by_zeta = self.damping is not None or self.natural_frequency is not None
-        if by_poles == by_zeta:
-            raise ValueError("give either poles, or damping and natural_frequency")
-        if by_zeta and (self.damping is None or self.natural_frequency is None):
-            raise ValueError("damping and natural_frequency go together")
-        for name in ("damping", "natural_frequency"):
-            value = getattr(self, name)
-            for x in (value if isinstance(value, list) else [] if value is None else [value]):
-                if x <= 0:
-                    raise ValueError(f"{name}: must be positive, got {x:g}")
-        if by_zeta:
-            zetas, wns = (v if isinstance(v, list) else [v] for v in (self.damping, self.natural_frequency))
-            if len(zetas) == len(wns) or 1 in (len(zetas), len(wns)):  # else refused per joint at synthesis
-                n = max(len(zetas), len(wns))
-                poles = [p for k in range(n) for p in _damped_pair(zetas[k % len(zetas)], wns[k % len(wns)])]
-                try:
-                    check_poles(poles)
-                except ValueError as exc:
-                    what = str(exc).split("]: ", 1)[-1] if str(exc).startswith("[") else str(exc)
-                    raise ValueError(f"natural_frequency: the error poles of damping and natural_frequency: {what}"
-                                     ) from None
-        return self
-
-
-FRICTION_LAYER = Ranged(1e-6, 1e3, "rad/s or m/s", zero=True, base=NonNegativeFinite)
-"""``controller.friction_layer``: the boundary layer of the Coulomb compensation (0 = the exact ``sign``)."""
-
-
 class ComputedTorqueLawSpec(ComputedTorqueSpec):
     """Computed torque as the ``computed_torque`` family reads it: :class:`ComputedTorqueSpec` and
     ``friction_layer`` (rad/s or m/s; 0, or 1e-6 to 1e3; default 0): the model's Coulomb compensation
-    ``Fc sign(q')`` is written ``Fc s(q'/friction_layer)`` (:mod:`~designkit.families.computed_torque.friction_layer`),
+    ``Fc sign(q')`` is written ``Fc s(q'/friction_layer)`` (:mod:`~designkit.synthesis.friction_layer`),
     0 keeps the exact ``sign``."""
 
+    kind: Literal[KIND]
     friction_layer: FRICTION_LAYER = DEFAULT_LAYER
 
 
-def _damped_pair(zeta: float, wn: float) -> tuple[complex, complex]:
-    """The error poles ``wn (-zeta +- sqrt(zeta^2 - 1))`` (1/s) of a damping ratio and natural frequency (rad/s),
-    as :func:`error_poles` computes them (for the spec's check of their range)."""
-    disc = complex(zeta * zeta - 1.0) ** 0.5
-    return wn * (-zeta + disc), wn * (-zeta - disc)
+@dataclass(frozen=True)
+class ComputedTorqueData(FamilyData):
+    """The computed-torque family's design data (:attr:`~designkit.synthesis.design.Design.data`).
 
+    Attributes
+    ----------
+    friction_layer : float
+        The boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``).
+    model_differs : bool
+        Whether the controller's model differs from the true plant (``controller.model`` given).
+    """
 
-def joint_values(value: Any, n: int, path: str) -> tuple[float, ...]:
-    try:
-        return per_joint(value, n, path)
-    except ValueError as exc:
-        key, msg = str(exc).split(": ", 1)
-        raise SpecError(key, msg) from None
-
-
-def error_poles(spec: Any, n: int, what: str = "joint") -> list[tuple[complex, complex]]:
-    """The pair of error poles of each of ``n`` joints (or task coordinates: ``what``), from ``poles`` or from
-    ``damping`` and ``natural_frequency``."""
-    ctrl = spec.controller
-    if ctrl.poles is not None:
-        if isinstance(ctrl.poles[0], list):
-            if len(ctrl.poles) != n:
-                raise SpecError("controller.poles", f"needs one pair of poles per {what} ({n}), got {len(ctrl.poles)}")
-            return [tuple(p) for p in ctrl.poles]
-        return [tuple(ctrl.poles)] * n
-    zetas = joint_values(ctrl.damping, n, "controller.damping")
-    wns = joint_values(ctrl.natural_frequency, n, "controller.natural_frequency")
-    out = []
-    for zeta, wn in zip(zetas, wns, strict=True):
-        disc = complex(zeta * zeta - 1.0) ** 0.5
-        out.append((wn * (-zeta + disc), wn * (-zeta - disc)))
-    return out
+    friction_layer: float = 0.0
+    model_differs: bool = False
 
 
 def friction_layer_of(design: Design) -> float:
-    """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``)."""
-    return float(design.extra.get("friction_layer", 0.0))
+    """The design's boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``, also for a design
+    without :class:`ComputedTorqueData`, such as the learning family's whose feedback is this law)."""
+    data = design.data
+    return float(data.friction_layer) if isinstance(data, ComputedTorqueData) else 0.0
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -213,10 +109,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
     model = controller_model(plant, spec.controller.model)
     n = model.n_joints
     pairs = error_poles(spec, n)
-    K1 = [float((p1 * p2).real) for p1, p2 in pairs]
-    K2 = [float((-(p1 + p2)).real) for p1, p2 in pairs]
-    gains = Gains.of([Gain("K1", K1, "1/s^2", "position error gain (wn^2)"),
-                      Gain("K2", K2, "1/s", "velocity error gain (2 zeta wn)")])
+    K1, K2 = error_gains(pairs)
+    gains = Gains.of([Gain("K1", list(K1), "1/s^2", "position error gain (wn^2)"),
+                      Gain("K2", list(K2), "1/s", "velocity error gain (2 zeta wn)")])
     notes = []
     if spec.controller.model is not None:
         changed = {q.name: q.value for q in model.parameters if q.value != plant.parameter(q.name).value}
@@ -240,8 +135,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
                   "ë + K2 ė + K1 e = 0 per joint on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)",
                   *layer_formulas(fc, layer)),
         notes=tuple(notes),
-        extra={"model_differs": spec.controller.model is not None, "codegen_terms": ["D_hat", "h_hat"],
-               "friction_layer": layer},
+        extra={"codegen_terms": ["D_hat", "h_hat"]},
+        data=ComputedTorqueData(friction_layer=layer, model_differs=spec.controller.model is not None),
     )
     return with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
                             field="simulation.initial_position")
@@ -266,4 +161,5 @@ FAMILY = Family(
     knobs=gain_knobs({"K1": ("1/s^2", "position error gain (wn^2)"), "K2": ("1/s", "velocity error gain (2 zeta wn)")},
                      ("K1", "K2")),
     traits=("model_based",),
+    per_joint_fields=PER_JOINT_FIELDS,
 )

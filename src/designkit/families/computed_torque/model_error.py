@@ -83,22 +83,18 @@ class ModelErrorPrediction:
 
 
 def _model_based(result: Any) -> bool:
-    """A model-based joint-space law whose controller model differs from the true plant (gains K1, K2, the
-    ``error_poles`` check of ``e'' + K2 e' + K1 e = 0``, joints tracked), both plants robots."""
-    from designkit.families import family
+    """A computed-torque design whose controller model differs from the true plant (gains K1, K2 of
+    ``e'' + K2 e' + K1 e = 0``, joints tracked), both plants robots."""
+    from designkit.families.computed_torque import KIND
 
     design, plant = result.design, result.plant
-    if plant is None or plant is design.plant or not (design.extra or {}).get("model_differs"):
+    if design.kind != KIND or plant is None or plant is design.plant or not design.data.model_differs:
         return False
     if not all(hasattr(p, "robot") for p in (plant, design.plant)) or result.simulation is None:
         return False
     if "K1" not in design.gains or "K2" not in design.gains or result.simulation.task_space:
         return False
-    try:
-        fam = family(design.kind)
-    except Exception:  # noqa: BLE001 -- an unregistered kind: no claim on its error dynamics
-        return False
-    return design.motion is None and "error_poles" in fam.check_names
+    return design.motion is None
 
 
 def static_model_error(plant: Any, model: Any, K1: Any, q: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ law, with the integrals ``x3_i' = q_i - qD_i`` and a centralized gravity feed-fo
 
 ``gravity_feedforward``: ``measured`` (``g^(q)``, as SIMNOG), ``desired`` (``g^(qD)``) or ``none``
 (the integrals alone take the gravity load).  The per-joint gains are the one-link PID servo's
-(:mod:`designkit.families.pid_servo`), so each joint loop places its requested poles exactly *on
+(:mod:`designkit.synthesis.servo_loop`), so each joint loop places its requested poles exactly *on
 its simplified model*; the coupled arm's poles differ by the intercoupling, which the
 ``coupling`` check measures.
 
@@ -35,43 +35,24 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from designkit.errors import ModelError, SpecError
-from designkit.families import pid_servo
 from designkit.families.decentralized_pid import workspace_check as workspace_certificate
 from designkit.families.decentralized_pid.diagnoses import diagnose
 from designkit.models.link import simplified_link
 from designkit.spec.controllers import three_poles
-from designkit.spec.fields import PositiveFinite, Section, parse_pole, per_joint
-from designkit.spec.ranges import Ranged, RangedInt, RangedPerJoint, check_poles
+from designkit.spec.fields import PositiveFinite, Section, joint_values, parse_pole
+from designkit.spec.ranges import Ranged, RangedPerJoint, check_poles
+from designkit.spec.workspace import Workspace, joint_limits_word, workspace_box, workspace_schema
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
+from designkit.synthesis.pid import GAIN_INFO, SERVO_FORMULAS
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
+from designkit.synthesis.servo_loop import servo_design, servo_law
 from designkit.synthesis.variation import with_gains
 
 KIND = "decentralized_pid"
-
-
-class Workspace(Section):
-    """A box of configurations ``low <= q <= high`` (rad, or m for a prismatic joint) for the ``workspace`` check.
-
-    ``low``, ``high``: one value for every joint or one per joint (each within 100); either omitted: the
-    robot's joint limits (``qlim``).  ``tolerance`` (1e-9 to 0.1, default 1e-3): the relative gap between
-    each proven bound of ``D_ii`` over the box and the configuration found nearest to it
-    (:func:`designkit.models.bounds.model_bound`).  ``samples`` (2 to 101): grid points per outboard joint
-    of the sampled estimate of the range shown beside it (:func:`designkit.models.link.link_range`).
-    Checked against the robot at synthesis: one value per joint, ``low < high``, inside the joint limits.
-    """
-
-    low: RangedPerJoint(-100, 100, "rad or m") | None = None
-    high: RangedPerJoint(-100, 100, "rad or m") | None = None
-    samples: RangedInt(2, 101) = 7
-    tolerance: Ranged(1e-9, 0.1, "") = 1e-3
-
-
-def _workspace_schema(schema: dict[str, Any]) -> None:
-    schema["anyOf"].insert(1, {"const": "joint_limits", "type": "string"})
 
 
 class DecentralizedPidSpec(Section):
@@ -85,7 +66,8 @@ class DecentralizedPidSpec(Section):
     within 100): where each link's ``Km_i``, ``tau_i`` are computed (default:
     ``simulation.initial_position``, else zero).
     ``workspace``: the box of configurations the ``workspace`` check certifies the loops over
-    (:class:`Workspace`, or ``joint_limits`` for the robot's joint limits; default: no such check).
+    (:class:`~designkit.spec.workspace.Workspace`, or ``joint_limits`` for the robot's joint limits; default: no
+    such check).
     """
 
     kind: Literal["decentralized_pid"]
@@ -96,18 +78,14 @@ class DecentralizedPidSpec(Section):
     gravity_feedforward: Literal["measured", "desired", "none"] = "measured"
     third_pole_factor: Ranged(1, 100, "", base=PositiveFinite) = 5.0
     design_margin: Ranged(0, 0.9, "") = 0.1
-    workspace: Workspace | None = Field(default=None, json_schema_extra=_workspace_schema,
+    workspace: Workspace | None = Field(default=None, json_schema_extra=workspace_schema,
                                         description="Box of configurations {low, high} (rad or m per joint) "
                                         "certified by the workspace check, or 'joint_limits'.")
 
     @field_validator("workspace", mode="before")
     @classmethod
     def _joint_limits(cls, v: Any) -> Any:
-        if isinstance(v, str):
-            if v.strip() != "joint_limits":
-                raise ValueError(f"must be 'joint_limits' or a mapping {{low, high, samples, tolerance}}, got {v!r}")
-            return {}
-        return v
+        return joint_limits_word(v)
 
     @field_validator("poles")
     @classmethod
@@ -148,14 +126,6 @@ def _pole(value: Any, where: str) -> complex:
         raise ValueError(f"{where}: {exc}") from None
 
 
-def _per_joint(value: Any, n: int, path: str) -> tuple[float, ...]:
-    try:
-        return per_joint(value, n, path)
-    except ValueError as exc:
-        key, msg = str(exc).split(": ", 1)
-        raise SpecError(key, msg) from None
-
-
 def _pole_sets(spec: Any, n: int) -> tuple[list[tuple[complex, ...]], tuple[str, ...], dict]:
     ctrl = spec.controller
     if ctrl.poles is None:
@@ -172,62 +142,10 @@ def configuration(spec: Any, n: int) -> np.ndarray:
     """The configuration ``q*`` (rad) of the per-link models: ``controller.configuration``, else the
     simulation's initial position, else zero."""
     if spec.controller.configuration is not None:
-        return np.array(_per_joint(spec.controller.configuration, n, "controller.configuration"))
+        return np.array(joint_values(spec.controller.configuration, n, "controller.configuration"))
     if spec.simulation.initial_position is not None:
-        return np.array(_per_joint(spec.simulation.initial_position, n, "simulation.initial_position"))
+        return np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
     return np.zeros(n)
-
-
-def workspace(spec: Any, plant: Any) -> dict[str, Any] | None:
-    """The ``controller.workspace`` box checked against the robot (rad or m per joint), or None.
-
-    Returns
-    -------
-    dict or None
-        ``{"low": [...], "high": [...], "samples": int, "tolerance": float, "source": {"low": ..., "high": ...}}``,
-        the source of each side being ``"spec"`` or ``"joint limits"``.
-
-    Raises
-    ------
-    SpecError
-        ``controller.workspace.low``: not one value per joint, or omitted on a robot without joint
-        limits; ``controller.workspace.high[i]``: not above ``low[i]``; either side outside the
-        joint limits.
-    """
-    ws = spec.controller.workspace
-    if ws is None:
-        return None
-    n, limits = plant.n_joints, plant.joint_limits
-    sides: dict[str, tuple[float, ...]] = {}
-    source: dict[str, str] = {}
-    for k, side in enumerate(("low", "high")):
-        given = getattr(ws, side)
-        if given is None:
-            missing = next((i for i, lim in enumerate(limits) if lim is None), None)
-            if missing is not None:
-                raise SpecError(f"controller.workspace.{side}", f"needed: joint {missing + 1} has no joint limits "
-                                "(qlim) in the robot data to default to")
-            sides[side], source[side] = tuple(lim[k] for lim in limits), "joint limits"
-        else:
-            sides[side], source[side] = _per_joint(given, n, f"controller.workspace.{side}"), "spec"
-
-    def path(side: str, i: int) -> str:
-        return f"controller.workspace.{side}" + (f"[{i}]" if isinstance(getattr(ws, side), list) else "")
-
-    low, high = sides["low"], sides["high"]
-    for i in range(n):
-        if not low[i] < high[i]:
-            raise SpecError(path("high", i), f"must be greater than low ({low[i]:g}) for joint {i + 1}, "
-                            f"got {high[i]:g}")
-        lim = limits[i]
-        if lim is not None and low[i] < lim[0]:
-            raise SpecError(path("low", i), f"outside joint {i + 1}'s limits [{lim[0]:.6g}, {lim[1]:.6g}], "
-                            f"got {low[i]:g}")
-        if lim is not None and high[i] > lim[1]:
-            raise SpecError(path("high", i), f"outside joint {i + 1}'s limits [{lim[0]:.6g}, {lim[1]:.6g}], "
-                            f"got {high[i]:g}")
-    return {"low": list(low), "high": list(high), "samples": ws.samples, "tolerance": ws.tolerance,
-            "source": source}
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -264,12 +182,12 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("plant.friction", "decentralized_pid designs each joint on Km = 1/f (f the joint's viscous "
                         "friction), so the plant needs its friction: set plant.friction: true")
     q_star = configuration(spec, n)
-    box = workspace(spec, plant)
+    box = workspace_box(spec, plant)
     pole_sets, notes, extra = _pole_sets(spec, n)
     ctrl = spec.controller
     zeros: tuple[float | None, ...] = (None,) * n
     if ctrl.zero is not None:
-        zeros = _per_joint(ctrl.zero, n, "controller.zero")
+        zeros = joint_values(ctrl.zero, n, "controller.zero")
     elif ctrl.poles is None:
         zeros = tuple(float(ps[2].real) for ps in pole_sets)
         notes = (*notes, "No zero given: each joint's zero placed on its third pole, so that its reference "
@@ -281,9 +199,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
         except ModelError as exc:
             raise SpecError("plant", f"joint {i + 1}: {exc.message}") from None
         links.append({"Km": link.Km, "tau": link.tau, "inertia": link.inertia, "damping": link.damping})
-        loops.append(pid_servo.design(link, pole_sets[i], zeros[i]))
+        loops.append(servo_design(link, pole_sets[i], zeros[i], kind=KIND))
     gains = Gains.of(
-        Gain(k, [float(loop.gains[k]) for loop in loops], *pid_servo.GAIN_INFO[k]) for k in ("K1", "K2", "K3", "K4")
+        Gain(k, [float(loop.gains[k]) for loop in loops], *GAIN_INFO[k]) for k in ("K1", "K2", "K3", "K4")
     )
     notes = (*notes, "Per-link models at q* = [" + ", ".join(f"{q:.4g}" for q in q_star) + "] rad: "
              + "; ".join(f"joint {i + 1}: Km = {lk['Km']:.4g} (rad/s)/(N*m), tau = {lk['tau']:.4g} s "
@@ -293,7 +211,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         kind=KIND, plant=plant, gains=gains, reference="step", loops=tuple(loops),
         loop_names=tuple(f"joint{i + 1}" for i in range(n)),
         formulas=("Km_i = 1/f_i,  tau_i = D_ii(q*)/f_i  (simplified link, notes §1.2)",
-                  *pid_servo.pid.SERVO_FORMULAS[2:]),
+                  *SERVO_FORMULAS[2:]),
         notes=notes,
         extra={**extra, "configuration": q_star.tolist(), "links": links,
                "gravity_feedforward": ctrl.gravity_feedforward, "workspace": box,
@@ -309,7 +227,7 @@ def regain(design: Design, gains: Gains, anti_windup: Any = None) -> Design:
     loops = []
     for i, loop in enumerate(design.loops):
         own = loop.gains.replace(**{k: float(np.asarray(gains[k], dtype=float)[i]) for k in ("K1", "K2", "K3", "K4")})
-        loops.append(with_gains(loop, own, pid_servo.law))
+        loops.append(with_gains(loop, own, servo_law))
     arm = with_gains(dataclasses.replace(design, loops=()), gains, law, anti_windup)
     return dataclasses.replace(arm, loops=tuple(loops))
 
@@ -332,7 +250,7 @@ FAMILY = Family(
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
     validate=poles_or_requirements,
-    knobs=gain_knobs(pid_servo.GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")),
     traits=("pid",),
     regain=regain,
     diagnoses=(diagnose,),

@@ -33,22 +33,23 @@ import casadi as ca
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
 
-from designkit.families import computed_torque as ct
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
 from designkit.families.ilc.figures import error_norm_figure, learned_figure, tracking_error_figure
 from designkit.families.ilc.knobs import KNOBS, METRICS
-from designkit.families.ilc.learning import check_size, lifted_of, operator_of, trial_grid, update_rule
+from designkit.families.ilc.learning import IlcData, check_size, lifted_of, operator_of, trial_grid, update_rule
 from designkit.families.ilc.lifted import lifted_model
 from designkit.families.ilc.operators import contraction, learning_operator
 from designkit.simulation.trials import MAX_TRIALS, Learning
-from designkit.spec.fields import Finite, Section
+from designkit.spec.computed_torque import PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
+from designkit.spec.fields import Finite, Section, joint_values
 from designkit.spec.ranges import Ranged, RangedInt
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import TRAJECTORY_REFERENCES, Display, Family
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.model import controller_model
+from designkit.synthesis.pole_placement import error_gains
 
 KIND = "ilc"
 
@@ -83,7 +84,7 @@ class LearningSpec(Section):
         return v
 
 
-class ILCSpec(ct.ComputedTorqueSpec):
+class ILCSpec(ComputedTorqueSpec):
     """Computed torque with a learned acceleration ``d_k``, updated between trials by ``d_{k+1} = d_k + Q e_k``.
 
     The error poles and the controller's ``model`` as for ``computed_torque``; ``trials`` (1 to 200, default
@@ -131,14 +132,13 @@ def synthesize(spec: Any, plant: Any) -> Design:
     ctrl = spec.controller
     model = controller_model(plant, ctrl.model)
     n = model.n_joints
-    pairs = ct.error_poles(spec, n)
-    K1 = tuple(float((p1 * p2).real) for p1, p2 in pairs)
-    K2 = tuple(float((-(p1 + p2)).real) for p1, p2 in pairs)
+    pairs = error_poles(spec, n)
+    K1, K2 = error_gains(pairs)
     feedback = [Gain("K1", list(K1), "1/s^2", "position error gain (wn^2)"),
                 Gain("K2", list(K2), "1/s", "velocity error gain (2 zeta wn)")]
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
-        q0 = np.array(ct.joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
+        q0 = np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
     design = Design(kind=KIND, plant=model, gains=Gains.of(feedback), poles=tuple(p for pr in pairs for p in pr),
                     reference="trajectory", extra={"codegen_terms": ["D_hat", "h_hat"]})
     design = with_closed_loop(design, law(design), np.concatenate([q0, np.zeros(2 * n)]),
@@ -157,8 +157,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
     else:
         name, unit, meaning = "gamma", "1/s^2", "learning gain of the P-type update (one-step advance)"
         value, source = float(learning.gain), "controller.learning.gain"
-    info = {"samples": timing.n_samples, "dt": timing.dt, "integrator": timing.integrator, "trials": ctrl.trials,
-            "learning": learning.kind, "value": value, "value_source": source}
+    info = IlcData(samples=timing.n_samples, dt=timing.dt, integrator=timing.integrator, trials=ctrl.trials,
+                   learning=learning.kind, value=value, value_source=source, model_differs=ctrl.model is not None)
     notes = [f"Learning: {learning.kind.replace('_', '-')} update, {name} = {value:.6g} {unit} ({source}); "
              f"{ctrl.trials} trials of {timing.n_samples} samples (dt = {timing.dt:g} s, {timing.integrator})."]
     if ctrl.model is not None:
@@ -169,7 +169,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
                        "the true plant and measure the difference.")
     design = dataclasses.replace(
         design, gains=Gains.of([*feedback, Gain(name, value, unit, meaning)]), notes=tuple(notes),
-        extra={**design.extra, "model_differs": ctrl.model is not None, "lifted": info},
+        data=info,
         formulas=("a* = q̈D + K1 (qD − q) + K2 (q̇D − q̇)",
                   "u = M̂(q) (a* + d_k) + ĥ(q, q̇)  (d_k the trial's learned acceleration)",
                   "e_k = H (d − d_k),  H(s) = 1/(s² + K2 s + K1) per joint when M̂ = M",
@@ -221,6 +221,7 @@ FAMILY = Family(
     knobs=KNOBS,
     metrics=METRICS,
     traits=("learning", "model_based"),
+    per_joint_fields=PER_JOINT_FIELDS,
 )
 
 __all__ = ["FAMILY", "ILCSpec", "law", "synthesize"]

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.ilc.learning import lifted_errors, lifted_of, operator_of
+from designkit.families.ilc.learning import IlcData, lifted_errors, lifted_of, operator_of
 from designkit.families.ilc.lifted import LiftedModel
 from designkit.families.ilc.operators import Contraction, contraction
 from designkit.verification.check import Check
@@ -148,7 +148,7 @@ def _words(c: Contraction) -> dict[str, str]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="ilc_convergence", order=75, applies=lambda d, c: "lifted" in d.extra, run=_certificate_checks,
+    name="ilc_convergence", order=75, applies=lambda d, c: isinstance(d.data, IlcData), run=_certificate_checks,
     label="Learning contraction ‖I − Q H‖₂ < 1",
     labels={"ilc_spectral_radius": "Learning spectral radius < 1 (asymptotic convergence)"},
     glossary=(("ρ", "‖I − Q H‖₂: ‖d − d_k‖ and the error norm shrink at least by this factor every trial"),
@@ -272,7 +272,7 @@ def _trial_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 
 def _source(design: Any) -> str:
-    if design.extra.get("model_differs"):
+    if design.data.model_differs:
         return ("the model mismatch (the learned signal reaches the error through M⁻¹M̂, coupled between joints, "
                 "and what the model misses changes with each trial's motion)")
     return "rounding, and a perturbation M⁻¹f that changes with each trial's motion"
@@ -280,7 +280,7 @@ def _source(design: Any) -> str:
 
 TRIALS_RULE = CheckRule(
     name="ilc_error_decrease", order=128,
-    applies=lambda d, c: "lifted" in d.extra and c.trials is not None and len(c.trials.results) >= 2,
+    applies=lambda d, c: isinstance(d.data, IlcData) and c.trials is not None and len(c.trials.results) >= 2,
     run=_trial_checks, label="Error norm falls every trial as certified",
     labels={"ilc_lifted_model": "Lifted model predicts the trial-to-trial change (μ < 1)"},
     glossary=(("e_k", "the lifted tracking error qD − q of trial k, every joint, samples 1 .. N−1"),

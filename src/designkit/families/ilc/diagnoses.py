@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from designkit.families.ilc.checks import trial_analysis
-from designkit.families.ilc.learning import lifted_of, operator_of
+from designkit.families.ilc.learning import IlcData, lifted_of, operator_of
 from designkit.families.ilc.operators import contraction
 from designkit.simulation.trials import MAX_TRIALS
 
@@ -41,7 +41,7 @@ def _fix(c: Any, lifted: Any) -> str:
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     """``(cause, fix)`` for a failed ``ilc_convergence``, ``ilc_error_decrease`` or (with trials)
     ``tracking_error`` check, else None."""
-    if check.passed is True or "lifted" not in result.design.extra:
+    if check.passed is True or not isinstance(result.design.data, IlcData):
         return None
     c, lifted = _contraction(result)
     if check.name == "ilc_convergence":

@@ -16,7 +16,7 @@ adjoint update, ``1/h_1`` for the P-type update, ``h_1`` the first Markov parame
 
 
 def _learning(design: Any) -> str:
-    return str(design.extra["lifted"]["learning"])
+    return str(design.data.learning)
 
 
 def _alpha_scale(design: Any) -> float:

@@ -9,6 +9,7 @@ samples ``1 .. N-1`` (``e_0`` does not depend on ``d``), computes ``d_{k+1} = d_
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -16,8 +17,44 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.families.ilc.lifted import MAX_LIFTED, MAX_TRIAL_SAMPLES, LiftedModel, lifted_model
 from designkit.families.ilc.operators import Adjoint, PType, learning_operator
+from designkit.synthesis.design import FamilyData
 
-__all__ = ["check_size", "lifted_errors", "lifted_of", "operator_of", "trial_grid", "update_rule"]
+__all__ = ["IlcData", "check_size", "lifted_errors", "lifted_of", "operator_of", "trial_grid", "update_rule"]
+
+
+@dataclass(frozen=True)
+class IlcData(FamilyData):
+    """The ILC family's design data (:attr:`~designkit.synthesis.design.Design.data`): the trial's grid and the
+    learning operator.
+
+    Attributes
+    ----------
+    samples : int
+        Samples of a trial, ``N``.
+    dt : float
+        The grid's step (s).
+    integrator : str
+        The simulator's integrator on that grid (the lifted model is its discretization).
+    trials : int
+        Trials run (``controller.trials``).
+    learning : str
+        The operator ``Q``: ``"adjoint"`` or ``"p_type"``.
+    value : float
+        Its gain: ``alpha`` (1/s^4) of the adjoint update, ``gamma`` (1/s^2) of the P-type update.
+    value_source : str
+        Where the gain comes from, in words.
+    model_differs : bool
+        Whether the controller's model differs from the true plant (the certificate is then the model's).
+    """
+
+    samples: int
+    dt: float
+    integrator: str
+    trials: int
+    learning: str
+    value: float
+    value_source: str
+    model_differs: bool = False
 
 
 def trial_grid(spec: Any, design: Any, plant: Any) -> Any:
@@ -56,13 +93,13 @@ def check_size(samples: int, dt: float, joints: int, trials: int) -> None:
                         f"ask for at most {MAX_TRIAL_SAMPLES // size} trials or a shorter trial")
 
 
-def _lifted(K1: tuple[float, ...], K2: tuple[float, ...], info: Any, time: np.ndarray | None) -> LiftedModel:
+def _lifted(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData, time: np.ndarray | None) -> LiftedModel:
     if time is None or len(time) < 2:
-        return lifted_model(K1, K2, float(info["dt"]), int(info["samples"]), str(info["integrator"]))
+        return lifted_model(K1, K2, float(info.dt), int(info.samples), str(info.integrator))
     dt = float(time[1] - time[0])
-    if int(len(time)) == int(info["samples"]) and abs(dt - float(info["dt"])) <= 1e-9 * dt:
-        dt = float(info["dt"])  # the same grid: share the cached model
-    return lifted_model(K1, K2, dt, int(len(time)), str(info["integrator"]))
+    if int(len(time)) == int(info.samples) and abs(dt - float(info.dt)) <= 1e-9 * dt:
+        dt = float(info.dt)  # the same grid: share the cached model
+    return lifted_model(K1, K2, dt, int(len(time)), str(info.integrator))
 
 
 def _gains(design: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -71,13 +108,13 @@ def _gains(design: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
 def lifted_of(design: Any, time: np.ndarray | None = None) -> LiftedModel:
     """The lifted model of an ``ilc`` design, on the grid of ``time`` (a run's instants) or the design's grid."""
-    return _lifted(*_gains(design), design.extra["lifted"], time)
+    return _lifted(*_gains(design), design.data, time)
 
 
 def operator_of(design: Any) -> Adjoint | PType:
     """The learning operator of an ``ilc`` design."""
-    info = design.extra["lifted"]
-    return learning_operator(str(info["learning"]), float(info["value"]))
+    info = design.data
+    return learning_operator(str(info.learning), float(info.value))
 
 
 def lifted_errors(result: Any) -> np.ndarray:
@@ -86,14 +123,14 @@ def lifted_errors(result: Any) -> np.ndarray:
     return (np.asarray(result.desired, dtype=float) - y).T[:, 1:]
 
 
-def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: Any) -> Any:
+def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData) -> Any:
     """The :data:`~designkit.simulation.trials.LearningRule` ``(result_k, d_k) -> d_{k+1}`` of the gains and the
-    design's ``extra["lifted"]`` (grid, operator, trials)."""
-    operator = learning_operator(str(info["learning"]), float(info["value"]))
+    design's data (grid, operator, trials)."""
+    operator = learning_operator(str(info.learning), float(info.value))
 
     def update(result: Any, feedforward: np.ndarray) -> np.ndarray:
         lifted = _lifted(K1, K2, info, result.time)
-        check_size(lifted.samples, lifted.dt, lifted.n, int(info["trials"]))
+        check_size(lifted.samples, lifted.dt, lifted.n, int(info.trials))
         d = np.asarray(feedforward, dtype=float).T  # (n, N)
         nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result))
         out = np.empty_like(d)

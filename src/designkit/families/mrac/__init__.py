@@ -52,6 +52,7 @@ from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.families.mrac import laws as mrac_law
+from designkit.families.mrac.data import MracData
 from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, gains_of
 from designkit.families.mrac.modification import Modification, describe, resolved
@@ -309,14 +310,9 @@ def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: l
         Gain("gamma2", gamma[1], "1/(s^3*rad^2)", "adaptation gain of a2"),
         Gain("Q", [list(row) for row in Q], "", "error weighting of (position, velocity)"),
     ])
-    extra = {
-        "reference_model": {"a": list(model.a), "natural_frequency": model.natural_frequency,
-                            "damping": model.damping, "poles": [[p.real, p.imag] for p in model.poles],
-                            "source": model.source},
-        "nominal": {"Km": Km, "tau": tau}, "gamma": list(gamma), "Q": [list(row) for row in Q],
-        "initial": list(initial), "parameters": list(PARAMETERS), "units": list(UNITS),
-        "modification": modification,
-    }
+    data = MracData(reference_model=model, nominal_Km=Km, nominal_tau=tau, gamma=tuple(gamma),
+                    Q=tuple(tuple(row) for row in Q), initial=tuple(initial),
+                    modification=modification)
     formulas = (
         "K1 = τn a1 / Kmn,  K2 = (τn a2 − 1) / Kmn  (the coefficients realised on the nominal link)",
         "closed loop: x1'' + ((1 + Km K2)/τ) x1' + (Km K1/τ) x1 = (Km K1/τ) xD",
@@ -325,7 +321,7 @@ def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: l
         "α' = Γ Sᵀ Q e,  e = ym − x" + (f"  (modified: {describe(modification)})" if modification else ""),
     )
     d = Design(kind=KIND, plant=nominal, gains=gains, poles=frozen_poles, reference="step",
-               formulas=formulas, notes=notes, extra=extra)
+               formulas=formulas, notes=notes, data=data)
     adaptive = mrac_law.adaptive_law(nominal, model, gamma, Q, initial, modification)
     lin = Linearization("frozen", reason="the PD gains with the adapted coefficients held (no adaptation, no "
                         "reference or sensitivity model)", parameters=PARAMETERS, initial=initial, units=UNITS,
@@ -334,10 +330,10 @@ def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: l
 
 
 def law(design: Design, anti_windup: Any = None) -> Any:
-    """The adaptive law of ``design`` (its reference model, gains and initial parameters from ``design.extra``)."""
-    x = design.extra
-    return mrac_law.adaptive_law(design.plant, ReferenceModel(tuple(x["reference_model"]["a"])), tuple(x["gamma"]),
-                                 [list(r) for r in x["Q"]], tuple(x["initial"]), x.get("modification"))
+    """The adaptive law of ``design`` (its reference model, gains and initial parameters from ``design.data``)."""
+    x: MracData = design.data
+    return mrac_law.adaptive_law(design.plant, ReferenceModel(x.reference_model.a), x.gamma,
+                                 [list(r) for r in x.Q], x.initial, x.modification)
 
 
 def _family() -> Family:

@@ -23,7 +23,7 @@ def _gain(v: float) -> str:
 
 
 def _rule(design: Any) -> str:
-    words = describe(design.extra.get("modification"))
+    words = describe(design.data.modification)
     return "the gradient rule" + (f", modified ({words})," if words else "")
 
 
@@ -51,10 +51,10 @@ def how(result: Any) -> tuple[str, ...]:
 def strategy(result: Any) -> tuple[str, ...]:
     """The law, the adaptation and its gains, in continuous time; the reference model's poles (1/s)."""
     d = result.design
-    x = d.extra
-    gamma = x["gamma"]
+    x = d.data
+    gamma = x.gamma
     gammas = _gain(gamma[0]) if gamma[0] == gamma[1] else f"({_gain(gamma[0])}, {_gain(gamma[1])})"
-    poles = fmt_poles(ReferenceModel(tuple(x["reference_model"]["a"])).poles)
+    poles = fmt_poles(ReferenceModel(x.reference_model.a).poles)
     return (f"A PD position servo u = −K1(α) (x1 − xD) − K2(α) x2 whose closed-loop coefficients α1, α2 follow "
             f"{_rule(d)} α' = Γ Sᵀ Q e with γ = {gammas}, in continuous time: a direct scheme, which adjusts the "
             f"controller's gains from the output error against a reference model (poles {poles} 1/s) without "

@@ -137,14 +137,14 @@ def period_indices(sim: Any) -> tuple[int, int] | None:
 
 
 def _signals(sim: Any, design: Any, Q: Any = None) -> dict[str, np.ndarray]:
-    x = design.extra
+    x = design.data
     names = list(sim.controller_state_names)
     xc = np.asarray(sim.controller_state, dtype=float)
     ym = xc[:, [names.index("ym1"), names.index("ym2")]]
     r = np.asarray(sim.reference, dtype=float)[:, 0, 0]
     return {"S": sensitivities(sim), "phi": np.stack([r - ym[:, 0], -ym[:, 1]], axis=1),
-            "G": np.diag(np.asarray(x["gamma"], dtype=float)), "Q": np.asarray(x["Q"] if Q is None else Q, dtype=float),
-            "a": np.asarray(x["reference_model"]["a"], dtype=float)}
+            "G": np.diag(np.asarray(x.gamma, dtype=float)), "Q": np.asarray(x.Q if Q is None else Q, dtype=float),
+            "a": np.asarray(x.reference_model.a, dtype=float)}
 
 
 def frozen_signal_bound(sim: Any, design: Any, spec: Any, plant: Any, *, Q: Any = None) -> dict[str, float] | None:

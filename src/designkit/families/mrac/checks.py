@@ -71,7 +71,7 @@ def _f(x: float | None, digits: int = 4) -> str:
 
 def mismatch_reasons(design: Any, spec: Any, plant: Any) -> list[str]:
     """Why the fixed-gain loop is not the model, in words (empty: it is)."""
-    n = design.extra["nominal"]
+    n = design.data
     Km, tau = float(plant.parameter("Km").value), float(plant.parameter("tau").value)
     out = []
     change = spec.simulation.plant_change
@@ -80,11 +80,11 @@ def mismatch_reasons(design: Any, spec: Any, plant: Any) -> list[str]:
                           if plant.parameter(k).value != v)
         if moved:
             out.append(f"the link changes at t = {change.time:g} s ({moved})")
-    if (Km, tau) != (n["Km"], n["tau"]):
+    if (Km, tau) != n.nominal:
         out.append(f"the true link (Km = {Km:g}, τ = {tau:g} s) is not the nominal one the gains are realised on "
-                   f"(Km = {n['Km']:g}, τ = {n['tau']:g} s)")
+                   f"(Km = {n.nominal_Km:g}, τ = {n.nominal_tau:g} s)")
     start = matching(design, (Km, tau))
-    initial = design.extra["initial"]
+    initial = design.data.initial
     if max(abs(a - b) / abs(b) for a, b in zip(initial, start, strict=True)) > 1e-9:
         out.append(f"the initial parameters ({initial[0]:.4g}, {initial[1]:.4g}) are not those that put the link on "
                    f"the model ({start[0]:.4g}, {start[1]:.4g})")
@@ -162,9 +162,9 @@ def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
     t = np.asarray(sim.time, dtype=float)
     t0 = last_event(spec, float(t[-1]))
     span = float(t[-1]) - t0
-    G = gram(sim, design.extra["Q"], t0)
+    G = gram(sim, design.data.Q, t0)
     k = plant_ratio(design, link)
-    root = np.diag(np.sqrt(np.asarray(design.extra["gamma"], dtype=float)))
+    root = np.diag(np.sqrt(np.asarray(design.data.gamma, dtype=float)))
     with np.errstate(all="ignore"):
         eig = np.linalg.eigvalsh(k * root @ G @ root) if np.all(np.isfinite(G)) else np.array([np.nan, np.nan])
     rate = float(eig[0])
@@ -219,7 +219,7 @@ def _stability(design: Any, ctx: Context) -> tuple[Check, ...]:
     bd = gamma_boundary(spec, design, plant, known=known, max_runs=BISECTION_ON_FAILURE)
     frozen = frozen_signal_bound(sim, design, spec, plant)
     floquet = floquet_boundary(sim, design, spec, plant, around=frozen["scale"] if frozen else None)
-    gamma = np.asarray(design.extra["gamma"], dtype=float)
+    gamma = np.asarray(design.data.gamma, dtype=float)
     fix = []
     if bd.lo is not None:
         fix.append(f"scaling the adaptation gains by {bd.lo:.3g} (γ = {_gammas(bd.lo * gamma)}) keeps the run "

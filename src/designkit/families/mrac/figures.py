@@ -217,7 +217,7 @@ def parameters_figure(result: Any) -> Figure | None:
 
 
 def _draw_gamma(result: Any, s: Any) -> tuple[Any, dict[str, Any]]:
-    gamma = np.asarray(result.design.extra["gamma"], dtype=float)
+    gamma = np.asarray(result.design.data.gamma, dtype=float)
     fig, (ax,) = new_figure(6.8, 3.6, rows=1)
     extra = [GammaRun(c.scale, c.stable, c.rms_adaptive, None, c.final, "") for c in s.gains if c.scale is not None]
     runs = sorted([*s.boundary.runs, *extra], key=lambda r: r.scale)

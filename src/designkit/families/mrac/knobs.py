@@ -104,7 +104,7 @@ def _modification(kind: str, settings: Any) -> Any:
 
 
 def _box(run: Any) -> dict[str, list[float]]:
-    initial = [float(v) for v in run.design.extra["initial"]]
+    initial = [float(v) for v in run.design.data.initial]
     return {"low": [v / BOX_FACTOR for v in initial], "high": [v * BOX_FACTOR for v in initial]}
 
 

@@ -89,7 +89,7 @@ class Modification(Section):
 
 
 def resolved(spec: Any, natural_frequency: float) -> dict[str, Any] | None:
-    """The modification of a ``controller`` section as the design stores it (``Design.extra["modification"]``), its
+    """The modification of a ``controller`` section as the design stores it (``MracData.modification``), its
     default filled in (``rate``: ``natural_frequency``, rad/s, of the reference model); None without one."""
     m = spec.modification
     if m is None:

@@ -70,13 +70,13 @@ HEADER = ("Scenario", "RMS e fixed (rad)", "RMS e adaptive (rad)", "last quarter
 def _why_how(result: Any, s: Any) -> Question:
     d, spec = result.design, result.loaded.spec
     plant = result.plant if result.plant is not None else d.plant
-    x = d.extra
+    x = d.data
     link = final_link(spec, plant)
-    K1, K2 = gains_of(x["initial"], x["nominal"]["Km"], x["nominal"]["tau"])
+    K1, K2 = gains_of(x.initial, x.nominal_Km, x.nominal_tau)
     c = coefficients_of(K1, K2, *link)
     poles = ReferenceModel(c).poles if min(c) > 0 else tuple(np.roots([1.0, c[1], c[0]]))
     m = s.main
-    model_poles = ReferenceModel(tuple(x["reference_model"]["a"])).poles
+    model_poles = ReferenceModel(x.reference_model.a).poles
     where = (f"on the link at the end of the run (Km = {link[0]:g}, τ = {link[1]:g} s) they place the poles at "
              f"{fmt_poles(poles)} 1/s")
     if np.allclose(sorted(poles, key=lambda p: (p.real, p.imag)), sorted(model_poles, key=lambda p: (p.real, p.imag)),
@@ -86,12 +86,12 @@ def _why_how(result: Any, s: Any) -> Question:
         where += f" instead of the model's {fmt_poles(model_poles)} 1/s"
     sentences = [
         f"Why: the fixed PD gains K1 = {_f(K1, 4)} N·m/rad, K2 = {_f(K2, 4)} N·m·s/rad are realised for the nominal "
-        f"link (Km = {x['nominal']['Km']:g}, τ = {x['nominal']['tau']:g} s); {where}, and the fixed-gain loop "
+        f"link (Km = {x.nominal_Km:g}, τ = {x.nominal_tau:g} s); {where}, and the fixed-gain loop "
         f"leaves the model by {_f(m.rms_fixed)} rad RMS over the run ({_f(m.last_fixed)} rad over its last quarter).",
         "How: the closed-loop coefficients a1, a2 (realised through K1, K2 on the nominal link) follow the gradient "
         "rule α' = Γ Sᵀ Q e, with S = ∂ym/∂a from the sensitivity model CasADi generates from the reference model "
-        "(the notes' approximation ∂e/∂α ≈ −∂ym/∂a)" + (f", modified: {describe(x['modification'])}."
-                                                         if x.get("modification") else "."),
+        "(the notes' approximation ∂e/∂α ≈ −∂ym/∂a)" + (f", modified: {describe(x.modification)}."
+                                                         if x.modification else "."),
         f"With what success: {_f(m.rms_adaptive)} rad RMS with adaptation against {_f(m.rms_fixed)} rad without "
         f"({_f(100 * m.rms_adaptive / m.rms_fixed if m.rms_fixed else math.nan)} %), {_f(m.last_adaptive)} rad "
         f"against {_f(m.last_fixed)} rad over the last quarter; a1, a2 end at {_pair(m.final)}, the values that put "
@@ -175,7 +175,7 @@ def _module_question(result: Any, s: Any) -> Question:
 
 
 def _boundary_question(result: Any, s: Any) -> Question:
-    bd, gamma = s.boundary, np.asarray(result.design.extra["gamma"], dtype=float)
+    bd, gamma = s.boundary, np.asarray(result.design.data.gamma, dtype=float)
     g = lambda k: ", ".join(_f(k * v, 4) for v in gamma)  # noqa: E731
     sentences = []
     if bd.lo is not None and bd.hi is not None:

@@ -59,12 +59,12 @@ def adaptive_variant(design: Any, *, gamma_scale: float = 1.0, gamma: Any = None
                      model: ReferenceModel | None = None) -> Any:
     """The design's adaptive law with some of its settings replaced (``gamma_scale`` multiplies the gains); its
     modification of the gradient rule (if any) is kept."""
-    x = design.extra
-    g = np.asarray(x["gamma"] if gamma is None else gamma, dtype=float) * float(gamma_scale)
-    return adaptive_law(design.plant, model or ReferenceModel(tuple(x["reference_model"]["a"])), tuple(g.tolist()),
-                        [list(r) for r in (x["Q"] if Q is None else Q)], tuple(x["initial"] if initial is None
-                                                                              else initial),
-                        x.get("modification"))
+    x = design.data
+    g = np.asarray(x.gamma if gamma is None else gamma, dtype=float) * float(gamma_scale)
+    return adaptive_law(design.plant, model or ReferenceModel(x.reference_model.a), tuple(g.tolist()),
+                        [list(r) for r in (x.Q if Q is None else Q)], tuple(x.initial if initial is None
+                                                                            else initial),
+                        x.modification)
 
 
 def simulate(spec: Any, design: Any, plant: Any, law: Any) -> Any:
@@ -103,15 +103,15 @@ def final_link(spec: Any, plant: Any) -> tuple[float, float]:
 
 def matching(design: Any, link: tuple[float, float]) -> tuple[float, float]:
     """The adapted parameters that put the link ``(Km, tau)`` on the design's reference model."""
-    x = design.extra
-    return matching_parameters(x["reference_model"]["a"], (x["nominal"]["Km"], x["nominal"]["tau"]), link)
+    x = design.data
+    return matching_parameters(x.reference_model.a, x.nominal, link)
 
 
 def plant_ratio(design: Any, link: tuple[float, float]) -> float:
     """``k = Km tau_n/(Km_n tau)``: how much the link ``(Km, tau)`` scales both closed-loop coefficients' response
     to the adapted parameters (1 on the nominal link)."""
-    n = design.extra["nominal"]
-    return link[0] * n["tau"] / (n["Km"] * link[1])
+    n = design.data
+    return link[0] * n.nominal_tau / (n.nominal_Km * link[1])
 
 
 def last_event(spec: Any, duration: float) -> float:

@@ -148,8 +148,7 @@ class _Runner:
             rf, lf = rms(ef), rms(ef[tail])
             pf = float(np.max(np.abs(fsim.u_command)))
         final = adapted(sim)[-1]
-        n = d.extra["nominal"]
-        want = matching(d, link) if model is None else matching_parameters(model.a, (n["Km"], n["tau"]), link)
+        want = matching(d, link) if model is None else matching_parameters(model.a, d.data.nominal, link)
         return Comparison(label, rms(e), rf, assess(sim, spec).stable, (float(final[0]), float(final[1])), want,
                           float(np.max(np.abs(np.nan_to_num(sim.u_command, nan=np.inf)))), pf, rms(e[tail]), lf,
                           k=plant_ratio(d, link))
@@ -299,18 +298,18 @@ def study(result: Any) -> Study | None:
         return None if c is None else replace(c, boundary=f_main * k_main / c.k if f_main and c.k else None)
 
     plant = tuple(moved(c) for c in _plant_studies(r, duration))
-    x = d.extra
-    half = [0.5 * v for v in x["initial"]]
+    x = d.data
+    half = [0.5 * v for v in x.initial]
     initial = _kept(moved(r.compare("initial parameters × 0.5", spec, law=adaptive_variant(d, initial=half),
                                     fixed=fixed_law(d.plant, half))))
-    model_now = ReferenceModel(tuple(x["reference_model"]["a"]))
+    model_now = ReferenceModel(x.reference_model.a)
     faster = ReferenceModel.from_frequency(1.5 * model_now.natural_frequency, model_now.damping)
     model = _kept(r.compare(f"reference model ωn × 1.5 ({faster.natural_frequency:.3g} rad/s)", spec,
                             law=adaptive_variant(d, model=faster), model=faster))
     weighting = []
     for factor in (0.1, 10.0):
         D = np.diag([1.0, math.sqrt(factor)])
-        Q = (D @ np.asarray(x["Q"], dtype=float) @ D).tolist()
+        Q = (D @ np.asarray(x.Q, dtype=float) @ D).tolist()
         c = r.compare(f"velocity weight × {factor:g}", spec, law=adaptive_variant(d, Q=Q), fixed=None)
         if c is not None:
             fq = floquet_boundary(sim, d, spec, r.plant, Q=Q, around=f_main)

@@ -67,7 +67,7 @@ from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import Knob
+from designkit.synthesis.knobs import COMMAND_VARIATION, SETTLED_ERROR, Knob
 from designkit.synthesis.law import Law, State, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -268,6 +268,7 @@ FAMILY = Family(
            Knob("epsilon", "rad*s", "boundary layer |slm| ≤ ε replacing the relay's sign", 1e-9, 1e6,
                 path="controller.epsilon")),
     traits=("switching",),
+    metrics=(SETTLED_ERROR, COMMAND_VARIATION),
     diagnoses=(diagnose,),
     answers=answers.ANSWERS,
     predictions=answers.PREDICTIONS,

@@ -133,8 +133,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("controller.layer", "the elastic joint's controller takes a saturation layer or none")
     if (spec.plant.mgl or 0.0) > 0:
         raise SpecError("plant.mgl", "designed on the joint without gravity (mgl = 0)")
-    from designkit.families.state_regulator.gains import check_controllable
-    from designkit.families.vsc.surface import linear_model
+    from designkit.synthesis.state_space import check_controllable, linear_model
 
     unc = spec.plant.uncertainty
     box = {k: (float(lo), float(hi)) for k, (lo, hi) in (unc.intervals.items() if unc is not None else ())}

@@ -36,7 +36,8 @@ from designkit.errors import ModelError, SpecError
 from designkit.families.pid_sliding_mode.spec import KIND, PID_GAINS
 from designkit.families.pid_sliding_mode.surface import Surface, ideal_motion, l1_norm, surface
 from designkit.simulation.reference import reference_for
-from designkit.spec.fields import per_joint
+from designkit.spec.fields import joint_values
+from designkit.spec.workspace import workspace_box
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
@@ -55,14 +56,6 @@ SAMPLES = 2000
 """Random configurations of the sampled ``D_ii`` range and of the sampled lower bound of ``sup|xi_i|``."""
 
 
-def _per_joint(value: Any, n: int, path: str) -> np.ndarray:
-    try:
-        return np.array(per_joint(value, n, path), dtype=float)
-    except ValueError as exc:
-        key, msg = str(exc).split(": ", 1)
-        raise SpecError(key, msg) from None
-
-
 def motion_box(spec: Any, plant: Any) -> dict[str, Any]:
     """The workspace (rad or m), velocity (rad/s) and acceleration (rad/s^2) limits the hierarchy bounds over.
 
@@ -72,13 +65,11 @@ def motion_box(spec: Any, plant: Any) -> dict[str, Any]:
         ``controller.workspace`` missing (or out of the joint limits, ``low >= high``), ``plant.limits.velocity``
         or ``plant.limits.acceleration`` missing or of the wrong length.
     """
-    from designkit.families.decentralized_pid import workspace
-
     n = plant.n_joints
     if spec.controller.workspace is None:
         raise SpecError("controller.workspace", "the hierarchy of control bounds xi over a box of configurations: "
                         "give workspace: {low, high} (rad per joint) or workspace: joint_limits")
-    ws = workspace(spec, plant)
+    ws = workspace_box(spec, plant)
     limits = spec.plant.limits
     out = {"low": list(ws["low"]), "high": list(ws["high"]), "source": ws["source"]}
     for key, unit in (("velocity", "rad/s"), ("acceleration", "rad/s^2")):
@@ -86,7 +77,7 @@ def motion_box(spec: Any, plant: Any) -> dict[str, Any]:
         if value is None:
             raise SpecError(f"plant.limits.{key}", f"the hierarchy of control bounds xi over the joints' {key} "
                             f"limits: give plant.limits.{key} ({unit}, one value or one per joint)")
-        out[key] = _per_joint(value, n, f"plant.limits.{key}").tolist()
+        out[key] = list(joint_values(value, n, f"plant.limits.{key}"))
     return out
 
 

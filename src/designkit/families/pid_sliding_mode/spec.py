@@ -19,8 +19,8 @@ Fields (every number with its unit and range, refused with its key path otherwis
 * ``switching_band`` (rad*s, above 0, at most 1e6): without a layer, the band ``|slm| <= delta`` the command
   held over an integration step leaves; sets the step.  Default: ``1e-3 e_max/||s/N||_1``, so the position
   error it leaves is at most ``1e-3`` of the largest reference jump.
-* On a robot (:mod:`~designkit.families.pid_sliding_mode.robot`): ``workspace`` (the decentralized PID's
-  :class:`~designkit.families.decentralized_pid.Workspace`, or ``joint_limits``; required, with
+* On a robot (:mod:`~designkit.families.pid_sliding_mode.robot`): ``workspace`` (a
+  :class:`~designkit.spec.workspace.Workspace`, or ``joint_limits``; required, with
   ``plant.limits.velocity`` and ``plant.limits.acceleration``), ``gravity_feedforward`` (``measured`` or
   ``none``) and ``work_limit`` (1 to 100000 boxes per joint, default 150).  ``M`` is then one amplitude for
   every joint.
@@ -32,10 +32,10 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from designkit.families.decentralized_pid import Workspace, _workspace_schema
 from designkit.spec.controllers import three_poles
 from designkit.spec.fields import Finite, Pole, Section, fmt_pole
 from designkit.spec.ranges import Ranged, RangedInt
+from designkit.spec.workspace import Workspace, joint_limits_word, workspace_schema
 
 KIND = "pid_sliding_mode"
 
@@ -75,7 +75,7 @@ class PidSlidingModeSpec(Section):
     switching_band: Ranged(0, 1e6, "rad*s", low_open=True, base=Finite) | None = Field(
         default=None, description="Without a layer: the band |slm| <= delta (rad*s) the held relay leaves.")
     workspace: Workspace | None = Field(
-        default=None, json_schema_extra=_workspace_schema,
+        default=None, json_schema_extra=workspace_schema,
         description="Robot: the box of configurations {low, high} (rad per joint) or 'joint_limits' the hierarchy "
         "of control bounds xi over (with plant.limits.velocity and plant.limits.acceleration).")
     gravity_feedforward: Literal["measured", "none"] = Field(
@@ -87,11 +87,7 @@ class PidSlidingModeSpec(Section):
     @field_validator("workspace", mode="before")
     @classmethod
     def _joint_limits(cls, v: Any) -> Any:
-        if isinstance(v, str):
-            if v.strip() != "joint_limits":
-                raise ValueError(f"must be 'joint_limits' or a mapping {{low, high, samples, tolerance}}, got {v!r}")
-            return {}
-        return v
+        return joint_limits_word(v)
 
     @field_validator("poles")
     @classmethod

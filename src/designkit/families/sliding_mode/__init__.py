@@ -68,6 +68,7 @@ import casadi as ca
 from designkit.errors import ModelError, SpecError
 from designkit.families.sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.sliding_mode.conditions import PARAMETERS, SlidingGains, reaching_rate, sdot_bound, strip_width
+from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.design_lp import design_gains
 from designkit.families.sliding_mode.diagnoses import diagnose
 from designkit.families.sliding_mode.figures import FIGURES
@@ -82,7 +83,7 @@ from designkit.families.sliding_mode.spec import (
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import Knob
+from designkit.synthesis.knobs import COMMAND_VARIATION, SETTLED_ERROR, Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
@@ -184,14 +185,14 @@ def synthesize(spec: Any, plant: Any) -> Design:
     gains = Gains.of(Gain(k, v, *GAIN_INFO[k]) for k, v in (("alpha", g.alpha), ("beta", g.beta), ("M", g.M),
                                                              ("c", c)))
     m = float(ctl.margin)
-    extra = {"sliding": {
-        "c": c, "xi_bar": xi_bar, "margin": m, "box": {k: list(v) for k, v in box.items()},
-        "amplitude": amplitude, "e_max": e_max, "band": band, "band_source": band_source,
-        "boundary_layer": ctl.boundary_layer, "max_step": h, "sdot_max": sdot,
-        "strip": strip if math.isfinite(strip) else None,
-        "reaching_rate": reaching_rate(g.M, xi_bar, box), "lp": dict(lp.certificate), "torque_rows": lp.torque_rows,
-        "objective": lp.objective, "fixed": sorted(fixed), "reaching_frequency": ctl.reaching_frequency,
-    }}
+    data = SlidingData(
+        c=c, xi_bar=xi_bar, margin=m, box={k: list(v) for k, v in box.items()},
+        amplitude=amplitude, e_max=e_max, band=band, band_source=band_source,
+        boundary_layer=ctl.boundary_layer, max_step=h, sdot_max=sdot,
+        strip=strip if math.isfinite(strip) else None,
+        reaching_rate=reaching_rate(g.M, xi_bar, box), lp=dict(lp.certificate), torque_rows=lp.torque_rows,
+        objective=lp.objective, fixed=sorted(fixed), reaching_frequency=ctl.reaching_frequency,
+    )
     formulas = (
         "existence of the sliding mode: α Km − c + c² τ > 0 and c − c² τ − β Km > 0, i.e. α > (a − c) c/b > β",
         "reaching: 4 α Km τ − 1 > 0, i.e. α > a²/(4 b) (the α structure is a focus); the relay: M > sup|ξ|",
@@ -200,7 +201,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         f"ṡ_max = {sdot:.4g} rad/s² the fastest ṡ over the box for |e| ≤ {e_max:g} rad)",
     )
     d = Design(kind=KIND, plant=plant, gains=gains, poles=(complex(-c),), reference="step", formulas=formulas,
-               notes=(*notes, *band_notes), extra=extra)
+               notes=(*notes, *band_notes), data=data)
     return with_law(d, law(d), Linearization("none", reason=REASON))
 
 
@@ -208,8 +209,8 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -psi e - M sign(s)`` (or ``M sat(s/epsilon)``), ``s = x2 + c e``, held over each step of at most
     ``max_step`` (N*m); records ``s`` (rad/s) and ``psi`` (N*m/rad).  ``anti_windup`` is refused at the spec."""
     al, be, M, c = (float(design.gains[k]) for k in ("alpha", "beta", "M", "c"))
-    info = design.extra["sliding"]
-    eps = info["boundary_layer"]
+    info = design.data
+    eps = info.boundary_layer
 
     def error(s: Any) -> Any:
         return s.q[0] - s.qD[0]
@@ -224,14 +225,14 @@ def law(design: Design, anti_windup: Any = None) -> Law:
         return M * (ca.sign(sliding(s)) if eps is None else ca.fmin(ca.fmax(sliding(s) / eps, -1.0), 1.0))
 
     what = "a tenth of the boundary layer" if eps is not None else "the chattering band"
-    reason = (f"the command is held over each step, so s moves at most h sdot_max per step; h = {info['max_step']:.4g} "
-              f"s keeps that within {what} ({info['band']:.4g} rad/s; sdot_max = {info['sdot_max']:.4g} rad/s^2 over "
-              f"the box for |e| <= {info['e_max']:g} rad)")
+    reason = (f"the command is held over each step, so s moves at most h sdot_max per step; h = {info.max_step:.4g} "
+              f"s keeps that within {what} ({info.band:.4g} rad/s; sdot_max = {info.sdot_max:.4g} rad/s^2 over "
+              f"the box for |e| <= {info.e_max:g} rad)")
     return dynamic_law(
         KIND, design.plant, command=lambda s: -psi(s) * error(s) - relay(s),
-        settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": info["band"]},
+        settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": info.band},
         signals={"s": sliding, "psi": psi}, signal_units=("rad/s", "N*m/rad"),
-        discontinuous=True, max_step=float(info["max_step"]), max_step_reason=reason,
+        discontinuous=True, max_step=float(info.max_step), max_step_reason=reason,
     )
 
 
@@ -263,4 +264,5 @@ FAMILY = Family(
            Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
                 path="controller.margin")),
     traits=("switching",),
+    metrics=(SETTLED_ERROR, COMMAND_VARIATION),
 )

@@ -34,6 +34,7 @@ from designkit.families.sliding_mode.conditions import (
     focus_bound,
     vertices,
 )
+from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.measure import POLE_FLOOR, POLE_TOLERANCE, measure
 from designkit.verification.check import Check
 from designkit.verification.conditions import certify
@@ -95,17 +96,17 @@ def shortfall_sentence(key: str, need: dict[str, Any], margin: float) -> str:
 
 
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra["sliding"]
+    info = design.data
     g = gains_of(design)
-    box = {k: tuple(v) for k, v in info["box"].items()}
-    needs = gains_needed(g, info["xi_bar"], box, info["margin"])
+    box = {k: tuple(v) for k, v in info.box.items()}
+    needs = gains_needed(g, info.xi_bar, box, info.margin)
     out = []
-    for key, set_ in condition_sets(g, info["xi_bar"]).items():
+    for key, set_ in condition_sets(g, info.xi_bar).items():
         check = certify(CERTIFICATE_CHECKS[key], set_, box, solver=ctx.solver)
         mine = {n: needs[n] for n in _OF_SET[key]}
-        cert = {**dict(check.certificate), "gains_needed": mine, "margin_of_design": info["margin"]}
+        cert = {**dict(check.certificate), "gains_needed": mine, "margin_of_design": info.margin}
         detail = check.detail
-        short = [shortfall_sentence(n, need, info["margin"]) for n, need in mine.items() if need["shortfall"] >= 0]
+        short = [shortfall_sentence(n, need, info.margin) for n, need in mine.items() if need["shortfall"] >= 0]
         if check.passed is False and short:
             cert["shortfall"] = {n: mine[n]["shortfall"] for n in mine if mine[n]["shortfall"] >= 0}
             detail = "; ".join(short) + ". " + detail
@@ -114,7 +115,7 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="sliding_conditions", order=55, applies=lambda d, c: "sliding" in d.extra, run=_certificates,
+    name="sliding_conditions", order=55, applies=lambda d, c: isinstance(d.data, SlidingData), run=_certificates,
     label="Sliding-mode conditions on the parameter box",
     labels={"sliding_existence": "Sliding mode exists on s = 0 (whole box)",
             "sliding_reaching": "Every trajectory reaches s = 0 (whole box)",
@@ -127,12 +128,12 @@ CERTIFICATE_RULE = CheckRule(
 
 def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
-    info = design.extra["sliding"]
-    c = float(info["c"])
+    info = design.data
+    c = float(info.c)
     run = measure(design, sim)
     n_seg = len(run.segments)
     segs = f" (the longest over {n_seg} reference segments)" if n_seg > 1 else ""
-    band_words = (f"the boundary layer epsilon = {run.band:.4g} rad/s" if info["boundary_layer"] is not None else
+    band_words = (f"the boundary layer epsilon = {run.band:.4g} rad/s" if info.boundary_layer is not None else
                   f"the band the held command leaves, hold x sdot_max = {run.hold:.4g} s x "
                   f"{run.band / run.hold:.4g} rad/s^2 = {run.band:.4g} rad/s (target {run.design_band:.4g} rad/s)")
     cert = {"band": run.band, "hold": run.hold, "design_band": run.design_band, "e_bound": run.e_seen,
@@ -193,7 +194,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 RUN_RULE = CheckRule(
     name="sliding_run", order=127,
-    applies=lambda d, c: c.simulation is not None and "sliding" in d.extra and "s" in c.simulation.signals,
+    applies=lambda d, c: c.simulation is not None and isinstance(d.data, SlidingData) and "s" in c.simulation.signals,
     run=_run_checks, label="Sliding mode in the simulated run",
     labels={"reaching_time": "Reaching time (measured)", "sliding_band": "The run stays in the chattering band",
             "sliding_pole": "Pole on the sliding line (measured)", "chattering": "Chattering (measured)"},

@@ -16,6 +16,7 @@ import math
 from typing import Any
 
 from designkit.families.sliding_mode.checks import shortfall_sentence
+from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.measure import measure
 
 __all__ = ["diagnose"]
@@ -58,7 +59,7 @@ def _certificate(check: Any, margin: float) -> tuple[str, str] | None:
 def _lost_sliding(result: Any, run: Any) -> tuple[str, str] | None:
     """Why the run left the sliding line, when a reason is visible."""
     pert = _failed(result, "sliding_perturbation")
-    info = result.design.extra["sliding"]
+    info = result.design.data
     if pert is not None:
         need = pert.certificate["gains_needed"]["M_perturbation"]
         alpha = float(result.design.gains["alpha"])
@@ -67,16 +68,16 @@ def _lost_sliding(result: Any, run: Any) -> tuple[str, str] | None:
                 f"(sliding_perturbation failed): the run leaves the sliding line (largest |s| "
                 f"{run.worst_excursion or math.nan:.4g} rad/s against the band {run.band:.4g} rad/s) and settles "
                 f"near e = (sup|xi| - M)/alpha = {e_star:.3g} rad, where the structure gain balances the shortfall.",
-                f"M >= {need['with_margin']:.4g} N*m (sup|xi| with the {100 * info['margin']:g} % margin); any M above "
+                f"M >= {need['with_margin']:.4g} N*m (sup|xi| with the {100 * info.margin:g} % margin); any M above "
                 f"{need['bound']:.4g} N*m restores the sliding mode.")
     if not run.reached:
         k = run.reach.index(None)
         a, b = run.segments[k]
         t = run.data["time"]
-        box = info["box"]
+        box = info.box
         alpha = float(result.design.gains["alpha"])
         slow = math.sqrt(max(box["Km"][0] / box["tau"][1] * alpha, 0.0))
-        c = float(info["c"])
+        c = float(info.c)
         return (f"Segment {k + 1} (from t = {float(t[a]):.4g} s, {float(t[b - 1] - t[a]):.3g} s long) never reached "
                 "the band: the alpha structure turns the trajectory onto the line slowly (natural frequency "
                 f"sqrt(b alpha) = {slow:.3g} rad/s at the slowest corner, alpha = {alpha:.4g} N*m/rad, the "
@@ -84,18 +85,18 @@ def _lost_sliding(result: Any, run: Any) -> tuple[str, str] | None:
                 f"controller.reaching_frequency (rad/s), e.g. {c:g} (the sliding pole), which raises alpha to "
                 f"omega_r^2 tau/Km on the box ({c * c * box['tau'][1] / box['Km'][0]:.4g} N*m/rad), or a longer "
                 "reference segment.")
-    max_step = float(info["max_step"])
+    max_step = float(info.max_step)
     if run.hold > max_step * (1 + 1e-9):
         return (f"The command is held for {run.hold:.4g} s (the sampling period and the delay), longer than the "
-                f"{max_step:.4g} s step the design chose for the band {info['band']:.4g} rad/s: the chattering "
+                f"{max_step:.4g} s step the design chose for the band {info.band:.4g} rad/s: the chattering "
                 f"grows with the hold to about {run.band:.4g} rad/s.",
                 f"A sampling period plus delay of at most {max_step:.4g} s, or a wider controller.chattering_band "
-                f"(about {info['sdot_max'] * run.hold:.4g} rad/s for this hold).")
+                f"(about {info.sdot_max * run.hold:.4g} rad/s for this hold).")
     return None
 
 
 def _while_sliding(result: Any, check: Any, run: Any) -> tuple[str, str] | None:
-    c = float(result.design.extra["sliding"]["c"])
+    c = float(result.design.data.c)
     req = result.loaded.spec.requirements
     if check.name == "steady_state_error" and run.amplitude is not None and req is not None:
         need = req.steady_state_error
@@ -107,7 +108,7 @@ def _while_sliding(result: Any, check: Any, run: Any) -> tuple[str, str] | None:
         t_r = run.reaching_time
         k0 = run.segments[0][0] + run.reach[0]
         e_r = abs(float(run.data["e"][k0]))
-        band = req.settling_band * float(result.design.extra["sliding"]["amplitude"])
+        band = req.settling_band * float(result.design.data.amplitude)
         decay = math.log(max(e_r / band, 1.0)) / c
         left = req.settling_time - t_r
         fix = (f"a faster sliding pole, c >= {math.log(max(e_r / band, 1.0)) / left:.4g} 1/s, if the reaching time "
@@ -122,11 +123,11 @@ def _while_sliding(result: Any, check: Any, run: Any) -> tuple[str, str] | None:
 
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     """``(cause, fix)`` for a failed check of a sliding-mode run (module docstring), or None."""
-    if "sliding" not in result.design.extra or check.passed is not False:
+    if not isinstance(result.design.data, SlidingData) or check.passed is not False:
         return None
     base = check.name.split("[")[0]
     if base in _CERTIFICATES:
-        return _certificate(check, float(result.design.extra["sliding"]["margin"]))
+        return _certificate(check, float(result.design.data.margin))
     if base not in _RUN or result.simulation is None:
         return None
     run = measure(result.design, result.simulation)

@@ -15,6 +15,7 @@ import numpy as np
 from designkit.display.figure import EVENT_STYLE, LIMIT_STYLE, REFERENCE_STYLE, Figure, plain_ticks
 from designkit.display.numbers import fmt_number, sci
 from designkit.display.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
+from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.measure import SlidingRun, measure
 
 __all__ = ["FIGURES", "control_figure", "phase_portrait", "sliding_function_figure"]
@@ -95,9 +96,9 @@ _PHASE = {
 
 def phase_portrait(result: Any) -> Figure | None:
     """``(e, e')`` of the run with the sliding line ``e' = -c e`` and the switching line ``e = 0``."""
-    if result.simulation is None or "sliding" not in result.design.extra:
+    if result.simulation is None or not isinstance(result.design.data, SlidingData):
         return None
-    c = float(result.design.extra["sliding"]["c"])
+    c = float(result.design.data.c)
     run = measure(result.design, result.simulation)
     svg, keys, info = render_tagged(_draw_phase, run, c)
     seg = "" if info["segments"] == 1 else f" over its {info['segments']} reference segments"
@@ -145,7 +146,7 @@ _S = {
 def sliding_function_figure(result: Any) -> Figure | None:
     """``s(t)`` on a symmetric-log axis linear within the band, with the band and the reaching time."""
     sim = result.simulation
-    if sim is None or "sliding" not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, SlidingData):
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_s, run, _onset(np.asarray(sim.time), sim.perturbation))
@@ -188,7 +189,7 @@ _U = {
 def control_figure(result: Any) -> Figure | None:
     """The command with its running mean (the equivalent control) and the perturbation."""
     sim = result.simulation
-    if sim is None or "sliding" not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, SlidingData):
         return None
     run = measure(result.design, sim)
     dt = float(sim.settings["dt"])

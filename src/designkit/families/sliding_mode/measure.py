@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from designkit.families.sliding_mode.conditions import SlidingGains, sdot_bound
+from designkit.families.sliding_mode.data import SlidingData
 
 __all__ = ["POLE_FLOOR", "POLE_TOLERANCE", "SlidingRun", "json_summary", "measure"]
 
@@ -100,17 +101,17 @@ def _sign_changes(s: np.ndarray) -> tuple[int, int | None]:
     return int(flips.size), (int(nz[flips[0] + 1]) if flips.size else None)
 
 
-def _band(design: Any, info: dict, hold: float, e_bar: float) -> float:
-    if info["boundary_layer"] is not None:
-        return float(info["boundary_layer"])
+def _band(design: Any, info: SlidingData, hold: float, e_bar: float) -> float:
+    if info.boundary_layer is not None:
+        return float(info.boundary_layer)
     g = SlidingGains(*(float(design.gains[k]) for k in ("alpha", "beta", "M", "c")))
-    return hold * sdot_bound(g, info["xi_bar"], info["box"], e_bar, info["band"])
+    return hold * sdot_bound(g, info.xi_bar, info.box, e_bar, info.band)
 
 
 def measure(design: Any, sim: Any) -> SlidingRun:
     """The measurements of ``sim``, a run of the sliding-mode ``design`` (module docstring)."""
-    info = dict(design.extra["sliding"])
-    c = float(info["c"])
+    info = design.data
+    c = float(info.c)
     t = np.asarray(sim.time, float)
     x1 = np.asarray(sim.state[:, sim.positions[0]], float)
     x2 = np.asarray(sim.state[:, sim.velocities[0]], float)
@@ -118,7 +119,7 @@ def measure(design: Any, sim: Any) -> SlidingRun:
     e, s, u = x1 - xd, np.asarray(sim.signals["s"], float), np.asarray(sim.u_command[:, 0], float)
     hold = hold_of(sim)
     segs = _segments(xd)
-    e_bar = float(info["e_max"])
+    e_bar = float(info.e_max)
     for _ in range(2):  # the band for |e| up to what the sliding phases meet
         band = _band(design, info, hold, e_bar)
         reach = [_first(np.abs(s[a:b]) <= band * (1 + 1e-9)) for a, b in segs]
@@ -158,7 +159,7 @@ def measure(design: Any, sim: Any) -> SlidingRun:
             else None)
     times = tuple(None if r is None else float(t[a + r] - t[a]) for (a, _), r in zip(segs, reach, strict=True))
     return SlidingRun(
-        band=band, hold=hold, design_band=float(info["band"]), segments=segs, reach=tuple(reach),
+        band=band, hold=hold, design_band=float(info.band), segments=segs, reach=tuple(reach),
         reaching_times=times, worst_excursion=worst, worst_at=worst_at, pole=pole, fit_samples=int(fit_idx.size),
         switches=switches, sliding_time=sliding, switching_frequency=switches / sliding if sliding > 0 else None,
         total_variation=tv, amplitude=amp, u_ptp_tail=max(tail) if tail else None, e_seen=e_bar, cut=cut,
@@ -175,14 +176,14 @@ def _clean(value: Any) -> Any:
 def json_summary(result: Any) -> dict[str, Any]:
     """The ``sliding_mode`` object of ``verify --json``: the law's numbers and what the run measured."""
     d = result.design
-    info = d.extra["sliding"]
+    info = d.data
     out: dict[str, Any] = {
-        "sliding_function": "s = x2 + c (x1 - xD)", "c": info["c"], "sliding_pole": -info["c"],
-        "perturbation_bound": info["xi_bar"], "margin": info["margin"], "box": info["box"],
-        "lp_objective": info["objective"], "lp_weights": info["lp"]["weights"], "torque_rows": info["torque_rows"],
-        "band_target": info["band"], "band_source": info["band_source"], "boundary_layer": info["boundary_layer"],
-        "max_step": info["max_step"], "sdot_max": info["sdot_max"], "strip": info["strip"],
-        "reaching_rate": info["reaching_rate"],
+        "sliding_function": "s = x2 + c (x1 - xD)", "c": info.c, "sliding_pole": -info.c,
+        "perturbation_bound": info.xi_bar, "margin": info.margin, "box": info.box,
+        "lp_objective": info.objective, "lp_weights": info.lp["weights"], "torque_rows": info.torque_rows,
+        "band_target": info.band, "band_source": info.band_source, "boundary_layer": info.boundary_layer,
+        "max_step": info.max_step, "sdot_max": info.sdot_max, "strip": info.strip,
+        "reaching_rate": info.reaching_rate,
     }
     sim = result.simulation
     if sim is not None:
@@ -192,10 +193,10 @@ def json_summary(result: Any) -> dict[str, Any]:
             "reaching_time": run.reaching_time, "reaching_times": list(run.reaching_times),
             "max_abs_s_after_reaching": run.worst_excursion,
             "measured_pole": run.pole, "pole_relative_error": (None if run.pole is None else
-                                                               abs(run.pole + info["c"]) / info["c"]),
+                                                               abs(run.pole + info.c) / info.c),
             "switching_frequency": run.switching_frequency, "step_rate": 1.0 / run.hold,
             "chattering_amplitude": run.amplitude,
-            "chattering_error_band": None if run.amplitude is None else run.amplitude / info["c"],
+            "chattering_error_band": None if run.amplitude is None else run.amplitude / info.c,
             "total_variation_u": run.total_variation, "u_peak_to_peak_tail": run.u_ptp_tail,
         })
     return {"sliding": {k: _clean(v) for k, v in out.items()}}

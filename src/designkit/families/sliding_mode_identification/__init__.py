@@ -38,6 +38,7 @@ import math
 from typing import Any
 
 from designkit.errors import SpecError
+from designkit.families.sliding_mode_identification.data import ArmIdentifierData, LinkIdentifierData
 from designkit.families.sliding_mode_identification.laws import KIND, RECORDED, Identifier, identifier_law
 from designkit.families.sliding_mode_identification.spec import LINK_REFERENCES, ROBOT_REFERENCES, SmidSpec, validate
 from designkit.synthesis.closed_loop import with_law
@@ -111,9 +112,9 @@ def design(plant: Any, ident: Identifier, bounds: tuple[float, float], need: tup
         Gain("gamma_a", ident.gamma[0], "s/rad^2", "adaptation gain of a"),
         Gain("gamma_b", ident.gamma[1], "1/(s*N^2*m^2)", "adaptation gain of b"),
     ])
-    extra = {"K1": ident.K1, "K2": ident.K2, "c": ident.c, "d": ident.d, "window": ident.window,
-             "gamma": list(ident.gamma), "initial": list(ident.initial), "Ts": ident.Ts,
-             "error_bounds": list(bounds), "required": list(need), "signals": list(RECORDED)}
+    data = LinkIdentifierData(K1=ident.K1, K2=ident.K2, c=ident.c, d=ident.d, window=ident.window,
+                              gamma=tuple(ident.gamma), initial=tuple(ident.initial), Ts=ident.Ts,
+                              error_bounds=tuple(bounds), required=tuple(need), signals=tuple(RECORDED))
     formulas = (
         "x2' = −a x2 + b u,  a = 1/τ,  b = Km/τ  (the sign convention of §5.1)",
         "x̂2' = −â x2 + b̂ u − (c|x2| + d|u|) sign(slm),  slm = x̂2 − x2",
@@ -123,19 +124,19 @@ def design(plant: Any, ident: Identifier, bounds: tuple[float, float], need: tup
         f"c > √(γa V0max) = {need[0]:.4g} 1/s,  d > √(γb V0max) = {need[1]:.4g} rad/(s²·N·m)",
     )
     d = Design(kind=KIND, plant=plant, gains=gains, poles=(), reference="step", formulas=formulas, notes=notes,
-               extra=extra)
+               data=data)
     return with_law(d, identifier_law(plant, ident), Linearization("none", reason=REASON))
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
-    """The law of ``design`` rebuilt from ``design.extra`` (``anti_windup`` is refused at the spec)."""
-    x = design.extra
-    if x.get("form") == "robot":
+    """The law of ``design`` rebuilt from ``design.data`` (``anti_windup`` is refused at the spec)."""
+    x = design.data
+    if isinstance(x, ArmIdentifierData):
         from designkit.families.sliding_mode_identification.arm_design import arm_law
 
         return arm_law(design)
-    return identifier_law(design.plant, Identifier(K1=x["K1"], K2=x["K2"], c=x["c"], d=x["d"], window=x["window"],
-                                                   gamma=tuple(x["gamma"]), initial=tuple(x["initial"]), Ts=x["Ts"]))
+    return identifier_law(design.plant, Identifier(K1=x.K1, K2=x.K2, c=x.c, d=x.d, window=x.window,
+                                                   gamma=tuple(x.gamma), initial=tuple(x.initial), Ts=x.Ts))
 
 
 def _family() -> Family:

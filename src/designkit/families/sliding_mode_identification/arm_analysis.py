@@ -117,7 +117,7 @@ def _true_plant_at(spec: Any, plant: Any, t: np.ndarray) -> list[tuple[np.ndarra
 
 def arm_run(design: Any, spec: Any, plant: Any, sim: Any) -> ArmRun:
     """The run of a robot-form design recomputed from its record (module docstring); ``plant`` the true arm."""
-    ident = ArmIdentifier.from_json(design.extra["identifier"])
+    ident = design.data.identifier
     base = base_of(design.plant)
     n, N, Ts = ident.n, ident.samples, ident.Ts
     cols = list(ident.columns)

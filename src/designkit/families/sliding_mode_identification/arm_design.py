@@ -19,6 +19,7 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.families.sliding_mode_identification.arm import base_of, parameter_unit, regressor_symbols
 from designkit.families.sliding_mode_identification.arm_law import ArmIdentifier, arm_identifier_law
+from designkit.families.sliding_mode_identification.data import ArmIdentifierData
 from designkit.families.sliding_mode_identification.laws import KIND
 from designkit.families.sliding_mode_identification.spec import LINK_REFERENCES
 from designkit.simulation.reference import reference_for
@@ -200,12 +201,12 @@ def arm_design(spec: Any, plant: Any, ident: ArmIdentifier, how: str) -> Design:
     )
     kind = "step" if spec.simulation.trajectory is None or spec.simulation.trajectory.kind in LINK_REFERENCES \
         else "trajectory"
-    extra = {"form": "robot", "identifier": ident.to_json(), "base_names": list(base.names),
-             "K": base.K.tolist(), "units": list(units), "Ts": ident.Ts, "window": ident.window,
-             "gamma": list(ident.gamma), "initial": list(ident.initial), "model_beta": base.beta.tolist(),
-             "kinematics": list(regressor_symbols(plant)), "gains_source": how}
+    data = ArmIdentifierData(identifier=ident, base_names=tuple(base.names), K=base.K.tolist(), units=tuple(units),
+                             Ts=ident.Ts, window=ident.window, gamma=tuple(ident.gamma), initial=tuple(ident.initial),
+                             model_beta=base.beta.tolist(), kinematics=tuple(regressor_symbols(plant)),
+                             gains_source=how)
     d = Design(kind=KIND, plant=plant, gains=gains, poles=(), reference=kind, formulas=formulas, notes=tuple(notes),
-               extra=extra)
+               data=data)
     return with_law(d, arm_identifier_law(plant, ident, base.W_base), Linearization("none", reason=REASON))
 
 
@@ -218,10 +219,10 @@ LAW = ("u = K1 (qD − q) + K2 (q̇D − q̇)  (a PD servo per joint driving the
 
 def law_lines(design: Design) -> tuple[str, ...]:
     """:data:`LAW` for a robot-form design, nothing for the link's (the family's own lines)."""
-    return LAW if design.extra.get("form") == "robot" else ()
+    return LAW if isinstance(design.data, ArmIdentifierData) else ()
 
 
 def arm_law(design: Design) -> Law:
-    """The law of a robot-form ``design`` rebuilt from ``design.extra``."""
-    ident = ArmIdentifier.from_json(design.extra["identifier"])
+    """The law of a robot-form ``design`` rebuilt from ``design.data``."""
+    ident = design.data.identifier
     return arm_identifier_law(design.plant, ident, base_of(design.plant).W_base)

@@ -17,6 +17,7 @@ from designkit.families.sliding_mode_identification.arm import base_of, paramete
 from designkit.families.sliding_mode_identification.arm_analysis import segments_of, window_rates
 from designkit.families.sliding_mode_identification.arm_checks import WINDOW_FACTOR, run_of, tolerances
 from designkit.families.sliding_mode_identification.checks import CONVERGED_REL, DET_REL
+from designkit.families.sliding_mode_identification.data import ArmIdentifierData
 from designkit.families.sliding_mode_identification.laws import KIND
 
 __all__ = ["FIGURES", "arm_json", "arm_section"]
@@ -31,7 +32,7 @@ def _num(x: float) -> float | None:
 
 
 def _robot(result: Any) -> bool:
-    return (result.simulation is not None and result.design.extra.get("form") == "robot"
+    return (result.simulation is not None and isinstance(result.design.data, ArmIdentifierData)
             and result.design.kind == KIND)
 
 
@@ -39,16 +40,16 @@ def arm_json(result: Any) -> dict[str, Any]:
     """``{"estimates": {name: value}, "identification": {...}}``: the estimates at the end of the run (SI units of
     each), and under ``identification`` the true values at the end, the initial estimates, the units and the known
     base parameters (convention ``u = Wb(q, qd, qdd) beta``, the model layer's base parameters)."""
-    x = result.design.extra
-    names = x["identifier"]["names"]
+    x = result.design.data
+    names = x.identifier.names
     if result.simulation is None:
         return {"estimates": None}
     run = run_of(result.design, result)
-    known = {x["base_names"][c]: v for c, v in x["identifier"]["known"]}
+    known = {x.base_names[c]: v for c, v in x.identifier.known}
     return {"estimates": {n: _num(float(v)) for n, v in zip(names, run.estimate[-1], strict=True)},
             "identification": {"convention": "u = Wb(q, qd, qdd) beta, beta the base parameters of the model layer",
-                               "units": {n: u for n, u in zip(names, x["units"], strict=True)},
-                               "initial": dict(zip(names, x["initial"], strict=True)),
+                               "units": {n: u for n, u in zip(names, x.units, strict=True)},
+                               "initial": dict(zip(names, x.initial, strict=True)),
                                "true_final": {n: float(v) for n, v in zip(names, run.theta[-1], strict=True)},
                                "known": known}}
 
@@ -102,7 +103,7 @@ def _draw_errors(result: Any) -> tuple[Any, dict[str, Any]]:
 def _draw_sliding(result: Any) -> tuple[Any, dict[str, Any]]:
     sim = result.simulation
     t = np.asarray(sim.time, dtype=float)
-    n = int(result.design.extra["identifier"]["K1"].__len__())
+    n = len(result.design.data.identifier.K1)
     fig, axes = new_figure(6.8, 1.0 + 1.4 * n, rows=n)
     for j, ax in enumerate(axes):
         tag(fig, "slm", *plot_decimated(ax, t, np.asarray(sim.signals[f"slm{j + 1}"], dtype=float), color=ORANGE,
@@ -173,7 +174,7 @@ def excitation_figure(result: Any) -> Figure | None:
     if not _robot(result):
         return None
     svg, _, _ = render_tagged(_draw_excitation, result)
-    length = WINDOW_FACTOR * result.design.extra["window"]
+    length = WINDOW_FACTOR * result.design.data.window
     return Figure("Excitation per window",
                   f"Drawn: over each window of {length:g} s, the contraction κ, the largest V(end)/V(start) the "
                   "update can leave whatever the error (top, blue; below the dotted green line every direction is "
@@ -194,8 +195,8 @@ def arm_section(result: Any) -> ReportSection | None:
     """Estimates, errors and the conditions in words and tables."""
     if not _robot(result):
         return None
-    x = result.design.extra
-    ident = x["identifier"]
+    x = result.design.data
+    ident = x.identifier
     run = run_of(result.design, result)
     spec = result.loaded.spec
     scale = _scales(result, run)
@@ -229,15 +230,15 @@ def arm_section(result: Any) -> ReportSection | None:
                  (f"The arm's torque is linear in its {len(base.names)} base parameters, u = Wb(q, q̇, q̈) β (the model "
                   "layer's regressor, its dependent columns regrouped): " + "; ".join(base.regrouping) + ".",
                   f"Identified: {', '.join(run.ident.names)}"
-                  + (f"; known at the model's values: {', '.join(x['base_names'][c] for c, _ in ident['known'])}."
-                     if ident["known"] else "."))),
+                  + (f"; known at the model's values: {', '.join(x.base_names[c] for c, _ in ident.known)}."
+                     if ident.known else "."))),
     )
-    K1 = ", ".join(_f(v) for v in ident["K1"])
-    K2 = ", ".join(_f(v) for v in ident["K2"])
+    K1 = ", ".join(_f(v) for v in ident.K1)
+    K2 = ", ".join(_f(v) for v in ident.K2)
     intro = (f"A PD servo per joint (K1 = {K1} N·m/rad, K2 = {K2} N·m·s/rad) drives the arm along the reference; every "
-             f"{_f(ident['Ts'])} s each joint's sliding-mode observer gives its acceleration by the equivalent "
-             f"switching term (k = {', '.join(_f(v) for v in ident['switching'])} rad/s²), and the gradient rule on "
-             f"two time points D = {_f(ident['window'])} s apart updates the {len(run.ident.names)} identified base "
-             f"parameters, normalised when a sample's step would exceed 1. {x['gains_source']}")
+             f"{_f(ident.Ts)} s each joint's sliding-mode observer gives its acceleration by the equivalent "
+             f"switching term (k = {', '.join(_f(v) for v in ident.switching)} rad/s²), and the gradient rule on "
+             f"two time points D = {_f(ident.window)} s apart updates the {len(run.ident.names)} identified base "
+             f"parameters, normalised when a sample's step would exceed 1. {x.gains_source}")
     return ReportSection("smid-arm", "Sliding-mode identification of the arm's base parameters (notes §5.5)", intro,
                          questions)

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.sliding_mode_identification.data import ArmIdentifierData
 from designkit.families.sliding_mode_identification.laws import KIND
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
@@ -85,29 +86,29 @@ def lyapunov(design: Any, spec: Any, plant: Any, sim: Any) -> tuple[np.ndarray, 
     """``(t, V)`` of the run (module docstring)."""
     t = np.asarray(sim.time, dtype=float)
     a, b = true_parameters(spec, plant, t)
-    g = design.extra["gamma"]
+    g = design.data.gamma
     ah, bh = (np.asarray(sim.signals[n], dtype=float) for n in ("a_hat", "b_hat"))
     return t, (a - ah) ** 2 / g[0] + (b - bh) ** 2 / g[1]
 
 
 def excitation(design: Any, sim: Any, mask: np.ndarray) -> dict[str, Any]:
     """The Gram matrix ``G`` of the two-point regressors over ``mask``, ``rho`` (1/s) and the determinant's record."""
-    x = design.extra
+    x = design.data
     t = np.asarray(sim.time, dtype=float)
     x2 = np.asarray(sim.state, dtype=float)[:, sim.velocities[0]]
     u = np.asarray(sim.u_command, dtype=float)[:, 0]
-    N = max(1, int(round(x["window"] / x["Ts"])))
+    N = max(1, int(round(x.window / x.Ts)))
     # regressors as the identifier forms them: mean speed and the command over the last sample, and D earlier
     xm = np.concatenate([[0.0], 0.5 * (x2[1:] + x2[:-1])])
     pu = np.concatenate([[0.0], u[:-1]])
     xD = np.concatenate([np.zeros(N), xm[:-N]])
     uD = np.concatenate([np.zeros(N), pu[:-N]])
     det = xm * uD - pu * xD
-    m = mask & (t >= t[0] + x["window"])
+    m = mask & (t >= t[0] + x.window)
     phi1 = np.stack([-xm[m], pu[m]])
     phi2 = np.stack([-xD[m], uD[m]])
     G = (phi1 @ phi1.T + phi2 @ phi2.T) / max(int(m.sum()), 1)
-    root = np.diag(np.sqrt(np.asarray(x["gamma"], dtype=float)))
+    root = np.diag(np.sqrt(np.asarray(x.gamma, dtype=float)))
     rho = float(np.linalg.eigvalsh(root @ G @ root)[0]) if m.any() else 0.0
     span = float(t[m][-1] - t[m][0]) if m.any() else 0.0
     return {"gram": G, "rho": rho, "span": span, "det": det, "mask": m, "regressors": (xm, pu, xD, uD)}
@@ -117,35 +118,35 @@ def sampled_step(design: Any, sim: Any) -> float:
     """The largest ``Ts lambda_max(Gamma^1/2 Phi Gamma^1/2)`` along the run, ``Phi = phi(t) phi(t)' + phi(t-D)
     phi(t-D)'``: the sampled update ``theta~(k+1) = (I - Ts Gamma Phi) theta~(k)`` changes ``V`` by
     ``-Ts theta~' Phi theta~ (2 - Ts lambda_max)`` at most, so ``V`` does not increase while this stays below 2."""
-    x = design.extra
+    x = design.data
     ex = excitation(design, sim, np.ones(len(sim.time), dtype=bool))
     xm, pu, xD, uD = ex["regressors"]
-    ga, gb = x["gamma"]
+    ga, gb = x.gamma
     p11 = ga * (xm**2 + xD**2)
     p22 = gb * (pu**2 + uD**2)
     p12 = -math.sqrt(ga * gb) * (xm * pu + xD * uD)
     lam = 0.5 * (p11 + p22) + np.sqrt(0.25 * (p11 - p22) ** 2 + p12**2)
-    return float(x["Ts"] * np.max(lam)) if lam.size and np.all(np.isfinite(lam)) else math.inf
+    return float(x.Ts * np.max(lam)) if lam.size and np.all(np.isfinite(lam)) else math.inf
 
 
 def _switching(design: Any, ctx: Context) -> tuple[Check, ...]:
-    sim, x = ctx.simulation, design.extra
+    sim, x = ctx.simulation, design.data
     t = np.asarray(sim.time, dtype=float)
     a, b = true_parameters(ctx.spec, ctx.true_plant(design), t)
     ea = float(np.max(np.abs(a - np.asarray(sim.signals["a_hat"], dtype=float))))
     eb = float(np.max(np.abs(b - np.asarray(sim.signals["b_hat"], dtype=float))))
-    ok = bool(x["c"] > ea and x["d"] > eb)
-    e0 = (abs(a[0] - x["initial"][0]), abs(b[0] - x["initial"][1]))
-    covered = bool(e0[0] <= x["error_bounds"][0] and e0[1] <= x["error_bounds"][1])
-    ratio = min(x["c"] / ea if ea > 0 else math.inf, x["d"] / eb if eb > 0 else math.inf)
-    detail = (f"largest estimation errors along the run |a − â| = {_f(ea)} 1/s (c = {_f(x['c'])} 1/s) and "
-              f"|b − b̂| = {_f(eb)} rad/(s²·N·m) (d = {_f(x['d'])} rad/(s²·N·m)); the condition "
+    ok = bool(x.c > ea and x.d > eb)
+    e0 = (abs(a[0] - x.initial[0]), abs(b[0] - x.initial[1]))
+    covered = bool(e0[0] <= x.error_bounds[0] and e0[1] <= x.error_bounds[1])
+    ratio = min(x.c / ea if ea > 0 else math.inf, x.d / eb if eb > 0 else math.inf)
+    detail = (f"largest estimation errors along the run |a − â| = {_f(ea)} 1/s (c = {_f(x.c)} 1/s) and "
+              f"|b − b̂| = {_f(eb)} rad/(s²·N·m) (d = {_f(x.d)} rad/(s²·N·m)); the condition "
               f"{'holds' if ok else 'is violated'}; the least gains the stated error bounds require are "
-              f"c = {_f(x['required'][0])} 1/s, d = {_f(x['required'][1])} rad/(s²·N·m)")
+              f"c = {_f(x.required[0])} 1/s, d = {_f(x.required[1])} rad/(s²·N·m)")
     if not covered:
         detail += (f"; the initial errors ({_f(e0[0])} 1/s, {_f(e0[1])} rad/(s²·N·m)) exceed the stated bounds "
-                   f"({_f(x['error_bounds'][0])}, {_f(x['error_bounds'][1])})")
-    cert = {"max_error": [ea, eb], "gains": [x["c"], x["d"]], "required": list(x["required"]),
+                   f"({_f(x.error_bounds[0])}, {_f(x.error_bounds[1])})")
+    cert = {"max_error": [ea, eb], "gains": [x.c, x.d], "required": list(x.required),
             "initial_error": list(e0), "bounds_cover_initial": covered}
     return (Check("switching_condition", ok, "min(c / max|â − a|, d / max|b̂ − b|) > 1", _json(ratio),
                   _json(ratio - 1.0), "1 (ratio)", detail, cert),)
@@ -159,7 +160,7 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t, V = lyapunov(design, ctx.spec, ctx.true_plant(design), sim)
     worst, where = 0.0, None
-    for m in segments(ctx.spec, t, design.extra["window"], design.extra["Ts"]):
+    for m in segments(ctx.spec, t, design.data.window, design.data.Ts):
         seg = V[m]
         rise = (seg - np.minimum.accumulate(seg) - V_FLOOR) / max(float(seg[0]), 1e-300)
         k = int(np.argmax(rise))
@@ -183,12 +184,12 @@ def _determinant(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t = np.asarray(sim.time, dtype=float)
     rec = np.asarray(sim.signals["det"], dtype=float)
-    m = t >= t[0] + design.extra["window"]
+    m = t >= t[0] + design.data.window
     peak = float(np.max(np.abs(rec[m]))) if m.any() else 0.0
     frac = float(np.mean(np.abs(rec[m]) >= DET_REL * peak)) if peak > 0 else 0.0
     ok = bool(frac >= DET_FRACTION and peak > 0)
     detail = (f"det [x2(t) u(t); x2(t − D) u(t − D)] is away from zero on {_f(100 * frac, 3)} % of the samples after "
-              f"the first D = {design.extra['window']:g} s (largest magnitude {_f(peak)} rad·N·m/s)")
+              f"the first D = {design.data.window:g} s (largest magnitude {_f(peak)} rad·N·m/s)")
     if not ok:
         detail += ": the input does not excite the two time points independently, a and b cannot be told apart"
     cert = {"fraction": frac, "peak": peak, "threshold_rel": DET_REL}
@@ -200,7 +201,7 @@ def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t = np.asarray(sim.time, dtype=float)
     a, b = true_parameters(ctx.spec, ctx.true_plant(design), t)
-    last = segments(ctx.spec, t, design.extra["window"], design.extra["Ts"])[-1]
+    last = segments(ctx.spec, t, design.data.window, design.data.Ts)[-1]
     ex = excitation(design, sim, last)
     efolds = ex["rho"] * ex["span"]
     excited = bool(efolds >= EFOLDS)
@@ -222,14 +223,14 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     """Why an identification check failed, and what would fix it."""
     if check.passed is not False:
         return None
-    x = result.design.extra
-    if x.get("form") == "robot":
+    x = result.design.data
+    if isinstance(x, ArmIdentifierData):
         from designkit.families.sliding_mode_identification import arm_checks
 
         return arm_checks.diagnose(result, check)
     if check.name == "switching_condition":
-        need = max(check.certificate["max_error"][0], x["required"][0])
-        needd = max(check.certificate["max_error"][1], x["required"][1])
+        need = max(check.certificate["max_error"][0], x.required[0])
+        needd = max(check.certificate["max_error"][1], x.required[1])
         return ("The observer's switching gains are below the estimation errors they must dominate, so the sliding "
                 "variable leaves zero and the acceleration it reconstructs is wrong: " + check.detail + ".",
                 f"Use c > {need:.4g} 1/s and d > {needd:.4g} rad/(s²·N·m) (leave them out to get "
@@ -256,7 +257,7 @@ def _form(run: Any, name: str) -> Any:
     """``run`` on the link; on a robot the check of the same name in
     :mod:`~designkit.families.sliding_mode_identification.arm_checks`."""
     def go(design: Any, ctx: Context) -> tuple[Check, ...]:
-        if design.extra.get("form") == "robot":
+        if isinstance(design.data, ArmIdentifierData):
             from designkit.families.sliding_mode_identification import arm_checks
 
             return getattr(arm_checks, name)(design, ctx)

@@ -19,6 +19,7 @@ from designkit.families.sliding_mode_identification.checks import (
     segments,
     true_parameters,
 )
+from designkit.families.sliding_mode_identification.data import ArmIdentifierData
 
 __all__ = ["FIGURES", "determinant_figure", "estimates_figure", "json", "section", "sliding_figure"]
 
@@ -32,7 +33,7 @@ def json(result: Any) -> dict[str, Any]:
     """``{"a_hat": ..., "b_hat": ..., "identification": {...}}``: the estimates at the end of the run (1/s,
     (rad/s^2)/(N*m)), and, under ``identification``, the true values at the end and the units (convention
     ``x2' = -a x2 + b u``, ``a = 1/tau``, ``b = Km/tau``)."""
-    if result.design.extra.get("form") == "robot":
+    if isinstance(result.design.data, ArmIdentifierData):
         return arm_report.arm_json(result)
     sim = result.simulation
     if sim is None:
@@ -43,7 +44,7 @@ def json(result: Any) -> dict[str, Any]:
     a, b = true_parameters(result.loaded.spec, plant, t)
     return {"a_hat": _num(ah), "b_hat": _num(bh),
             "identification": {"convention": "x2' = -a x2 + b u, a = 1/tau, b = Km/tau", "units": ["1/s",
-                               "rad/(s^2*N*m)"], "initial": list(result.design.extra["initial"]),
+                               "rad/(s^2*N*m)"], "initial": list(result.design.data.initial),
                                "true_final": [float(a[-1]), float(b[-1])]}}
 
 
@@ -165,16 +166,16 @@ def section(result: Any) -> ReportSection | None:
     sim = result.simulation
     if sim is None:
         return None
-    if result.design.extra.get("form") == "robot":
+    if isinstance(result.design.data, ArmIdentifierData):
         return arm_report.arm_section(result)
-    x = result.design.extra
+    x = result.design.data
     t = np.asarray(sim.time, dtype=float)
     plant = result.plant if result.plant is not None else result.design.plant
     spec = result.loaded.spec
     a, b = true_parameters(spec, plant, t)
     ah, bh = (np.asarray(sim.signals[n], dtype=float) for n in ("a_hat", "b_hat"))
     rows = []
-    for mask in segments(spec, t, x["window"], x["Ts"]):
+    for mask in segments(spec, t, x.window, x.Ts):
         idx = np.flatnonzero(mask)
         k = idx[-1]
         rel = np.maximum(np.abs(ah - a) / np.abs(a), np.abs(bh - b) / np.abs(b))
@@ -195,10 +196,10 @@ def section(result: Any) -> ReportSection | None:
         Question("Do the observer's switching condition, the Lyapunov function and the determinant condition hold?",
                  tuple(said[1:])),
     )
-    intro = (f"A PD servo (K1 = {_f(x['K1'])} N·m/rad, K2 = {_f(x['K2'])} N·m·s/rad) drives the link; every "
-             f"{_f(x['Ts'])} s the sliding-mode observer's equivalent switching term gives the acceleration, and "
-             f"the gradient rule on two time points D = {_f(x['window'])} s apart updates the estimates "
-             f"(γa = {_f(x['gamma'][0])} s/rad², γb = {_f(x['gamma'][1])} 1/(s·N²·m²)), from a = "
-             f"{_f(x['initial'][0])} 1/s, b = {_f(x['initial'][1])} rad/(s²·N·m). Sign convention: "
+    intro = (f"A PD servo (K1 = {_f(x.K1)} N·m/rad, K2 = {_f(x.K2)} N·m·s/rad) drives the link; every "
+             f"{_f(x.Ts)} s the sliding-mode observer's equivalent switching term gives the acceleration, and "
+             f"the gradient rule on two time points D = {_f(x.window)} s apart updates the estimates "
+             f"(γa = {_f(x.gamma[0])} s/rad², γb = {_f(x.gamma[1])} 1/(s·N²·m²)), from a = "
+             f"{_f(x.initial[0])} 1/s, b = {_f(x.initial[1])} rad/(s²·N·m). Sign convention: "
              "x2' = −a x2 + b u (that of §5.1; §5.5 writes +a x2).")
     return ReportSection("smid", "Sliding-mode parameter identification (notes §5.5)", intro, questions)

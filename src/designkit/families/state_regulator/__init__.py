@@ -6,10 +6,11 @@ CasADi from the plant's own ODE.  Law::
 
     u = -K x + N xD,      K = e P(A) (Ackermann),      N = -1 / (C (A - B K)^-1 B)
 
-(:mod:`~designkit.families.state_regulator.gains`).  The loop has no controller state, so its closed loop is
-``A - B K`` with exactly the requested poles; the generic checks judge it: ``pole_placement`` (poles, no finite
-zero of ``x3/xD``, unit DC gain), ``lyapunov``, ``loop_margins`` (the loop broken at the plant input:
-``L(s) = K (sI - A)^-1 B``), ``robustness`` over ``plant.uncertainty``, ``designed_loop`` and ``time_domain``.
+(:mod:`~designkit.synthesis.pole_placement`, :mod:`~designkit.families.state_regulator.gains`).  The loop has no
+controller state, so its closed loop is ``A - B K`` with exactly the requested poles; the generic checks judge it:
+``pole_placement`` (poles, no finite zero of ``x3/xD``, unit DC gain), ``lyapunov``, ``loop_margins`` (the loop broken
+at the plant input: ``L(s) = K (sI - A)^-1 B``), ``robustness`` over ``plant.uncertainty``, ``designed_loop`` and
+``time_domain``.
 Without integral action a constant load ``w`` leaves the offset ``-C (A - B K)^-1 D w`` (in ``--json``).
 """
 
@@ -21,14 +22,15 @@ import casadi as ca
 import numpy as np
 
 from designkit.families.state_regulator import answers
-from designkit.families.state_regulator.gains import ackermann, check_controllable, load_offset, reference_gain
+from designkit.families.state_regulator.gains import load_offset, reference_gain
 from designkit.families.state_regulator.spec import EXTRA, KIND, StateRegulatorSpec, validate
-from designkit.families.vsc.surface import linear_model
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
+from designkit.synthesis.pole_placement import ackermann
+from designkit.synthesis.state_space import check_controllable, linear_model
 
 __all__ = ["FAMILY", "KIND", "StateRegulatorSpec", "law", "synthesize"]
 

@@ -53,20 +53,14 @@ from designkit.families.vsc.figures import FIGURES
 from designkit.families.vsc.gains import bound_ranges, design_gains, rational_forms
 from designkit.families.vsc.report import json_summary, section
 from designkit.families.vsc.spec import KIND, VscSpec, perturbation_level, validate
-from designkit.families.vsc.surface import (
-    CONTROLLABILITY_TOL,
-    controllability_ratio,
-    drive_index,
-    linear_model,
-    reduced_poles,
-    sliding_surface,
-)
+from designkit.families.vsc.surface import drive_index, reduced_poles, sliding_surface
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import Knob
+from designkit.synthesis.knobs import COMMAND_VARIATION, SETTLED_ERROR, Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
+from designkit.synthesis.state_space import check_controllable, linear_model
 
 __all__ = ["FAMILY", "KIND", "VscSpec", "law", "synthesize"]
 
@@ -79,8 +73,6 @@ MAX_STEP = 1e-3
 REASON = ("the law switches on sigma = 0 (the relay) and on every x_i sigma = 0 (psi_i between alpha_i and beta_i), "
           "where it spends its life: it has no derivative there, so no linearization describes the loop; theorem 3's "
           "conditions are certified on the parameter box instead")
-COUPLING = ("KR", "J2", "R2")
-"""Elastic-joint parameters of the coupling ``k2 = KR R2^2/J2`` through which the motor reaches the link."""
 
 
 def design_box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
@@ -109,20 +101,7 @@ def design_box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
 def _surface(spec: Any, model: Any, box: dict) -> np.ndarray:
     A, B, _ = model.at()
     poles = [complex(p) for p in spec.controller.sliding_poles]
-    ratio = controllability_ratio(A, B)
-    if ratio < CONTROLLABILITY_TOL:
-        if A.shape[0] != 4:
-            raise SpecError("plant", f"the plant is not controllable (Hadamard ratio {ratio:.3g})")
-        given = [k for k in COUPLING if getattr(spec.plant, k, None) is not None] or ["KR"]
-        raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "
-                        f"through the coupling k2 = KR R2^2/J2 = {-A[3, 2]:.3g} 1/s^2, and the controllability "
-                        f"matrix [B, AB, A^2 B, A^3 B] is singular to {ratio:.3g} (Hadamard ratio, below "
-                        f"{CONTROLLABILITY_TOL:g}): no sliding surface places the poles")
-    for name, (lo, hi) in box.items():  # every plant of the box must be controllable too
-        for v in (lo, hi):
-            Ab, Bb, _ = model.at({name: v})
-            if controllability_ratio(Ab, Bb) < CONTROLLABILITY_TOL:
-                raise SpecError(f"plant.uncertainty.{name}", f"{name} = {v:g} makes the plant uncontrollable")
+    check_controllable(spec, model, box, "no sliding surface places the poles")  # every plant of the box too
     return sliding_surface(A, B, poles)
 
 
@@ -295,6 +274,7 @@ FAMILY = Family(
                 "step)", 1e-12, 1e6, path="controller.chattering_band", current=lambda d: float(d.extra[KIND]["band"]),
                 when=lambda d: d.extra[KIND]["boundary_layer"] is None)),
     traits=("switching", "state_feedback"),
+    metrics=(SETTLED_ERROR, COMMAND_VARIATION),
     answers=answers.ANSWERS,
     predictions=answers.PREDICTIONS,
 )

@@ -25,7 +25,7 @@ import numpy as np
 from designkit.families.vsc.gains import VscGains, condition_sets, rational_forms
 from designkit.families.vsc.measure import measure
 from designkit.families.vsc.spec import KIND
-from designkit.families.vsc.surface import linear_model
+from designkit.synthesis.state_space import linear_model
 from designkit.verification.check import Check
 from designkit.verification.conditions import certify
 from designkit.verification.suite import CheckRule, Context

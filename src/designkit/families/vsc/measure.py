@@ -91,7 +91,7 @@ def static_offset(A: np.ndarray, B: np.ndarray, D: np.ndarray, c: np.ndarray, d:
 
 @functools.lru_cache(maxsize=8)
 def _model(plant: Any) -> Any:
-    from designkit.families.vsc.surface import linear_model
+    from designkit.synthesis.state_space import linear_model
 
     return linear_model(plant)
 

@@ -83,15 +83,14 @@ def measure_configuration(result: Any, plant: Any, path: PathSamples | None, nat
     M = np.asarray(plant.robot.mass_matrix(path.q, p=plant.model_parameters()), dtype=float)
     D = np.diagonal(M, axis1=1, axis2=2)
     joints = []
-    star = design.extra.get("configuration") if nature == "per-joint loops" else None
+    # per-joint loops are designed on the simplified links at the configuration the design is linearized at
+    op = design.operating_point
+    n = D.shape[1]
+    star = np.asarray(op["r"], dtype=float)[:n].tolist() if nature == "per-joint loops" and op else None
     design_D = None
     if star is not None:
-        links = design.extra.get("links")
-        if links:
-            design_D = [float(lk["inertia"]) for lk in links]
-        else:
-            Ms = design.plant.robot.mass_matrix(np.asarray(star, float), p=design.plant.model_parameters())
-            design_D = np.diag(np.asarray(Ms, float)).tolist()
+        Ms = design.plant.robot.mass_matrix(np.asarray(star, float), p=design.plant.model_parameters())
+        design_D = np.diag(np.asarray(Ms, float)).tolist()
     for i in range(D.shape[1]):
         lo, hi = int(np.argmin(D[:, i])), int(np.argmax(D[:, i]))
         low, high = float(D[lo, i]), float(D[hi, i])

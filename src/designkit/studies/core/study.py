@@ -11,8 +11,9 @@ say it in words.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from designkit.display.section import ReportSection
@@ -41,6 +42,8 @@ class Row:
         One of :data:`OUTCOMES`.
     detail : str
         The checks that failed or are undecided (their labels), or why the variant was not run.
+    seconds : float
+        Wall time of the variant's run (s); not part of the row's value.
     """
 
     factor: float
@@ -48,6 +51,7 @@ class Row:
     metrics: Mapping[str, float | None]
     outcome: str
     detail: str = ""
+    seconds: float = field(default=0.0, compare=False)
 
     def __post_init__(self) -> None:
         if self.outcome not in OUTCOMES:
@@ -59,8 +63,11 @@ class Row:
         return self.outcome == "verified"
 
     def to_json(self) -> dict[str, Any]:
+        """JSON types only: a metric that is infinite (a run that diverged, a response that never settles) or
+        undefined is ``null``, the outcome and detail say which."""
         value = [_json(v) for v in self.value] if isinstance(self.value, tuple) else _json(self.value)
-        return {"factor": self.factor, "value": value, "metrics": dict(self.metrics), "outcome": self.outcome,
+        metrics = {k: (v if v is not None and math.isfinite(v) else None) for k, v in self.metrics.items()}
+        return {"factor": self.factor, "value": value, "metrics": metrics, "outcome": self.outcome,
                 "detail": self.detail}
 
 
@@ -161,6 +168,9 @@ class StudyContext:
         Seconds of work the study may spend on variants.
     earlier : tuple of StudyResult
         What the studies before this one (in report order) returned: a lab answer cites the gain study's rows.
+    processes : int
+        2 shares each batch of independent variants with a forked child on a second core
+        (:func:`designkit.processes.run_tasks`); the rows are the same.
     """
 
     result: Any
@@ -168,6 +178,17 @@ class StudyContext:
     settings: Any = None
     budget: float = 15.0
     earlier: tuple[Any, ...] = ()
+    processes: int = 1
+
+    def run_all(self, tasks: Any, budget: Any) -> list[Any]:
+        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, on :attr:`processes` cores;
+        each row's wall time charged to ``budget``."""
+        from designkit.processes import run_tasks
+
+        rows = run_tasks(list(tasks), processes=self.processes)
+        for row in rows:
+            budget.record(row.seconds)
+        return rows
 
     def study(self, name: str) -> Any:
         """The result of the earlier study ``name``, or None."""

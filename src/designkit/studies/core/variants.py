@@ -7,6 +7,7 @@ and carries the family's metrics on it.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -70,6 +71,8 @@ def run_variant(result: Any, knob: Any, value: Any, factor: float, metrics: tupl
 def run_row(make: Any, factor: float, value: Any, metrics: tuple, budget: Budget | None = None) -> Row:
     """The row of the run ``make()`` returns (a :class:`~designkit.runner.run.Run` of the family's own run).
 
+    ``budget`` (when given) is charged with the row's wall time; a batch run on two cores
+    (:meth:`~designkit.studies.core.study.StudyContext.run_all`) passes none and charges the rows it gets back.
     A variant the family refuses (a :class:`~designkit.errors.DesignkitError`: no equilibrium, an operator that
     cannot be built, a setting the family does not take) is a ``refused`` row with the family's message; a run that
     fails numerically (the integrator gives up) a ``not run`` row with the reason.  Never raises for what the
@@ -88,8 +91,9 @@ def run_row(make: Any, factor: float, value: Any, metrics: tuple, budget: Budget
         row = Row(float(factor), _value(value), {m.key: None for m in metrics}, "refused", _first(exc))
     except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
         row = Row(float(factor), _value(value), {m.key: None for m in metrics}, "not run", _first(exc))
+    row = dataclasses.replace(row, seconds=time.perf_counter() - start)
     if budget is not None:
-        budget.record(time.perf_counter() - start)
+        budget.record(row.seconds)
     return row
 
 

@@ -105,24 +105,18 @@ def _run(ctx: StudyContext) -> StudyResult:
     nominal = nominal_row(result, 1.0, metrics)
     scenario, plants = scenario_changes(result), plant_changes(result)
     ran: dict[str, list[tuple[str, Row]]] = {}
-    left = []
-    for c in scenario:
-        if not budget.affords(1):
-            left.append(c.label)
-            continue
-        row = run_row(lambda c=c: vary_spec(result, c.changes), c.size, c.size, metrics, budget)
-        ran.setdefault(c.group, []).append((c.label, row))
-    for p in plants:
-        if not budget.affords(1):
-            left.append(p.label)
-            continue
-        row = run_row(lambda p=p: vary_plant(result, p.values), p.factor, p.factor, metrics, budget)
-        ran.setdefault(p.group, []).append((p.label, row))
+    planned = [(c.group, c.label, (lambda c=c: run_row(lambda: vary_spec(result, c.changes), c.size, c.size,
+                                                        metrics))) for c in scenario]
+    planned += [(p.group, p.label, (lambda p=p: run_row(lambda: vary_plant(result, p.values), p.factor, p.factor,
+                                                         metrics))) for p in plants]
+    room = budget.capacity()
+    kept, left = planned[:room], [label for _, label, _ in planned[room:]]
+    for (group, label, _), row in zip(kept, ctx.run_all([t for *_, t in kept], budget), strict=True):
+        ran.setdefault(group, []).append((label, row))
     reduced = ""
     if left:
-        why = budget.overrun_words() if budget.overrun else (
-            f"the studies' budget of {fmt_number(ctx.budget, 3)} s fits {budget.runs} at about "
-            f"{fmt_number(budget.per_run, 2)} s each (raise studies.budget to run them)")
+        why = (f"the studies' budget of {fmt_number(ctx.budget, 3)} s fits {room} at about "
+               f"{fmt_number(budget.per_run, 2)} s each (raise studies.budget to run them)")
         reduced = f"{len(left)} variants not run ({'; '.join(left)}): {why}"
     scenario_groups = [g for g in ("sampling", "delay", "noise", "quantization", "limit", "load") if g in ran]
     plant_groups = [g for g in ("viscosity", "inertia", "masses", "lengths") if g in ran]

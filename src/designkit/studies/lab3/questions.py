@@ -39,8 +39,8 @@ def why_question(switching: tuple[Member, ...], chat: dict[str, Chatter], cu: st
         c = chat[m.label]
         over, settle = amount(m.values.get("overshoot"), "%"), amount(m.values.get("settling_time"), "s")
         sentences.append(f"With what success: {m.label} overshoots by {over} and settles in {settle}, at the price of "
-                         f"a command that reverses {amount(c.rate)} times per second (total variation "
-                         f"{amount(c.total_variation, cu)}). {m.verdict}")
+                         f"a command that reverses {amount(c.rate)} times per second and varies by "
+                         f"{amount(c.variation, cu + '/s')}. {m.verdict}")
     return Question("Why, how and with what success a sliding-mode controller?", tuple(sentences))
 
 
@@ -52,7 +52,7 @@ def importance_question(runs: dict[str, list[tuple[Any, list[Measured]]]], by_la
     def cells(label: str, what: str, outcome: str, v: Any) -> tuple[str, ...]:
         return (label, what, outcome, amount(v.get("overshoot"), "%"), amount(v.get("settling_time"), "s"),
                 amount(v.get("steady_state_error"), eu), amount(v.get("command_peak"), cu),
-                amount(v.get("command_variation"), cu))
+                amount(v.get("command_variation"), cu + "/s"))
 
     for label, knobs in runs.items():
         m = by_label[label]
@@ -67,14 +67,14 @@ def importance_question(runs: dict[str, list[tuple[Any, list[Measured]]]], by_la
                 if d.row.outcome in ("verified", "failed", "undecided"):
                     moved = [f"{what} {amount(base.get(key), u)} → {amount(v.get(key), u)}" for what, key, u in
                              (("settling", "settling_time", "s"), ("peak command", "command_peak", cu),
-                              ("TV(u)", "command_variation", cu))]
+                              ("variation of u", "command_variation", cu + "/s"))]
                     text += f" ({', '.join(moved)})"
                 parts.append(text)
         if parts:
             sentences.append(f"{label}: " + "; ".join(parts) + ".")
     table = Table("One setting changed at a time by its family's own factors (the first row of each controller: the "
                   "spec's design)", ("controller", "change", "checks", "overshoot", "settling", "final error",
-                                     "peak |u|", "TV(u)"), tuple(rows))
+                                     "peak |u|", "variation of u"), tuple(rows))
     intro = ("Each setting the controller's family declares it may vary (its knobs that are spec settings) was moved "
              "by the knob's own factors, everything else equal, and the controller run again through its own run and "
              "checks; the design gains are varied in each controller's own report.")
@@ -133,11 +133,11 @@ def compare_question(switching: tuple[Member, ...], others: tuple[Member, ...], 
             ea, eb = effects.get(a.label), effects.get(b.label)
             sa, sb = amount(a.values.get("settling_time"), "s"), amount(b.values.get("settling_time"), "s")
             peak = ratio(a.values.get("peak_command"), b.values.get("peak_command"))
-            tv = ratio(chat[a.label].total_variation, chat[b.label].total_variation)
+            tv = ratio(chat[a.label].variation, chat[b.label].variation)
             la, lb = amount(ea.final if ea else None, eu, 4), amount(eb.final if eb else None, eu, 4)
             sentences.append(f"{a.label} against {b.label} ({b.controller}): settles in {sa} against {sb}, with {peak} "
-                             f"times its peak command and {tv} times its command's total variation; the load leaves "
-                             f"{la} against {lb}.")
+                             f"times its peak command and {tv} times its command's variation per second; the load "
+                             f"leaves {la} against {lb}.")
     keys = ("rms_error_before", "rise_time_before", "overshoot", "settling_time", "max_error_load", "peak_command",
             "rms_command", "rms_error_final")
     return Question("How does the sliding mode compare with the PID and the linear state regulator?",
@@ -181,8 +181,9 @@ def level_question(found: tuple[Member, ...], chat: dict[str, Chatter], cu: str)
     """Peak and RMS command (the table's) and the command's chattering (measured here on the members' runs)."""
     return Question("What control level does each need, and how much does it chatter?", tuple(
         f"{m.label}: peak |u| {amount(m.values.get('peak_command'), cu)}, RMS {amount(m.values.get('rms_command'), cu)}"
-        f"; the command reverses {chat[m.label].reversals} times ({amount(chat[m.label].rate, '1/s')}), total "
-        f"variation {amount(chat[m.label].total_variation, cu)}." for m in found))
+        f"; the command reverses {chat[m.label].reversals} times ({amount(chat[m.label].rate)} per second) and varies "
+        f"by {amount(chat[m.label].variation, cu + '/s')} (total variation {amount(chat[m.label].total_variation, cu)} "
+        f"over the {amount(chat[m.label].duration, 's')} run)." for m in found))
 
 
 def _span(values_: list[float | None], unit_text: str) -> str:
