@@ -122,10 +122,10 @@ def _recheck(check, design, result) -> None:
     if base == "singularity":  # the worst condition number again, from the robot's own Jacobian
         robot, p = design.plant.robot, design.plant.model_parameters()
         J = robot.jacobian(np.array(cert["worst_configuration"]), p=p)
-        rows = design.extra["task"]["rows"]
+        rows = list(design.motion.space.rows)
         sv = np.linalg.svd(J[rows, :], compute_uv=False)
         assert sv[0] / sv[-1] == pytest.approx(cert["worst_condition"], rel=1e-6)
-        if design.extra.get("damping") is None:
+        if design.motion.damping is None:
             assert bool(cert["worst_condition"] <= cert["max_condition_allowed"]) is bool(check.passed)
     if base in ("robust_vertices", "robust_grid") and check.passed is True:
         assert check.margin > 0

@@ -189,7 +189,7 @@ def test_singular_joint_against_finite_differences(singular_run, singular_findin
     check = next(c for c in singular_run.checks if c.name == "singularity")
     q = np.asarray(check.certificate["worst_configuration"], dtype=float)
     model = singular_run.design.plant
-    rows = list(singular_run.design.extra["task"]["rows"])
+    rows = list(singular_run.design.motion.space.rows)
     jac = model.robot.functions["jacobian"]
     p = model.model_parameters()
 

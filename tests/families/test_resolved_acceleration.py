@@ -366,7 +366,9 @@ def _puma(dls: bool, displacement: str = "[0, 0, 0.15]", orientation: str = "hel
 def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_with_it():
     loaded = parse_spec(_puma(dls=False))
     design = design_of(loaded)
-    assert tuple(design.extra["task"]["coordinates"]) == ("x", "y", "z", "rx", "ry", "rz")
+    assert design.motion.space.names == ("x", "y", "z", "rx", "ry", "rz")
+    assert design.motion.space == design.data.space  # the law's task space is the motion's
+    assert design.motion.damping is None and design.motion.max_condition == 100.0  # the spec's default
     check = singularity_check(design, design.motion)
     assert check.passed is False
     q = np.array(check.certificate["worst_configuration"])
@@ -379,6 +381,7 @@ def test_puma_line_near_the_wrist_singularity_fails_without_damping_and_passes_w
 
     loaded = parse_spec(_puma(dls=True))
     design = design_of(loaded)
+    assert design.motion.damping == design.data.damping == 0.02
     damped = singularity_check(design, design.motion)
     assert damped.passed is True
     assert damped.certificate["joint_acceleration_gain_bound"] == pytest.approx(25.0, rel=1e-15)

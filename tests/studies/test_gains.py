@@ -90,7 +90,7 @@ def test_a_destabilizing_gain_is_a_row_that_fails_and_says_why():
     doubled = next(r for r in k2.rows if r.factor == 2.0)
     # the independent condition: K2_2 doubled is below -1/Km2, so joint 2's loop has a root in the right half plane
     loop = result.design.loops[1]
-    km = result.design.extra["links"][1]["Km"]
+    km = result.design.data.links[1].Km
     assert 2 * float(loop.gains["K2"]) < -1.0 / km
     assert doubled.outcome in ("failed", "diverged") and doubled.detail
     assert any(r.factor == 0.5 and r.outcome == "verified" for r in k2.rows) or not result.verified

@@ -71,10 +71,12 @@ def test_batched_equilibria_equal_one_by_one_and_hold_the_arm_against_gravity():
     plant = zoo_plant("planar2r")
     design = pid_servo.design(LinkPlant(0.5, 0.9), [-4, -5, -20], -3.0)  # for its gains only
     from designkit.families import decentralized_pid
+    from designkit.families.decentralized_pid.data import DecentralizedPidData
     from designkit.synthesis.design import Design, Gain, Gains
 
     gains = Gains.of(Gain(k, [float(design.gains[k])] * 2, design.gains.unit(k)) for k in ("K1", "K2", "K3", "K4"))
-    d = Design(kind="decentralized_pid", plant=plant, gains=gains, extra={"gravity_feedforward": "none"})
+    data = DecentralizedPidData(configuration=(0.0, 0.0), links=(), gravity_feedforward="none", workspace=None)
+    d = Design(kind="decentralized_pid", plant=plant, gains=gains, data=data)
     law = decentralized_pid.law(d)
     fns = loop_functions(plant, law)
     r0 = np.array([0.4, -0.3, 0, 0, 0, 0])

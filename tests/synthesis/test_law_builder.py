@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import casadi as ca
 import control
 import numpy as np
@@ -34,6 +36,15 @@ def test_the_builder_gives_the_law_functions_their_expressions():
     assert float(law.derivative(y, xc, m, r, np.ones(1))) == pytest.approx(10 * (1.0 - 0.1))
     assert float(law.signals(y, xc, m, r)) == pytest.approx(0.2)
     assert law.signal_names == ("error",) and law.signal_units == ("rad",)
+
+
+def test_a_law_declares_its_integral_states():
+    assert _filtered_pd().integral_states == ()
+    pi = dynamic_law("demo", PLANT, states=[State("z", lambda s: s.q[0] - s.qD[0], integral=True)],
+                     command=lambda s: -20 * (s.q[0] - s.qD[0]) - 5 * s.state("z") - 2 * s.qd[0])
+    assert pi.integral_states == ("z",) and pi.rest_start == ("z",)
+    with pytest.raises(ValueError, match="integral_states names unknown states"):
+        dataclasses.replace(pi, integral_states=("w",))
 
 
 def test_the_linearized_loop_is_python_controls_interconnection():

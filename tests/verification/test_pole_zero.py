@@ -119,6 +119,25 @@ def test_tracker_with_wrong_feedforward_is_not_perfect_tracking():
     assert "x1/xD is not 1" in check.detail
 
 
+def test_the_trackers_disturbance_zero_is_checked_when_its_law_integrates_the_error():
+    design = pid_tracking.design(PLANT, [-10, -12, -15])
+    assert design.law.integral_states == ("x3",)
+    check = pole_placement(design)
+    assert check.passed is True and "xi zeros" in check.certificate["error_over_tolerance"]
+    # a disturbance that also enters the integral: x1/xi loses its zero at 0, which the check sees
+    cl = design.closed_loop
+    B = np.array(cl.B, dtype=float)
+    B[cl.states.index("x3"), cl.inputs.index("xi")] = 1.0
+    leaky = LinearSystem(A=cl.A, B=B, C=cl.C, D=cl.D, states=cl.states, inputs=cl.inputs, outputs=cl.outputs)
+    check = pole_placement(dataclasses.replace(design, closed_loop=leaky))
+    assert check.passed is False and "(integral action)" in check.detail
+    # a law without integral states is not asked for the zero
+    without = dataclasses.replace(design.law, integral_states=())
+    proportional = dataclasses.replace(design, closed_loop=leaky, law=without)
+    check = pole_placement(proportional)
+    assert check.passed is True and "xi zeros" not in check.certificate["error_over_tolerance"]
+
+
 def test_infinite_zeros_are_discarded():
     # x1/xD with K1 + K3 K4 = 0 has no finite zero: the numerator is the constant Km K3
     g = pid.servo_gains(PLANT, [-4, -5, -20], -3.0)

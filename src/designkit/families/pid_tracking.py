@@ -72,7 +72,7 @@ def design(plant: Any, poles: Sequence[complex], *, notes: tuple[str, ...] = (),
     d = Design(
         kind=KIND, plant=plant, gains=g, poles=tuple(poles), zeros=(), reference="trajectory",
         characteristic=characteristic(plant), formulas=pid.TRACKING_FORMULAS, notes=notes,
-        extra={**(extra or {}), "integral_action": True},
+        extra=dict(extra or {}),
     )
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 

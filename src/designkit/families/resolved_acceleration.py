@@ -29,6 +29,7 @@ conditioning the ``singularity`` check reports.
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import casadi as ca
@@ -41,7 +42,7 @@ from designkit.spec.computed_torque import FRICTION_LAYER, PER_JOINT_FIELDS, Com
 from designkit.spec.fields import PositiveFinite, Section, joint_values
 from designkit.spec.ranges import Ranged
 from designkit.synthesis.closed_loop import with_closed_loop
-from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.friction_layer import DEFAULT_LAYER, coulomb_levels, layer_formulas, layer_words, smoothed
 from designkit.synthesis.knobs import gain_knobs
@@ -78,15 +79,38 @@ class ResolvedAccelerationSpec(ComputedTorqueSpec):
     friction_layer: FRICTION_LAYER = DEFAULT_LAYER
 
 
+@dataclass(frozen=True)
+class ResolvedAccelerationData(FamilyData):
+    """The resolved-acceleration family's design data (:attr:`~designkit.synthesis.design.Design.data`), read by its
+    law and its motion; the motion (:class:`designkit.simulation.motion.TaskMotion`) carries the task space, the
+    resolution and the conditioning limit to the generic checks.
+
+    Attributes
+    ----------
+    space : TaskSpace
+        The controlled task coordinates (rows of the geometric Jacobian) and the orientation held.
+    damping : float or None
+        ``lambda`` of the damped least-squares resolution (units of ``J``'s singular values, m/rad for position
+        rows), or None for the exact inverse ``J^-1``.
+    max_condition : float
+        The condition number of ``J`` (1) above which a configuration of the path counts as near-singular.
+    friction_layer : float
+        The boundary layer of the Coulomb compensation (rad/s or m/s; 0: the exact ``sign``).
+    model_differs : bool
+        Whether the controller's model differs from the true plant (``controller.model`` given).
+    """
+
+    space: TaskSpace
+    damping: float | None
+    max_condition: float
+    friction_layer: float
+    model_differs: bool
+
+
 def _q0(spec: Any, n: int) -> np.ndarray:
     if spec.simulation.initial_position is None:
         return np.zeros(n)
     return np.array(joint_values(spec.simulation.initial_position, n, "simulation.initial_position"))
-
-
-def _space(design: Design) -> TaskSpace:
-    task = design.extra["task"]
-    return TaskSpace(tuple(task["rows"]), tuple(task["orientation_target"]))
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -96,10 +120,11 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     n = plant.n_joints
     pos, vel = list(plant.positions), list(plant.velocities)
     p = plant.model_parameters()
-    fns = task_functions(plant.robot, p, _space(design))
+    data = design.data
+    fns = task_functions(plant.robot, p, data.space)
     inverse_dynamics = plant.robot.functions["inverse_dynamics"]
-    damping = design.extra.get("damping")
-    layer = float(design.extra.get("friction_layer", 0.0))
+    damping = data.damping
+    layer = float(data.friction_layer)
     fc = coulomb_levels(plant.robot, p)
 
     def output(y: ca.SX, r: ca.SX) -> ca.SX:
@@ -154,10 +179,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
                   "ë + K2 ė + K1 e = 0 per task coordinate on an exact model:  K1 = p1 p2,  K2 = −(p1 + p2)",
                   *layer_formulas(fc, layer)),
         notes=tuple(notes),
-        extra={"task": {**space.to_json(), "rows": list(space.rows),
-                        "orientation_target": list(space.orientation_target)},
-               "damping": damping, "max_condition": float(ctrl.max_condition), "friction_layer": layer,
-               "model_differs": ctrl.model is not None, "codegen_terms": ["D_hat", "h_hat", "J", "Jdot_qd"]},
+        extra={"codegen_terms": ["D_hat", "h_hat", "J", "Jdot_qd"]},
+        data=ResolvedAccelerationData(space=space, damping=damping, max_condition=float(ctrl.max_condition),
+                                      friction_layer=layer, model_differs=ctrl.model is not None),
     )
     fns = task_functions(model.robot, model.model_parameters(), space)
     x0 = np.asarray(fns.tracked(q0)).ravel()
@@ -170,7 +194,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
 
 
 def motion(spec: Any, design: Design) -> Any:
-    """The task-space reference of ``simulation.trajectory`` and the joint path that tracks it exactly.
+    """The task-space reference of ``simulation.trajectory`` and the joint path that tracks it exactly, with the
+    design's resolution (``damping``) and conditioning limit (``max_condition``) for the checks.
 
     Raises
     ------
@@ -188,7 +213,8 @@ def motion(spec: Any, design: Design) -> Any:
                         f"a task-space controller follows an end-effector path: give kind line or circle (got {got})")
     plant = design.plant
     n = plant.n_joints
-    space = _space(design)
+    data = design.data
+    space = data.space
     p = plant.model_parameters()
     fns = task_functions(plant.robot, p, space)
     q0 = _q0(spec, n)
@@ -205,7 +231,7 @@ def motion(spec: Any, design: Design) -> Any:
                    reach_key=f"simulation.trajectory.{end}")
     except ModelError as exc:
         raise SpecError(exc.field, exc.message) from None
-    return TaskMotion(ref, space, fns, path)
+    return TaskMotion(ref, space, fns, path, damping=data.damping, max_condition=data.max_condition)
 
 
 FAMILY = Family(

@@ -321,7 +321,8 @@ class Design:
         input loop or characteristic, and no linear check is offered).
     motion : TaskMotion or None
         What a task-space design tracks (:class:`designkit.simulation.motion.TaskMotion`), computed
-        at synthesis; ``None`` for a joint-space design.
+        at synthesis, with how it resolves task accelerations to the joints (``damping``) and the conditioning
+        it accepts (``max_condition``); ``None`` for a joint-space design.
     learning : Learning or None
         Repeated trials with a learning update between them (:class:`designkit.simulation.trials.Learning`);
         ``None`` for a design run once.

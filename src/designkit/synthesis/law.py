@@ -34,6 +34,12 @@ holds the plant still (``x3(0) = K4 q0`` for the PID servo at ``q0``, plus the s
 load), a reference model starts at the plant's position.  So the simulated loop is the loop that
 was designed, in deviations about where the arm starts, wherever that is.
 
+**Integral action.**  ``integral_states`` names the states that integrate a joint's position error,
+``x' = q_j - qD_j`` (times the anti-windup gate): in a stable loop with them, a constant disturbance
+leaves no steady-state position error, so the disturbance-to-position transfer has a zero at ``s = 0``
+(the ``pole_placement`` check verifies it).  :func:`integral_law` declares its integrals;
+:func:`dynamic_law` the states given with ``State(..., integral=True)``.
+
 **Discontinuous laws.**  A law that switches (``sign`` of a sliding function, a relay inside the
 controller) declares ``discontinuous=True``: the simulator then evaluates its command (and its
 state derivative) once per integration step, at the step's start, and holds both over the step --
@@ -99,6 +105,9 @@ class Law:
         ``xc(0)``, one value per state (empty: zeros).
     rest_start : tuple of str
         States whose initial value is solved so that the loop starts at rest (module docstring).
+    integral_states : tuple of str
+        States that integrate a joint's position error (rad*s), ``x' = q_j - qD_j``: the law's integral action
+        (module docstring).
     discontinuous : bool
         The command switches: held over each integration step.
     max_step : float or None
@@ -130,6 +139,7 @@ class Law:
     settings: Mapping[str, Any] = field(default_factory=dict)
     initial_state: tuple[float, ...] = ()
     rest_start: tuple[str, ...] = ()
+    integral_states: tuple[str, ...] = ()
     discontinuous: bool = False
     max_step: float | None = None
     max_step_reason: str = ""
@@ -149,9 +159,10 @@ class Law:
         if len(initial) != n:
             raise ValueError(f"law {self.kind!r}: initial_state has {len(initial)} values for {n} states")
         object.__setattr__(self, "initial_state", initial)
-        unknown = set(self.rest_start) - set(self.state_names)
-        if unknown:
-            raise ValueError(f"law {self.kind!r}: rest_start names unknown states {sorted(unknown)}")
+        for role in ("rest_start", "integral_states"):
+            unknown = set(getattr(self, role)) - set(self.state_names)
+            if unknown:
+                raise ValueError(f"law {self.kind!r}: {role} names unknown states {sorted(unknown)}")
         if self.max_step is not None and not self.max_step > 0:
             raise ValueError(f"law {self.kind!r}: max_step must be positive, got {self.max_step}")
         size = 0 if self.signals is None else self.signals.size1_out(0)
@@ -275,11 +286,15 @@ class State:
         ``LawSymbols -> SX`` scalar: the state's time derivative.
     initial : float or None
         ``xc(0)``; ``None`` starts the state at the loop's rest (``rest_start``).
+    integral : bool
+        The state integrates a joint's position error, ``x' = q_j - qD_j`` (rad*s): it is one of the law's
+        ``integral_states``.
     """
 
     name: str
     derivative: Callable[[LawSymbols], ca.SX]
     initial: float | None = None
+    integral: bool = False
 
 
 @dataclass(frozen=True)
@@ -392,6 +407,7 @@ def dynamic_law(kind: str, plant: Any, *, command: Callable[[LawSymbols], ca.SX]
         sampling_period_source=sampling_period_source, command_after_update=bool(memory),
         initial_state=tuple(0.0 if s.initial is None else float(s.initial) for s in states),
         rest_start=tuple(s.name for s in states if s.initial is None),
+        integral_states=tuple(s.name for s in states if s.integral),
         discontinuous=discontinuous, max_step=max_step, max_step_reason=max_step_reason,
         signals=signal_fn, signal_names=tuple(signals or ()), signal_units=tuple(signal_units), feedforward=ff_fn,
     )
@@ -459,6 +475,7 @@ def integral_law(
         update=ca.Function(f"{kind}_update", args, [m], names, ["m_next"]),
         settings={**settings, "anti_windup": aw},
         rest_start=states,
+        integral_states=states,
     )
 
 

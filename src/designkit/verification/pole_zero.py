@@ -21,7 +21,9 @@ first joint's channels are used (the families that place zeros have one joint).
 - tracker (``reference == "trajectory"``): the reference transfer with ``xD' = s xD`` and
   ``xD'' = s^2 xD`` must be identically 1 (perfect tracking, notes F1) -- evaluated at
   ``s = 0, jR/10, jR, 10jR`` -- so it has no zeros (``design.zeros == ()``); and ``xi -> x1`` must have
-  its single finite zero at 0 (integral action; notes F2 = (Km/tau) s / ((s-p1)(s-p2)(s-p3))).
+  its single finite zero at 0 when the law has integral action (states integrating the position error, the
+  linearized law's ``integral_states``: :class:`designkit.synthesis.law.Law`; notes F2 =
+  (Km/tau) s / ((s-p1)(s-p2)(s-p3))).
 
 ``margin = 1 - max(error / tolerance)`` over every comparison: positive when all hold.
 """
@@ -43,6 +45,12 @@ from designkit.verification.tolerances import (
     cluster_tolerance,
     scaled_error,
 )
+
+
+def _integral_action(design: Any) -> bool:
+    """Whether the law the closed loop linearizes integrates a position error (its ``integral_states``)."""
+    law = design.linear_law
+    return law is not None and bool(law.integral_states)
 
 
 def _pairs(z: Sequence[complex]) -> list[list[float]]:
@@ -250,7 +258,7 @@ def pole_placement(design: Any) -> Check:
             failures.append(f"the tracker's reference transfer has no zeros, but the design lists {design.zeros}")
             ratios["requested zeros"] = np.inf
         dz, n_inf = finite_zeros(_siso(cl, 0, i_dist))
-        if design.extra.get("integral_action", False):  # the PID tracker's integral rejects a constant xi
+        if _integral_action(design):  # an integral of the position error rejects a constant xi
             dm = match_roots(dz, [0.0], R)
             ratios["xi zeros"] = dm["ratio"]
             if not dm["ok"]:

@@ -1,15 +1,16 @@
 """Check ``singularity``: how close a task-space design's path comes to a singular configuration.
 
-Along the joint path that tracks the reference exactly (inverse kinematics at
-:data:`~designkit.families.resolved_acceleration.PATH_SAMPLES` instants,
-:func:`designkit.models.task.joint_path`), the singular values ``sigma`` of the task Jacobian
+Along the joint path that tracks the reference exactly (the path of the design's motion,
+:class:`designkit.simulation.motion.TaskMotion`: inverse kinematics at the instants it was computed
+at, :func:`designkit.models.task.joint_path`), the singular values ``sigma`` of the task Jacobian
 ``J`` give its condition number ``kappa = sigma_max/sigma_min`` and Yoshikawa's manipulability
-``w = prod sigma``.  The path is near-singular where ``kappa`` exceeds the design's
+``w = prod sigma``.  The path is near-singular where ``kappa`` exceeds the motion's
 ``max_condition``.
 
-Verdict.  With the exact inverse (``qdd* = J^-1 (a* - Jdot qd)``), a near-singular point FAILS:
-the resolved joint accelerations grow as ``1/sigma_min`` there (reported: ``1/sigma_min`` at the
-worst point).  With damped least squares ``(J^T J + lambda^2 I)^-1 J^T``, the resolution's gain is
+Verdict.  With the exact inverse (``qdd* = J^-1 (a* - Jdot qd)``: the motion's ``damping`` is None),
+a near-singular point FAILS: the resolved joint accelerations grow as ``1/sigma_min`` there
+(reported: ``1/sigma_min`` at the worst point).  With damped least squares
+``(J^T J + lambda^2 I)^-1 J^T`` (``lambda`` the motion's ``damping``), the resolution's gain is
 at most ``max_sigma sigma/(sigma^2 + lambda^2) = 1/(2 lambda)`` whatever the configuration, so the
 check passes and reports what the damping costs: the task-space gain
 ``sigma_min^2/(sigma_min^2 + lambda^2)`` along the worst direction at the worst point, and the
@@ -29,10 +30,11 @@ __all__ = ["singularity_check"]
 
 
 def singularity_check(design: Any, motion: Any) -> Check:
-    """Check ``"singularity"`` (see the module docstring) of ``design`` along ``motion.path``."""
+    """Check ``"singularity"`` (see the module docstring) of ``design`` along ``motion.path``, with the motion's
+    resolution (``damping``) and limit (``max_condition``)."""
     path = motion.path
-    limit = float(design.extra["max_condition"])
-    damping = design.extra.get("damping")
+    limit = float(motion.max_condition)
+    damping = motion.damping
     k = path.worst
     kappa = float(path.condition[k])
     sigma_min = float(path.sigma[k, -1])

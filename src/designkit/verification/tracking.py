@@ -172,7 +172,7 @@ def error_poles_check(spec: Any, design: Any, plant: Any = None) -> Check:
         cert["true_plant"] = {"largest_pole_move_1_per_s": float(shifts[k]), "at_s": float(t[k])}
         detail += (f"; on the true plant the model mismatch moves them by up to {shifts[k]:.3g} 1/s "
                    f"(t = {t[k]:.3g} s)")
-    damping = design.extra.get("damping")
+    damping = motion.damping if motion is not None else None
     if damping:  # damped least squares trades the exact poles for bounded joint accelerations: evidence only
         k = int(np.argmax(moves))
         defined = np.array([bool(np.all(np.isfinite(Ak))) for Ak in A])

@@ -94,7 +94,7 @@ def test_per_link_models_use_the_diagonal_inertia_at_the_configuration():
         f = P[f"f{i + 1}"]
         assert loop.plant.Km == pytest.approx(1.0 / f, rel=TOL["algebra"])
         assert loop.plant.tau == pytest.approx(D[i, i] / f, rel=TOL["algebra"])
-    assert tuple(design.extra["configuration"]) == (0.3, 1.1)
+    assert design.data.configuration == (0.3, 1.1)
 
 
 def test_each_joint_loop_places_its_poles_on_its_simplified_link():

@@ -202,7 +202,7 @@ def test_scara_range_against_a_dense_grid_of_the_closed_form_d11():
     assert np.allclose(model, _scara_d11(Q[:, 1]), rtol=TOL["algebra"], atol=0)  # the oracle is the model's D_11
 
     design = design_of(parse_spec(FRAGILE))
-    ws = design.extra["workspace"]
+    ws = design.data.workspace
     joint = joint_workspace(design, 0, ws["low"], ws["high"], samples=ws["samples"], tolerance=1e-9)
     dense = _scara_d11(np.linspace(ws["low"][1], ws["high"][1], 200_001))
     # proven: every value of the closed form lies inside, and the bounds are within the tolerance of it
@@ -281,7 +281,7 @@ def test_gains_stable_at_the_nominal_configuration_fail_over_the_box_with_the_br
     checks = {c.name: c for c in result.checks}
     design = result.design
     gains = {k: float(design.gains[k][0]) for k in ("K1", "K2", "K3")}
-    q_star = np.array(design.extra["configuration"])
+    q_star = np.array(design.data.configuration)
     f1 = SCARA["f1"]
     # stable at the nominal configuration: the joint's own checks pass, and independently
     assert checks["pole_placement[joint1]"].passed and checks["routh_hurwitz[joint1]"].passed
@@ -294,7 +294,7 @@ def test_gains_stable_at_the_nominal_configuration_fail_over_the_box_with_the_br
     q_bad = np.array(ev["configuration"])
     assert "joint 1 unstable at q = [" in ws.detail
     # the breaking configuration is in the box, and the loop is really unstable there (independent route)
-    low, high = np.array(design.extra["workspace"]["low"]), np.array(design.extra["workspace"]["high"])
+    low, high = np.array(design.data.workspace["low"]), np.array(design.data.workspace["high"])
     assert np.all(q_bad >= low) and np.all(q_bad <= high)
     re_bad = _max_re(gains, 1 / f1, _scara_d11(q_bad[1]) / f1)
     assert re_bad > 0
@@ -318,8 +318,8 @@ def test_robust_gains_pass_with_the_margin_of_the_critical_inertia():
     d_min = _scara_d11(max(abs(v) for v in q2_limit))
     rows = ws.certificate["joints"]
     for i, row in enumerate(rows):
-        tau0 = design.extra["links"][i]["tau"]
-        f = design.extra["links"][i]["damping"]
+        tau0 = design.data.links[i].tau
+        f = design.data.links[i].damping
         assert row["tau_stable_s"][0] == 0.0
         assert row["tau_stable_s"][1] == pytest.approx(tau0 * S1 * S2 / S3, rel=TOL["algebra"])
         assert row["inertia_critical"] == pytest.approx(f * tau0 * S1 * S2 / S3, rel=TOL["algebra"])
@@ -339,7 +339,7 @@ def test_robust_gains_pass_with_the_margin_of_the_critical_inertia():
 
 def test_joint_verdict_needs_both_routes():
     design = design_of(parse_spec(ROBUST))
-    ws = design.extra["workspace"]
+    ws = design.data.workspace
     joint = joint_workspace(design, 0, ws["low"], ws["high"])
     assert joint.passed is True
     assert dataclasses.replace(joint, route_status=(1, 0)).passed is None
@@ -354,7 +354,7 @@ def test_joint_verdict_needs_both_routes():
 def test_the_check_runs_only_with_a_workspace():
     without = parse_spec(ROBUST.replace("  workspace: joint_limits\n", ""))
     design = design_of(without)
-    assert design.extra["workspace"] is None
+    assert design.data.workspace is None
     assert "workspace" not in applicable(design, without.spec, rules=FAMILY.checks)
     loaded = parse_spec(ROBUST)
     assert "workspace" in applicable(design_of(loaded), loaded.spec, rules=FAMILY.checks)
@@ -380,7 +380,7 @@ def test_workspace_spec_round_trips_through_the_json_schema():
 
 def test_omitted_side_defaults_to_the_joint_limits():
     design = design_of(parse_spec(FRAGILE.replace("low: [-1, -0.5, 0, -1], ", "")))
-    ws = design.extra["workspace"]
+    ws = design.data.workspace
     assert list(ws["low"]) == [lim[0] for lim in zoo_plant("scara").joint_limits]
     assert ws["source"] == {"low": "joint limits", "high": "spec"}
 

@@ -36,6 +36,7 @@ from pydantic import Field, field_validator
 
 from designkit.errors import ModelError, SpecError
 from designkit.families.decentralized_pid import workspace_check as workspace_certificate
+from designkit.families.decentralized_pid.data import DecentralizedPidData
 from designkit.families.decentralized_pid.diagnoses import diagnose
 from designkit.models.link import simplified_link
 from designkit.spec.controllers import three_poles
@@ -155,7 +156,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     n = plant.n_joints
     vel = list(plant.velocities)
     pos = list(plant.positions)
-    mode = design.extra["gravity_feedforward"]
+    mode = design.data.gravity_feedforward
     gravity = plant.robot.functions["gravity_torque"]
     p = plant.model_parameters()
 
@@ -198,14 +199,14 @@ def synthesize(spec: Any, plant: Any) -> Design:
             link = simplified_link(plant.robot, i, q_star, p=plant.model_parameters())
         except ModelError as exc:
             raise SpecError("plant", f"joint {i + 1}: {exc.message}") from None
-        links.append({"Km": link.Km, "tau": link.tau, "inertia": link.inertia, "damping": link.damping})
+        links.append(link)
         loops.append(servo_design(link, pole_sets[i], zeros[i], kind=KIND))
     gains = Gains.of(
         Gain(k, [float(loop.gains[k]) for loop in loops], *GAIN_INFO[k]) for k in ("K1", "K2", "K3", "K4")
     )
     notes = (*notes, "Per-link models at q* = [" + ", ".join(f"{q:.4g}" for q in q_star) + "] rad: "
-             + "; ".join(f"joint {i + 1}: Km = {lk['Km']:.4g} (rad/s)/(N*m), tau = {lk['tau']:.4g} s "
-                         f"(D_ii = {lk['inertia']:.4g} kg*m^2, f = {lk['damping']:.4g} N*m*s/rad)"
+             + "; ".join(f"joint {i + 1}: Km = {lk.Km:.4g} (rad/s)/(N*m), tau = {lk.tau:.4g} s "
+                         f"(D_ii = {lk.inertia:.4g} kg*m^2, f = {lk.damping:.4g} N*m*s/rad)"
                          for i, lk in enumerate(links)) + ".")
     design = Design(
         kind=KIND, plant=plant, gains=gains, reference="step", loops=tuple(loops),
@@ -213,9 +214,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
         formulas=("Km_i = 1/f_i,  tau_i = D_ii(q*)/f_i  (simplified link, notes §1.2)",
                   *SERVO_FORMULAS[2:]),
         notes=notes,
-        extra={**extra, "configuration": q_star.tolist(), "links": links,
-               "gravity_feedforward": ctrl.gravity_feedforward, "workspace": box,
-               "codegen_terms": [] if ctrl.gravity_feedforward == "none" else ["g_hat"]},
+        extra={**extra, "codegen_terms": [] if ctrl.gravity_feedforward == "none" else ["g_hat"]},
+        data=DecentralizedPidData(configuration=tuple(q_star.tolist()), links=tuple(links),
+                                  gravity_feedforward=ctrl.gravity_feedforward, workspace=box),
     )
     r0 = np.concatenate([q_star, np.zeros(2 * n)])
     return with_closed_loop(design, law(design), r0, field="controller.configuration")

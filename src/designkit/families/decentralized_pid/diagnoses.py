@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from designkit.display.numbers import fmt_number, quantity
+from designkit.families.decentralized_pid.data import DecentralizedPidData
 from designkit.synthesis.spec_change import SpecChange
 
 __all__ = ["JointLoop", "diagnose", "joint_loops", "overshoot", "pole_ratio", "poles_step", "upper_gain_margin",
@@ -112,12 +113,12 @@ def joint_loops(design: Any) -> tuple[JointLoop, ...]:
     plant = design.plant
     gains = {k: np.atleast_1d(np.asarray(design.gains[k], dtype=float)) for k in ("K1", "K2", "K3", "K4")}
     out = []
-    for i, (link, loop) in enumerate(zip(design.extra["links"], design.loops, strict=True)):
+    for i, (link, loop) in enumerate(zip(design.data.links, design.loops, strict=True)):
         K1, K2, K3, K4 = (float(gains[k][i]) for k in ("K1", "K2", "K3", "K4"))
         lead = K1 + K3 * K4
         zero = -K3 / lead if abs(lead) > 1e-12 * (abs(K1) + abs(K3 * K4)) else None
         poles = tuple(sorted((complex(p) for p in loop.closed_loop.poles), key=lambda p: (-p.real, p.imag)))
-        out.append(JointLoop(i + 1, float(link["Km"]), float(link["tau"]), K1, K2, K3, K4, poles, zero,
+        out.append(JointLoop(i + 1, float(link.Km), float(link.tau), K1, K2, K3, K4, poles, zero,
                              plant.states[plant.positions[i]].unit, plant.inputs[i].unit))
     return tuple(out)
 
@@ -353,7 +354,7 @@ def _workspace(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...
     d_star = float(row["tau_nominal_s"]) / lp.Km  # D_ii(q*) = f_i tau_i = tau_i/Km_i
     d_crit, d_hi = float(row["inertia_critical"]), float(row["inertia_range"][1])
     ratio, need = d_crit / d_star, d_hi / d_star
-    q_star = result.design.extra["configuration"]
+    q_star = result.design.data.configuration
     q_max = [float(f"{v:.4g}") if abs(v) > 1e-6 else 0.0 for v in row["q_at_max"]]
     cause = (f"joint {i}'s loop is designed at D_{i}{i}(q*) = {quantity(d_star, unit)} (q* = {_vector(q_star)}; "
              f"τ = {quantity(float(row['tau_nominal_s']), 's')}) and is stable only while τ < K1 (1 + Km K2)/K3 = "
@@ -422,7 +423,7 @@ def _pole_text(p: complex) -> Any:
 def diagnose(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | tuple[str, str] | None:
     """``(cause, fix, changes)`` for a failed ``overshoot`` check of a decentralized PID run or its failed
     ``workspace`` certificate (module docstring), else None."""
-    if check.passed is not False or "links" not in result.design.extra or not result.design.loops:
+    if check.passed is not False or not isinstance(result.design.data, DecentralizedPidData) or not result.design.loops:
         return None
     if check.name == "overshoot":
         return _overshoot(result, check)

@@ -88,6 +88,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.decentralized_pid.data import DecentralizedPidData
 from designkit.families.decentralized_pid.workspace_conditions import (
     PARAMETERS,
     ConditionValue,
@@ -422,7 +423,8 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
         A decentralized design (per-joint ``loops`` on simplified links, a robot ``plant``).
     workspace : Mapping, optional
         ``{"low": [...], "high": [...], "samples": int, "tolerance": float}`` (rad or m per joint); default
-        ``design.extra["workspace"]`` (set by the family from ``controller.workspace``).
+        ``design.data.workspace`` (:class:`~designkit.families.decentralized_pid.data.DecentralizedPidData`, set by
+        the family from ``controller.workspace``).
 
     Returns
     -------
@@ -432,7 +434,7 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
         detail and in ``certificate["evidence"]``.  None: a condition zero within rounding, or the two
         routes disagree.  ``margin``: smallest relative condition value over the joints (1).
     """
-    ws = dict(design.extra["workspace"] if workspace is None else workspace)
+    ws = dict(design.data.workspace if workspace is None else workspace)
     low, high = (np.asarray(ws[k], dtype=float) for k in ("low", "high"))
     samples = int(ws.get("samples", 7))
     tolerance = float(ws.get("tolerance", 1e-3))
@@ -446,7 +448,7 @@ def workspace_check(design: Any, workspace: Mapping[str, Any] | None = None) -> 
         "tolerance": tolerance,
         "boxes": sum(j.boxes for j in joints),
         "workspace": to_json({**ws, "low": low, "high": high, "samples": samples, "tolerance": tolerance}),
-        "nominal_configuration": to_json(design.extra.get("configuration")),
+        "nominal_configuration": to_json(getattr(design.data, "configuration", None)),
         "joints": [j.to_dict() for j in joints],
         "ends": [row for j in joints for row in j.end_rows()],
         "smallest_margin": {"joint": worst.joint, "margin": worst.margin,
@@ -487,7 +489,7 @@ def _run(design: Any, ctx: Any) -> tuple[Check, ...]:
 
 RULE = CheckRule(
     name="workspace", order=70, linear=True,
-    applies=lambda d, c: bool(d.loops) and d.extra.get("workspace") is not None,
+    applies=lambda d, c: bool(d.loops) and isinstance(d.data, DecentralizedPidData) and d.data.workspace is not None,
     run=_run, label="Joint loops stable over the workspace", figures=(_figure,),
 )
 """The decentralized PID's own check: every joint loop for every configuration of ``controller.workspace``."""

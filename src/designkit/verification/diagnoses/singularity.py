@@ -44,18 +44,18 @@ def damping_for_condition(sigma_min: float, condition: float, max_condition: flo
 
 
 def _singular_joint(result: Any, q: np.ndarray) -> tuple[int, float] | None:
-    """The joint whose motion raises ``1/kappa`` of ``J`` fastest at ``q``, and ``d(1/kappa)/dq`` (1/rad)."""
-    task = (result.design.extra or {}).get("task")
-    if not task or "rows" not in task:
+    """The joint whose motion raises ``1/kappa`` of ``J`` fastest at ``q``, and ``d(1/kappa)/dq`` (1/rad), on the
+    task functions of the design's motion (:class:`designkit.simulation.motion.TaskMotion`); None without one."""
+    motion = result.design.motion
+    if motion is None:
         return None
     import casadi as ca
 
-    from designkit.models.task import TaskSpace, task_functions
+    from designkit.models.task import task_functions
 
     model = result.design.plant
     try:
-        fns = task_functions(model.robot, model.model_parameters(),
-                             TaskSpace(tuple(task["rows"]), tuple(task["orientation_target"])))
+        fns = task_functions(model.robot, model.model_parameters(), motion.space)
     except Exception:  # noqa: BLE001 -- no task functions: no joint named
         return None
 
