@@ -1,14 +1,13 @@
-"""What the studies cost a report, against running the same variants by hand, on one core and on two.
+"""What the studies cost a report, against running the same variants by hand.
 
 Run apart from the tests:  python benchmarks/bench_studies.py [--repeat N] [--spec NAME ...]
 
 Per spec, in one process and interleaved (median of N, each repeat on a fresh pipeline result so that nothing is
 cached between them): the pipeline run (``designkit.run``: design, simulation, checks), every study that applies
-(``designkit.studies.run_studies``) on one core and on two (``processes=2``: each batch of independent variants
-shared with a forked child), and the alternative a user would pick: each variant the studies ran, written as its own
+(``designkit.studies.run_studies``), and the alternative a user would pick: each variant the studies ran, written as its own
 spec and run with ``designkit.run`` (what ``designkit verify variant.yaml`` does after start-up), timed on the gain
-study's variants and scaled to the studies' count.  Quoted: the studies' seconds per variant, the two-core speed-up,
-and the studies against the by-hand runs.  Writes benchmarks/results/studies.json.
+study's variants and scaled to the studies' count.  Quoted: the studies' seconds per variant and the studies
+against the by-hand runs.  Writes benchmarks/results/studies.json.
 """
 
 from __future__ import annotations
@@ -66,23 +65,21 @@ def main() -> None:
     for name in args.spec:
         loaded = dk.load_spec(ROOT / "specs" / f"{name}.yaml")
         dk.run(loaded)  # warm: the process has run the spec once, as a report does before its studies
-        t_run, t1, t2, runs, hand = [], [], [], 0, []
+        t_run, t1, runs, hand = [], [], 0, []
         for _ in range(args.repeat):
             dt, result = _time(lambda loaded=loaded: dk.run(loaded))
             t_run.append(dt)
             dt, studies = _time(lambda result=result: run_studies(result))
             t1.append(dt)
             runs = sum(s.runs for s in studies)
-            dt, _ = _time(lambda loaded=loaded: run_studies(dk.run(loaded), processes=2))
-            t2.append(dt - statistics.median(t_run))
             gains = next((s for s in studies if s.name == "gains"), None)
             if gains is not None:
                 hand += _by_hand(result, gains)
-        one, two = statistics.median(t1), statistics.median(t2)
+        one = statistics.median(t1)
         per_hand = statistics.median(hand) if hand else None
         rows[name] = {
-            "run_s": statistics.median(t_run), "studies_1_core_s": one, "studies_2_cores_s": two,
-            "variants": runs, "per_variant_s": one / runs if runs else None, "two_core_speedup": one / two,
+            "run_s": statistics.median(t_run), "studies_s": one,
+            "variants": runs, "per_variant_s": one / runs if runs else None,
             "by_hand_per_variant_s": per_hand,
             "studies_vs_by_hand": (one / runs) / per_hand if runs and per_hand else None,
         }

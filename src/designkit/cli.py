@@ -151,8 +151,6 @@ def cmd_synth(args: argparse.Namespace) -> int:
     loaded = load_spec(args.spec)
     result = run(loaded, budget=args.budget)
     comparison = _is_comparison(result)
-    if not comparison and not args.no_studies:
-        result.run_studies(processes=args.jobs)
     files = None
     if not args.no_report:
         try:

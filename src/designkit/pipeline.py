@@ -89,20 +89,10 @@ class PipelineResult:
     @cached_property
     def studies(self) -> tuple[Any, ...]:
         """Every study that applies to this run (:func:`designkit.studies.run_studies`), run on first access:
-        gain studies, boundaries, lab answers, each through the family's own run (:meth:`run_studies` runs them
-        on two cores)."""
+        gain studies, boundaries, lab answers, each through the family's own run."""
         from designkit.studies import run_studies
 
         return run_studies(self)
-
-    def run_studies(self, *, processes: int = 1) -> tuple[Any, ...]:
-        """:attr:`studies`, run now with ``processes`` cores for each batch of independent variants when not run
-        yet (the rows are the same on one core or two)."""
-        if "studies" not in self.__dict__:
-            from designkit.studies import run_studies
-
-            self.__dict__["studies"] = run_studies(self, processes=processes)
-        return self.studies
 
     @cached_property
     def diagnosis(self) -> Any:

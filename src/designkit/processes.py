@@ -1,7 +1,7 @@
 """What the machine offers for a second process, and independent tasks shared with a forked child.
 
 :func:`available_cores` and :func:`can_fork` cost no import; :func:`run_tasks` runs independent tasks on two cores
-(the report's figures, :mod:`designkit.report.parallel`; a study's variants, :mod:`designkit.studies`): the child
+(the report's figures, :mod:`designkit.report.parallel`): the child
 inherits the finished run (nothing is pickled on the way in), runs the second half of the tasks and sends their
 results back through a pipe, while the parent runs the first half.
 
@@ -10,7 +10,8 @@ Safety rules, each a reason to run every task in this process instead:
 - ``os.fork`` is missing (not POSIX) or fewer than two cores are available;
 - this process runs other Python threads (a thread holding a lock at the fork would leave the
   child deadlocked), e.g. inside a Jupyter kernel -- so the command line asks for two processes,
-  the Python API's default is one;
+  the Python API's default is one.  Native thread pools are not seen: tasks that solve with Clarabel
+  (whose pool a child inherits locked) must not be run here;
 - the child fails in any way (it dies, sends nothing, or a task raises there): the parent then
   runs the tasks it did not get, so an exception is raised here exactly as without the child.
 

@@ -122,11 +122,11 @@ def validate(spec: Any, family: Any) -> None:
                 raise SpecError(f"studies.{name}.{where}", what) from None
 
 
-def run_studies(result: Any, *, processes: int = 1) -> tuple[StudyResult, ...]:
+def run_studies(result: Any) -> tuple[StudyResult, ...]:
     """Every study that applies to ``result`` (a one-controller run, or a comparison), in report order.
 
     Each study runs its variants within the spec's studies budget (:func:`budget_of`) and says what it reduced
-    to stay within it; ``processes=2`` runs each batch of independent variants on two cores (same rows).
+    to stay within it.
     """
     from designkit.families import family
 
@@ -139,7 +139,7 @@ def run_studies(result: Any, *, processes: int = 1) -> tuple[StudyResult, ...]:
             continue
         start = time.perf_counter()
         ctx = StudyContext(result, fam, study_settings(spec, study.name) if not comparison else None,
-                           budget_of(spec), tuple(out), processes)
+                           budget_of(spec), tuple(out))
         done = study.run(ctx)
         if done is not None:
             if not done.seconds:

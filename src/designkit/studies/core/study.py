@@ -168,9 +168,6 @@ class StudyContext:
         Seconds of work the study may spend on variants.
     earlier : tuple of StudyResult
         What the studies before this one (in report order) returned: a lab answer cites the gain study's rows.
-    processes : int
-        2 shares each batch of independent variants with a forked child on a second core
-        (:func:`designkit.processes.run_tasks`); the rows are the same.
     """
 
     result: Any
@@ -178,14 +175,16 @@ class StudyContext:
     settings: Any = None
     budget: float = 15.0
     earlier: tuple[Any, ...] = ()
-    processes: int = 1
 
     def run_all(self, tasks: Any, budget: Any) -> list[Any]:
-        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, on :attr:`processes` cores;
-        each row's wall time charged to ``budget``."""
-        from designkit.processes import run_tasks
+        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, each row's wall time charged
+        to ``budget``.
 
-        rows = run_tasks(list(tasks), processes=self.processes)
+        They run in this process: a variant solves LMIs with Clarabel, whose native thread pool a forked child
+        would inherit locked, so the report's way of sharing work with a forked child
+        (:func:`designkit.processes.run_tasks`) is not safe here.
+        """
+        rows = [task() for task in tasks]
         for row in rows:
             budget.record(row.seconds)
         return rows
