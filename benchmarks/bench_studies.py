@@ -4,10 +4,10 @@ Run apart from the tests:  python benchmarks/bench_studies.py [--repeat N] [--sp
 
 Per spec, in one process and interleaved (median of N, each repeat on a fresh pipeline result so that nothing is
 cached between them): the pipeline run (``designkit.run``: design, simulation, checks), every study that applies
-(``designkit.studies.run_studies``), and the alternative a user would pick: each variant the studies ran, written as its own
-spec and run with ``designkit.run`` (what ``designkit verify variant.yaml`` does after start-up), timed on the gain
-study's variants and scaled to the studies' count.  Quoted: the studies' seconds per variant and the studies
-against the by-hand runs.  Writes benchmarks/results/studies.json.
+(``designkit.studies.run_studies``), and the alternative a user would pick: each variant the studies ran, written as
+its own spec and run with ``designkit.run`` (what ``designkit verify variant.yaml`` does after start-up), timed on
+the gain study's variants.  Quoted: the studies' seconds per variant and the studies against the by-hand runs.
+Writes benchmarks/results/studies.json.
 """
 
 from __future__ import annotations
