@@ -128,7 +128,7 @@ def test_stiff_example_through_the_cli_is_designed_and_verified(tmp_path, capsys
     check falls back on the Lyapunov equation, whose certificate is judged by rounding bounds."""
     path = _write(tmp_path, STIFF + REQUIREMENTS)
     out = tmp_path / "out"
-    code = main(["synth", str(path), "--out", str(out), "--json"])
+    code = main(["synth", str(path), "--out", str(out), "--json", "--no-studies"])
     result = json.loads(capsys.readouterr().out)
     assert code == 0, [c for c in result["checks"] if c["status"] != "PASS"]
     status = {c["name"]: c["status"] for c in result["checks"]}

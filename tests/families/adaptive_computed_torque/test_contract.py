@@ -21,7 +21,7 @@ simulation: {duration: 3.0, trajectory: {kind: sine, amplitude: [1.0, 1.2], freq
 def _synth(tmp_path, capsys, ctrl: str) -> tuple[int, dict]:
     path = tmp_path / "spec.yaml"
     path.write_text(SPEC.replace("CTRL", ctrl))
-    code = main(["synth", str(path), "--json", "--out", str(tmp_path / "out")])
+    code = main(["synth", str(path), "--json", "--no-studies", "--out", str(tmp_path / "out")])
     return code, json.loads(capsys.readouterr().out)
 
 

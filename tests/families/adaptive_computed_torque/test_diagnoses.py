@@ -10,6 +10,8 @@ the error equation predicts from the run's errors, and the declared fix passes w
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -44,7 +46,7 @@ def test_the_spr_bound_is_where_the_sweep_turns():
         assert not _sweep_says_spr(bound * (1 - rel / 2)), rel
     assert not _sweep_says_spr(bound)  # positive real, not strictly: w^2 Re H -> 0
     # the family's fix: psi = 2/K2 on the joints that fail
-    psi, joints = psi_fix({"K1": [K1, K1], "K2": [K2, K2], "psi": [0.02, 0.2]})
+    psi, joints = psi_fix(SimpleNamespace(K1=(K1, K1), K2=(K2, K2), psi=(0.02, 0.2)))
     assert joints == [1] and psi == [pytest.approx(0.1), 0.2] and _sweep_says_spr(psi[0])
 
 

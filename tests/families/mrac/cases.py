@@ -12,6 +12,9 @@ controller: {kind: mrac, reference_model: {natural_frequency: 4.5, damping: 1.0}
 simulation: {duration: 4.0, trajectory: {kind: square, amplitude: 0.5, period: 4}}
 """
 
+NORMALIZED = BASE.replace("kind: mrac,", "kind: mrac, modification: {kind: normalized, rate: 4.5},", 1)
+DEAD_ZONE = BASE.replace("kind: mrac,", "kind: mrac, modification: {kind: dead_zone, width: 0.001},", 1)
+
 RANGES = {
     "controller.reference_model.natural_frequency": [(BASE, "controller.reference_model.natural_frequency",
                                                       "controller.reference_model.natural_frequency")],
@@ -19,6 +22,9 @@ RANGES = {
                                             "controller.reference_model.damping")],
     "controller.nominal.Km": [(BASE, "controller.nominal.Km", "controller.nominal.Km")],
     "controller.nominal.tau": [(BASE, "controller.nominal.tau", "controller.nominal.tau")],
+    "controller.modification.rate": [(NORMALIZED, "controller.modification.rate", "controller.modification.rate")],
+    "controller.modification.width": [(DEAD_ZONE, "controller.modification.width",
+                                       "controller.modification.width")],
 }
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 

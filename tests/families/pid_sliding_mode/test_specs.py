@@ -15,7 +15,7 @@ LINK = (ROOT / "specs" / "pid-sm-link.yaml").read_text()
 
 
 def _synth(path: Path, tmp_path: Path, capsys) -> tuple[int, dict]:
-    code = main(["synth", str(path), "--json", "--out", str(tmp_path / "out")])
+    code = main(["synth", str(path), "--json", "--no-studies", "--out", str(tmp_path / "out")])
     return code, json.loads(capsys.readouterr().out)
 
 

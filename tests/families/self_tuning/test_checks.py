@@ -22,7 +22,7 @@ def _check(result, name):
                                                     ("selftune-position", "position", 0),
                                                     ("selftune-no-forgetting", "speed", 1)])
 def test_json_theta_hat_and_theta_true(spec, form, code, tmp_path, capsys):
-    rc = main(["synth", str(SPECS / f"{spec}.yaml"), "--json", "--out", str(tmp_path)])
+    rc = main(["synth", str(SPECS / f"{spec}.yaml"), "--json", "--no-studies", "--out", str(tmp_path)])
     payload = json.loads(capsys.readouterr().out)
     assert rc == code
     true = theta_scipy(1.0, 0.8, 0.01, form)  # the link after the change, discretized by scipy
@@ -109,7 +109,7 @@ def test_a_step_reference_loses_excitation_and_says_so(tmp_path, capsys):
     spec.write_text("name: step\nplant: {kind: link, Km: 2.0, tau: 0.5}\n"
                     "controller: {kind: self_tuning, sampling_period: 0.01, forgetting: 0.98, poles: [-4, -5], "
                     "nominal: {Km: 1.0, tau: 1.0}}\nsimulation: {duration: 10, step: 0.5}\n")
-    rc = main(["synth", str(spec), "--json", "--out", str(tmp_path / "out")])
+    rc = main(["synth", str(spec), "--json", "--no-studies", "--out", str(tmp_path / "out")])
     payload = json.loads(capsys.readouterr().out)
     exc = next(c for c in payload["checks"] if c["name"] == "excitation")
     assert rc == 1 and exc["passed"] is False and "lost excitation" in exc["detail"]

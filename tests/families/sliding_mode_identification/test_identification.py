@@ -118,7 +118,7 @@ def test_a_single_step_does_not_excite(single_step_result):
 
 
 def test_json_gives_the_final_estimates(tmp_path, capsys):
-    code = main(["synth", str(SPECS / "smid-link.yaml"), "--json", "--out", str(tmp_path)])
+    code = main(["synth", str(SPECS / "smid-link.yaml"), "--json", "--no-studies", "--out", str(tmp_path)])
     out = json.loads(capsys.readouterr().out)
     assert code == 0
     assert out["a_hat"] == pytest.approx(2.0, rel=1e-4) and out["b_hat"] == pytest.approx(4.0, rel=1e-4)

@@ -28,7 +28,7 @@ def data(tmp_path_factory):
 
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        code = main(["synth", str(SPEC), "--json", "--out", str(out)])
+        code = main(["synth", str(SPEC), "--json", "--no-studies", "--out", str(out)])
     return code, json.loads(buf.getvalue())
 
 

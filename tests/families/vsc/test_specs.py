@@ -15,7 +15,7 @@ from tests.families.vsc.common import ELASTIC_SPEC, LINK_SPEC, NARROW_SPEC
 
 
 def _synth(path, tmp_path, capsys) -> tuple[int, dict]:
-    code = main(["synth", str(path), "--json", "--out", str(tmp_path / "out")])
+    code = main(["synth", str(path), "--json", "--no-studies", "--out", str(tmp_path / "out")])
     return code, json.loads(capsys.readouterr().out)
 
 

@@ -48,11 +48,11 @@ def predicted_rise(t: np.ndarray, e: np.ndarray, edot: np.ndarray, K1: Sequence[
     return float(np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(tt)))
 
 
-def psi_fix(a: dict[str, Any]) -> tuple[list[float], list[int]]:
-    """``psi`` per joint with :func:`~.spr.default_psi` (``2/K2``, s) on the joints whose ``psi K2 <= 1``, and
-    those joints (1-based)."""
+def psi_fix(a: Any) -> tuple[list[float], list[int]]:
+    """``psi`` per joint of the adaptation ``a`` (its ``K2``, ``psi``) with :func:`~.spr.default_psi` (``2/K2``,
+    s) on the joints whose ``psi K2 <= 1``, and those joints (1-based)."""
     psi, bad = [], []
-    for j, (k2, p) in enumerate(zip(a["K2"], a["psi"], strict=True)):
+    for j, (k2, p) in enumerate(zip(a.K2, a.psi, strict=True)):
         if p * k2 <= 1.0:
             bad.append(j + 1)
             psi.append(float(f"{default_psi(k2):.6g}"))
@@ -71,7 +71,7 @@ def _groups(a: dict[str, Any], joints: Sequence[int]) -> list[tuple[list[int], f
     """The joints grouped by equal ``(K1, K2, psi)``."""
     groups: dict[tuple[float, float, float], list[int]] = {}
     for j in joints:
-        key = (float(a["K1"][j - 1]), float(a["K2"][j - 1]), float(a["psi"][j - 1]))
+        key = (float(a.K1[j - 1]), float(a.K2[j - 1]), float(a.psi[j - 1]))
         groups.setdefault(key, []).append(j)
     return [(js, *key) for key, js in groups.items()]
 
@@ -98,7 +98,7 @@ def _fix(a: dict[str, Any]) -> tuple[str, tuple[SpecChange, ...]]:
     psi, bad = psi_fix(a)
     by_k2: dict[float, list[int]] = {}
     for j in bad:
-        by_k2.setdefault(float(a["K2"][j - 1]), []).append(j)
+        by_k2.setdefault(float(a.K2[j - 1]), []).append(j)
     bounds = "; ".join(f"{quantity(1.0 / k2, 's')} on {_joints(js)}" for k2, js in by_k2.items())
     chosen = "; ".join(f"{quantity(float(f'{default_psi(k2):.6g}'), 's')} on {_joints(js)}" for k2, js in by_k2.items())
     text = (f"Choose ψ above 1/K2 ({bounds}): ψ K2 > 1 makes H strictly positive real and V' ≤ 0; "
@@ -138,7 +138,7 @@ def _lyapunov(result: Any, check: Any, a: dict[str, Any]) -> tuple[str, str, tup
     rise, k = lyapunov_rise(V)
     start = int(np.argmin(V[:k + 1]))
     e, edot = _errors(sim)
-    gained = predicted_rise(t, e, edot, a["K1"], a["K2"], a["psi"], start, k)
+    gained = predicted_rise(t, e, edot, a.K1, a.K2, a.psi, start, k)
     words = []
     for js, K1, K2, psi in _groups(a, bad):
         w0 = crossing(K1, K2, psi)
@@ -155,8 +155,9 @@ def _lyapunov(result: Any, check: Any, a: dict[str, Any]) -> tuple[str, str, tup
 def diagnose(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | None:
     """``(cause, fix, changes)`` for a failed ``spr_certificate``, or a failed ``adaptive_lyapunov`` of a design whose
     filter is not SPR (module docstring); else None."""
-    a = result.design.extra.get("adaptation")
-    if check.passed is not False or not a or a.get("scheme", "craig") != "craig":
+    data = result.design.data
+    a = getattr(data, "adaptation", None)
+    if check.passed is not False or a is None or a.scheme != "craig":
         return None
     if check.name == "spr_certificate":
         return _spr(result, check, a)
