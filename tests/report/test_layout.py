@@ -119,7 +119,7 @@ def wide_html() -> str:
     wide_check = Check("workspace_table", True, target="stable", achieved=1.0, margin=1.0, unit="1",
                        detail="a certificate table wider than the page",
                        certificate={"joints": [dict(record, joint=k) for k in range(1, 5)]})
-    model = build_report_model(make_result(checks=(*servo_checks(), wide_check)))
+    model = build_report_model(make_result(checks=(*servo_checks(), wide_check)), studies=False)
     header = ("Gain", "Scale", "Loop", "max Re(pole) (1/s)", *(f"peak |e| q{k} (rad)" for k in range(1, 7)), "Note")
     rows = tuple((g, f"× {s}", "stable", "-18.46", *("0.0002211",) * 6, "as designed")
                  for g in ("K1", "K2") for s in (0.5, 1, 2))
