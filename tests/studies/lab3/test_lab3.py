@@ -152,7 +152,7 @@ def test_load_effect_against_closed_form_offsets(comparison, lab):
     assert effects["state-regulator"].final == pytest.approx(abs(sr), rel=2e-3)
     # sliding-mode regulator: the rest of the reduced system on sigma = 0 solved by numpy (x2 = x4 = 0, c x = 0,
     # the link's equation at rest with the load)
-    c = np.asarray(comparison["sliding-regulator"].design.extra["vsc"]["c"])
+    c = np.asarray(comparison["sliding-regulator"].design.data.c)
     k2 = p.KR * p.R2**2 / p.J2
     x1, x3 = np.linalg.solve(np.array([[c[0], c[2]], [k2, -k2]]), [0.0, -p.R2 / p.J2 * W])
     assert effects["sliding-regulator"].predicted == pytest.approx(abs(x3), rel=1e-9)
@@ -191,7 +191,7 @@ def test_the_surface_words_come_from_the_family(comparison, lab_text):
 
 
 def test_sliding_poles_over_the_box_against_the_reduced_system(comparison, lab_text):
-    c = np.asarray(comparison["sliding-regulator"].design.extra["vsc"]["c"])
+    c = np.asarray(comparison["sliding-regulator"].design.data.c)
     keep = [0, 2, 3]
     rates = []
     for J2, Km, KR in itertools.product((0.45, 0.55), (1.8, 2.2), (180.0, 220.0)):
