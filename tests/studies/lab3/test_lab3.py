@@ -99,7 +99,7 @@ def test_chattering_of_a_known_command():
 
 def test_state_regulator_corners_against_scipy(comparison, lab):
     run = comparison["state-regulator"]
-    K, N = run.design.extra["state_regulator"]["K"], run.design.extra["state_regulator"]["N"]
+    K, N = run.design.data.K, run.design.data.N
     at = corners(comparison)
     rows = _entry(lab, "state-regulator: corners of the box").rows
     assert len(at) == len(rows) == 8 and all(r.outcome == "verified" for r in rows)
@@ -145,7 +145,7 @@ def test_load_effect_against_closed_form_offsets(comparison, lab):
     effects = {label: load_effect(m, plan) for label, m in found.items()}
     # state regulator: -C (A - BK)^-1 D w, computed here from the model's NumPy state space
     A, B = elastic_state_space(p)
-    K = np.asarray(comparison["state-regulator"].design.extra["state_regulator"]["K"])
+    K = np.asarray(comparison["state-regulator"].design.data.K)
     D = np.array([0.0, 0.0, 0.0, p.R2 / p.J2])
     sr = -np.linalg.solve(A - B @ K[None, :], D)[2] * W
     assert effects["state-regulator"].predicted == pytest.approx(abs(sr), rel=1e-9)
