@@ -47,12 +47,12 @@ SAMPLES = 20000
 
 
 def _inputs(design: Any) -> dict[str, Any]:
-    info = design.extra["pid_sm_robot"]
-    ws = info["workspace"]
+    info = design.data
+    ws = info.workspace
     return {"q": (np.array(ws["low"]), np.array(ws["high"])), "qd_limit": np.array(ws["velocity"]),
-            "qdd_limits": np.array(info["acceleration_rows"]),
-            "inertia": [lk["inertia"] for lk in info["links"]], "damping": [lk["damping"] for lk in info["links"]],
-            "coulomb": info["coulomb"], "gravity": info["gravity_feedforward"] == "none"}
+            "qdd_limits": np.array(info.acceleration_rows),
+            "inertia": [lk.inertia for lk in info.links], "damping": [lk.damping for lk in info.links],
+            "coulomb": info.coulomb, "gravity": info.gravity_feedforward == "none"}
 
 
 def _sampled(plant: Any, kw: dict[str, Any], count: int, seed: int) -> tuple[float, list[float]]:
@@ -93,10 +93,10 @@ def _payload() -> dict[str, Any]:
     t, c = time.perf_counter(), time.process_time()
     d = design(loaded, arm)
     seconds, cpu = time.perf_counter() - t, time.process_time() - c
-    info = d.extra["pid_sm_robot"]
+    info = d.data
     return {"seconds": seconds, "cpu_seconds": cpu, "goal_s": GOAL_S,
             "box": {k: list(v) for k, v in loaded.spec.plant.uncertainty.intervals.items()},
-            "bound": list(info["bound"]), "attained": list(info["sampled"]), "boxes": info["boxes"]}
+            "bound": list(info.bound), "attained": list(info.sampled), "boxes": info.enclosure.boxes}
 
 
 def main() -> None:
@@ -109,7 +109,7 @@ def main() -> None:
     plant = design.plant
     kw = _inputs(design)
     p = plant.model_parameters()
-    limit_spec = int(design.extra["pid_sm_robot"]["work_limit"])
+    limit_spec = int(design.data["work_limit"])
     proven, sampled = [], []
     cpu = []
     for r in range(REPEAT):  # interleaved

@@ -64,7 +64,7 @@ def main() -> None:
 
     result = pipeline_run(loaded)
     design = result.design
-    h = float(design.extra["vsc"]["max_step"])
+    h = float(design.data.max_step)
     exact_dt = 1.0 / math.ceil(1.0 / h)  # divides the load's onset (1 s) and the duration (10 s)
     exact_loaded = parse_spec(spec_text(exact_dt))
     exact_result = pipeline_run(exact_loaded)

@@ -307,9 +307,10 @@ class Design:
     formulas, notes : tuple of str
         Design equations and the choices made on the user's behalf.
     extra : Mapping
-        Data keyed by strings (deeply frozen): what the generic layers read of a design by name
-        (``codegen_terms``, the requirements' ``zeta`` and ``wn``, ...), and the family data of a family
-        that does not declare :attr:`data`.
+        Data keyed by strings (deeply frozen): only what the generic layers read of a design by name, whatever its
+        family: ``codegen_terms`` (:mod:`designkit.synthesis.codegen`) and the requirements' ``zeta`` and ``wn``
+        (:func:`designkit.synthesis.requirements.poles_from_spec`, read by the pole-zero figure).  A family's own
+        numbers are in :attr:`data`.
     law : Law or None
         The control law as designed (no anti-windup; the simulation adds the spec's), set with the
         closed loop (:func:`~designkit.synthesis.closed_loop.with_closed_loop`) or alone

@@ -95,7 +95,8 @@ def servo_design(plant: Any, poles: Sequence[complex], zero: float | None = None
     notes : tuple of str
         Notes to carry; the zero's is appended.
     extra : dict or None
-        Family data to carry (:attr:`Design.extra`).
+        Entries the generic layers read by name to carry (:attr:`Design.extra`: the requirements' ``zeta`` and
+        ``wn``).
 
     Examples
     --------

@@ -19,8 +19,6 @@ import pytest
 import designkit as dk
 from designkit.analysis.diagnosis import diagnose
 from designkit.families.pid_sliding_mode.diagnoses import run_xi
-from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA
-from designkit.families.pid_sliding_mode.spec import EXTRA
 
 SPECS = Path(__file__).resolve().parents[3] / "specs"
 
@@ -36,11 +34,11 @@ def runs():
 
 def test_the_run_s_perturbation_is_the_link_equation_s(runs):
     result, _ = runs["pid-sm-link-weak-relay"]
-    sim, info = result.simulation, result.design.extra[EXTRA]
+    sim, info = result.simulation, result.design.data
     t, xi = run_xi(info, sim)
     # after the change the true link is x2' = -x2/tau + (Km/tau) u, the model x2' = -x2/tau0 + (Km0/tau0) u0 +
     # (Km/tau)(du + xi_p): solved for xi_p with the simulated acceleration
-    Km, tau, (Km0, tau0) = 1.3, 0.7, info["nominal"]
+    Km, tau, (Km0, tau0) = 1.3, 0.7, info.nominal
     x2 = np.asarray(sim.state)[:, 1]
     u0, du = (np.asarray(sim.signals[k]) for k in ("u0", "du"))
     x2dot = np.gradient(x2, t)
@@ -48,17 +46,17 @@ def test_the_run_s_perturbation_is_the_link_equation_s(runs):
     xd = np.asarray(sim.reference)[:, 0, 0]
     jumps = np.convolve(np.abs(np.diff(xd, prepend=xd[0], append=xd[-1])) > 0, np.ones(5), "same")[:-1] > 0
     after = (t > 4.3) & ~jumps & (np.arange(t.size) < t.size - 1)  # away from the change and the reference's jumps
-    assert np.max(np.abs(xi[after] - reference[after])) < 0.02 * info["M"]
+    assert np.max(np.abs(xi[after] - reference[after])) < 0.02 * info.M
     assert np.all(xi[t < 4.2] == 0.0)
-    assert np.max(np.abs(xi)) > info["M"]  # what the diagnosis says: the run's xi exceeds the relay
+    assert np.max(np.abs(xi)) > info.M  # what the diagnosis says: the run's xi exceeds the relay
 
 
 def test_the_link_relay_failure_and_its_fix(runs):
     result, diag = runs["pid-sm-link-weak-relay"]
     by = {f.check: f for f in diag.findings}
     assert set(by) == {"pid_sm_relay", "pid_sm_in_band"}
-    info = result.design.extra[EXTRA]
-    xi = info["xi_total"]
+    info = result.design.data
+    xi = info.xi_total
     assert f"M = 3 N·m is below sup|ξ| = {xi:.4g} N·m" in by["pid_sm_relay"].cause
     assert "exceeds M for" in by["pid_sm_in_band"].cause
     M = math.ceil(1.2 * xi * 1000) / 1000  # the 20 % margin, rounded up at the printed digits
@@ -73,8 +71,8 @@ def test_the_hierarchy_failures_and_their_fixes(runs):
     result, diag = runs["hierarchy-simnog-small-M"]
     assert {f.check for f in diag.findings} == {"pid_sm_hierarchy", "pid_sm_robot_xi", "pid_sm_robot_in_band"}
     assert all(f.cause and f.fix for f in diag.findings)
-    info = result.design.extra[ROBOT_EXTRA]
-    largest = max(info["bound"])
+    info = result.design.data
+    largest = max(info.bound)
     M = math.ceil(1.2 * largest * 1000) / 1000
     xi_finding = next(f for f in diag.findings if f.check == "pid_sm_robot_xi")
     peak = next(c for c in result.checks if c.name == "pid_sm_robot_xi").certificate["peak_xi_inside"][1]

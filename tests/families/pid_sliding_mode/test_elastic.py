@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from designkit.families.pid_sliding_mode.elastic import EXTRA, sliding_motion
+from designkit.families.pid_sliding_mode.elastic import sliding_motion
 from designkit.families.pid_sliding_mode.surface import surface
 from designkit.models.elastic import elastic_state_space
 from designkit.models.robots.elastic_link import elastic_link
@@ -74,8 +74,8 @@ def test_the_motor_slides_and_the_load_follows_its_motion(result):
 
     _, ideal = signal.step(([1.0], [1 / 12, 7 / 12, 1.0]), T=np.asarray(sim.time))
     assert np.max(np.abs(x1 - ideal)) < 5e-3
-    info = result.design.extra[EXTRA]
-    assert info["load_mode"]["zeta"] == pytest.approx(1 / (2 * 2.0 * 20.0))
+    info = result.design.data
+    assert info.load_mode.zeta == pytest.approx(1 / (2 * 2.0 * 20.0))
     # no load offset of the motor: the integral holds x1 at xD; the spring carries the 0.2 N*m: x3 = xD + w/KR
     assert np.mean(np.asarray(sim.state[-200:, 0])) == pytest.approx(1.0, abs=2e-3)
 
@@ -112,7 +112,7 @@ def test_figures_draw_the_motor_and_the_link(result):
 
 def test_relay_covers_interior_plants_of_the_box(result):
     # M is sized on the corners; at random interior plants the sliding motion's equivalent control stays below it
-    info = result.design.extra[EXTRA]
+    info = result.design.data
     gains = {k: float(result.design.gains[k]) for k in ("K1", "K2", "K3", "K4")}
     t = np.linspace(0.0, 3.0, 12001)
     r = np.ones_like(t)
@@ -121,6 +121,6 @@ def test_relay_covers_interior_plants_of_the_box(result):
     worst = 0.0
     for _ in range(20):
         params = elastic_link(J2=rng.uniform(0.45, 0.55), Km=rng.uniform(1.8, 2.2))
-        m = sliding_motion(params, info["a1"], info["a2"], gains, t, r, w, 0.0)
+        m = sliding_motion(params, info.a1, info.a2, gains, t, r, w, 0.0)
         worst = max(worst, float(np.max(np.abs(m["du_eq"]))))
-    assert worst <= info["sup_du_eq"] * (1 + 1e-9) < info["M"]
+    assert worst <= info.sup_du_eq * (1 + 1e-9) < info.M

@@ -82,41 +82,41 @@ def test_the_closed_form_is_the_models_arm():
 
 
 def test_simnog_bound_covers_the_closed_form_at_random_points_and_vertices(simnog):
-    info = simnog.design.extra["pid_sm_robot"]
+    info = simnog.design.data
     P = {p.name: p.value for p in simnog.design.plant.parameters}
     D, c = _closed_form_2r(P)
-    ws = info["workspace"]
+    ws = info.workspace
     lo, hi, V = np.array(ws["low"]), np.array(ws["high"]), np.array(ws["velocity"])
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
+    Dh = np.array([lk.inertia for lk in info.links])
     rng = np.random.default_rng(7)
     N = 20000
     for i in range(2):
-        A = np.array(info["acceleration_rows"][i])
+        A = np.array(info.acceleration_rows[i])
         q = lo + (hi - lo) * rng.random((N, 2))
         qd = V * rng.choice([-1.0, 1.0], (N, 2)) * np.where(rng.random((N, 2)) < 0.5, 1.0, rng.random((N, 2)))
         qdd = A * rng.choice([-1.0, 1.0], (N, 2))
         xi = (np.einsum("kj,kj->k", D(q)[:, i, :], qdd) - Dh[i] * qdd[:, i] + c(q, qd)[:, i])
         worst = float(np.max(np.abs(xi)))
-        assert worst <= info["bound"][i]
-        assert info["sampled"][i] <= info["bound"][i]
+        assert worst <= info.bound[i]
+        assert info.sampled[i] <= info.bound[i]
         # on this two-link arm the proven bound is tight: within 5 % of the largest value the closed form finds
-        assert info["bound"][i] <= 1.05 * max(worst, info["sampled"][i])
-        assert info["M"][i] == pytest.approx(1.2 * info["bound"][i])
+        assert info.bound[i] <= 1.05 * max(worst, info.sampled[i])
+        assert info.M[i] == pytest.approx(1.2 * info.bound[i])
 
 
 def test_the_hierarchy_takes_the_later_joint_at_its_sliding_motions_acceleration(simnog):
     """Servo sliding motion a2 q'' + a1 q' + q = qD from rest: q''(0+) = step/a2 = p1 p2 step, its largest value."""
-    info = simnog.design.extra["pid_sm_robot"]
+    info = simnog.design.data
     step2 = 0.3
-    assert info["sliding_acceleration"][1] == pytest.approx(4 * 5 * step2, rel=1e-9)
-    assert info["acceleration_rows"][0] == pytest.approx([12.0, 6.0])  # joint 1 sees joint 2 sliding
-    assert info["acceleration_rows"][1] == pytest.approx([12.0, 12.0])  # the last joint: the limits
+    assert info.sliding_acceleration[1] == pytest.approx(4 * 5 * step2, rel=1e-9)
+    assert info.acceleration_rows[0] == pytest.approx([12.0, 6.0])  # joint 1 sees joint 2 sliding
+    assert info.acceleration_rows[1] == pytest.approx([12.0, 12.0])  # the last joint: the limits
 
 
 def test_each_joints_gains_place_its_poles_and_the_zero_on_p3(simnog):
-    info = simnog.design.extra["pid_sm_robot"]
-    for lk, g in zip(info["links"], info["gains"], strict=True):
-        Km, tau = 1.0 / lk["damping"], lk["inertia"] / lk["damping"]
+    info = simnog.design.data
+    for lk, g in zip(info.links, info.gains, strict=True):
+        Km, tau = 1.0 / lk.damping, lk.inertia / lk.damping
         roots = np.sort(np.roots([tau, 1 + Km * g["K2"], Km * g["K1"], Km * g["K3"]]).real)
         np.testing.assert_allclose(roots, [-20, -5, -4], rtol=1e-9)
         assert -g["K3"] / (g["K1"] + g["K3"] * g["K4"]) == pytest.approx(-20.0, rel=1e-9)
@@ -162,20 +162,20 @@ def _xi_closed_form(result) -> tuple[np.ndarray, np.ndarray]:
     """xi along a run from its states alone (finite-difference accelerations, the closed form), and whether each
     sample is inside each joint's box (the same accelerations)."""
     d = result.design
-    info = d.extra["pid_sm_robot"]
+    info = d.data
     P = {p.name: p.value for p in d.plant.parameters}
     D, c = _closed_form_2r(P)
     sim = result.simulation
     t, x = np.asarray(sim.time), np.asarray(sim.state)
     q, qd = x[:, :2], x[:, 2:]
     qdd = np.gradient(qd, t, axis=0)
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
+    Dh = np.array([lk.inertia for lk in info.links])
     xi = np.einsum("kij,kj->ki", D(q), qdd) - Dh * qdd + c(q, qd)
-    ws = info["workspace"]
+    ws = info.workspace
     tol = 1e-9
     state_in = (np.all((q >= np.array(ws["low"]) - tol) & (q <= np.array(ws["high"]) + tol), axis=1)
                 & np.all(np.abs(qd) <= np.array(ws["velocity"]), axis=1))
-    inside = np.column_stack([state_in & np.all(np.abs(qdd) <= np.array(info["acceleration_rows"][i]), axis=1)
+    inside = np.column_stack([state_in & np.all(np.abs(qdd) <= np.array(info.acceleration_rows[i]), axis=1)
                               for i in range(2)])
     inside[:3] = False  # the step's instant: a finite difference across it is no acceleration of the run
     return xi, inside
@@ -187,12 +187,12 @@ def _xi_closed_form(result) -> tuple[np.ndarray, np.ndarray]:
 def test_along_runs_inside_the_box_xi_never_exceeds_the_bound(s1, s2, eps):
     spec = _design(**{"simulation.step": [s1, s2], "simulation.duration": 1.5, "controller.epsilon": eps})
     result = run(spec)
-    info = result.design.extra["pid_sm_robot"]
+    info = result.design.data
     xi, inside = _xi_closed_form(result)
     for i in range(2):
         assert inside[:, i].mean() > 0.5
         peak = float(np.max(np.abs(xi[inside[:, i], i])))
-        assert peak <= info["bound"][i] * (1 + 1e-3) + 1e-3, (i, peak, info["bound"][i])
+        assert peak <= info.bound[i] * (1 + 1e-3) + 1e-3, (i, peak, info.bound[i])
     names = {c.name: c.passed for c in result.checks}
     assert names["pid_sm_robot_xi"] is True and names["pid_sm_hierarchy"] is True
 
@@ -201,8 +201,8 @@ def test_a_later_joint_held_still_leaves_the_run_outside_the_box_and_the_check_u
     """Joint 2 not moving: its sliding motion's acceleration is 0, so joint 1's box allows q2'' = 0 only, which the
     boundary layer's approximate sliding never meets exactly: the run check is undecided, not a vacuous pass."""
     result = run(_design(**{"simulation.step": [0.5, 0.0], "simulation.duration": 1.0}))
-    info = result.design.extra["pid_sm_robot"]
-    assert info["acceleration_rows"][0][1] == 0.0
+    info = result.design.data
+    assert info.acceleration_rows[0][1] == 0.0
     check = next(c for c in result.checks if c.name == "pid_sm_robot_xi")
     assert check.passed is None and "does not describe it" in check.detail
 
@@ -214,17 +214,17 @@ def test_a_run_beyond_the_velocity_limit_exceeds_the_bound():
                       "simulation.step": [0.5, -0.5], "simulation.duration": 1.5,
                       "controller.workspace": {"low": [-0.2, -0.8], "high": [0.8, 0.3]}})
     result = run(spec)
-    info = result.design.extra["pid_sm_robot"]
+    info = result.design.data
     xi, inside = _xi_closed_form(result)
     qd = np.asarray(result.simulation.state)[:, 2:]
     beyond = np.any(np.abs(qd) > 0.2, axis=1)
     beyond[:3] = False
     assert beyond.any()
-    exceeded = [float(np.max(np.abs(xi[beyond, i]))) - info["bound"][i] for i in range(2)]
+    exceeded = [float(np.max(np.abs(xi[beyond, i]))) - info.bound[i] for i in range(2)]
     assert max(exceeded) > 0, exceeded
     for i in range(2):  # and where the run is inside the box, it does not
         if inside[:, i].any():
-            assert float(np.max(np.abs(xi[inside[:, i], i]))) <= info["bound"][i] * (1 + 1e-3) + 1e-3
+            assert float(np.max(np.abs(xi[inside[:, i], i]))) <= info.bound[i] * (1 + 1e-3) + 1e-3
 
 
 @pytest.mark.parametrize(("change", "remove", "path"), [
@@ -299,19 +299,19 @@ def test_tracking_form_takes_the_later_joint_at_the_trajectorys_acceleration():
     spec = _design(**{"controller.form": "tracking", "simulation.step": None,
                       "simulation.trajectory": {"kind": "quintic", "amplitude": [0.5, -0.3], "duration": 2.0}})
     result = run(spec)
-    info = result.design.extra["pid_sm_robot"]
-    assert info["acceleration_rows"][0][1] == pytest.approx(10 * np.sqrt(3) / 3 * 0.3 / 2.0**2, rel=1e-4)
+    info = result.design.data
+    assert info.acceleration_rows[0][1] == pytest.approx(10 * np.sqrt(3) / 3 * 0.3 / 2.0**2, rel=1e-4)
     assert all(c.passed for c in result.checks if c.required)
 
 
 def test_report_section_has_one_row_per_joint_from_the_last_to_the_first(simnog):
     from designkit.families.pid_sliding_mode.robot_family import section
 
-    info = simnog.design.extra["pid_sm_robot"]
+    info = simnog.design.data
     sec = section(simnog)
     (table,) = sec.questions[0].tables
     assert [row[0] for row in table.rows] == ["joint 2", "joint 1"]
     for row, i in zip(table.rows, (1, 0), strict=True):
-        assert row[2] == f"{info['bound'][i]:.4g} N·m" and row[3] == f"{info['sampled'][i]:.4g} N·m"
+        assert row[2] == f"{info.bound[i]:.4g} N·m" and row[3] == f"{info.sampled[i]:.4g} N·m"
         assert "rad/s²" in row[1] and "q =" in row[4]
     assert "pid_sm" not in " ".join(sec.questions[0].sentences)  # words, not identifiers

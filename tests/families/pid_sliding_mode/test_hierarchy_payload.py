@@ -78,18 +78,18 @@ def test_the_gravity_closed_form_is_the_models():
 
 
 def test_the_bound_covers_the_closed_form_at_every_mass_of_the_box(payload):
-    info = payload.design.extra["pid_sm_robot"]
+    info = payload.design.data
     nominal = {p.name: p.value for p in payload.design.plant.parameters}
-    assert list(info["parameter_box"]) == [{"name": "m2", "index": 1, "low": 2.0, "high": 4.0, "nominal": 3.0,
+    assert list(info.parameter_box) == [{"name": "m2", "index": 1, "low": 2.0, "high": 4.0, "nominal": 3.0,
                                       "unit": "kg", "meaning": "link 2 mass"}]
-    ws = info["workspace"]
+    ws = info.workspace
     lo, hi, V = np.array(ws["low"]), np.array(ws["high"]), np.array(ws["velocity"])
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
-    f = np.array([lk["damping"] for lk in info["links"]])
+    Dh = np.array([lk.inertia for lk in info.links])
+    f = np.array([lk.damping for lk in info.links])
     rng = np.random.default_rng(11)
     N = 4000
     for i in range(2):
-        A = np.array(info["acceleration_rows"][i])
+        A = np.array(info.acceleration_rows[i])
         worst = 0.0
         for m2 in np.concatenate([[2.0, 4.0], rng.uniform(2.0, 4.0, 8)]):
             q = lo + (hi - lo) * rng.random((N, 2))
@@ -97,24 +97,24 @@ def test_the_bound_covers_the_closed_form_at_every_mass_of_the_box(payload):
             qdd = A * rng.choice([-1.0, 1.0], (N, 2))
             xi = _xi({**nominal, "m2": m2}, nominal, Dh, np.array(f), q, qd, qdd)[:, i]
             worst = max(worst, float(np.max(np.abs(xi))))
-        assert worst <= info["bound"][i]
+        assert worst <= info.bound[i]
         # where the bound says it is attained: in the box, and the closed form gives the value there
-        at = info["argmax"][i]
+        at = info.enclosure.argmax[i]
         m2 = at["p"][1]
         assert 2.0 <= m2 <= 4.0
         there = abs(_xi({**nominal, "m2": m2}, nominal, Dh, f, *(np.array(at[k]) for k in ("q", "qd", "qdd")))[i])
-        assert there == pytest.approx(info["sampled"][i], rel=1e-9)
-        assert info["bound"][i] <= 1.05 * max(worst, there)  # not vacuous on this arm
+        assert there == pytest.approx(info.sampled[i], rel=1e-9)
+        assert info.bound[i] <= 1.05 * max(worst, there)  # not vacuous on this arm
         # the heavier arm sets it: more inertia, coupling and gravity residual than the nominal arm's bound
-        assert m2 == 4.0 and info["bound"][i] > [5.892, 5.723][i]
+        assert m2 == 4.0 and info.bound[i] > [5.892, 5.723][i]
 
 
 def test_a_degenerate_box_at_the_nominal_mass_gives_the_examples_bound():
-    today = design(_spec("specs/hierarchy-simnog.yaml")).extra["pid_sm_robot"]
+    today = design(_spec("specs/hierarchy-simnog.yaml")).data
     held = design(_spec("specs/hierarchy-simnog.yaml", **{"plant.uncertainty": {"m2": [3.0, 3.0]}}))
-    held = held.extra["pid_sm_robot"]
-    assert held["bound"] == today["bound"] and held["sampled"] == today["sampled"] and held["M"] == today["M"]
-    assert held["boxes"] == today["boxes"]
+    held = held.data
+    assert held.bound == today.bound and held.sampled == today.sampled and held.M == today.M
+    assert held.enclosure.boxes == today.enclosure.boxes
 
 
 def test_the_example_verifies_through_the_load_change_and_says_over_which_box(payload):
@@ -146,18 +146,18 @@ def _true_run(spec: LoadedSpec, m2: float):
 
 
 def _xi_along(dsn, arm, sim) -> tuple[np.ndarray, np.ndarray]:
-    info = dsn.extra["pid_sm_robot"]
+    info = dsn.data
     nominal = {p.name: p.value for p in dsn.plant.parameters}
     t, x = np.asarray(sim.time), np.asarray(sim.state)
     q, qd = x[:, :2], x[:, 2:]
     qdd = np.gradient(qd, t, axis=0)
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
-    f = np.array([lk["damping"] for lk in info["links"]])
+    Dh = np.array([lk.inertia for lk in info.links])
+    f = np.array([lk.damping for lk in info.links])
     xi = _xi({p.name: p.value for p in arm.parameters}, nominal, Dh, f, q, qd, qdd)
-    ws = info["workspace"]
+    ws = info.workspace
     state_in = (np.all((q >= np.array(ws["low"])) & (q <= np.array(ws["high"])), axis=1)
                 & np.all(np.abs(qd) <= np.array(ws["velocity"]), axis=1))
-    inside = np.column_stack([state_in & np.all(np.abs(qdd) <= np.array(info["acceleration_rows"][i]), axis=1)
+    inside = np.column_stack([state_in & np.all(np.abs(qdd) <= np.array(info.acceleration_rows[i]), axis=1)
                               for i in range(2)])
     inside[:3] = False  # the step's instant: a finite difference across it is no acceleration of the run
     return xi, inside
@@ -169,12 +169,12 @@ def _xi_along(dsn, arm, sim) -> tuple[np.ndarray, np.ndarray]:
 def test_runs_of_interior_arms_stay_below_the_bound_inside_the_box(m2, s1, s2):
     spec = _spec(**{"simulation.step": [s1, s2], "simulation.duration": 1.2, "simulation.plant_change": None})
     dsn, arm, sim, checks = _true_run(spec, m2)
-    info = dsn.extra["pid_sm_robot"]
+    info = dsn.data
     xi, inside = _xi_along(dsn, arm, sim)
     for i in range(2):
         assert inside[:, i].mean() > 0.5
         peak = float(np.max(np.abs(xi[inside[:, i], i])))
-        assert peak <= info["bound"][i] * (1 + 1e-3) + 1e-3, (i, peak, info["bound"][i])
+        assert peak <= info.bound[i] * (1 + 1e-3) + 1e-3, (i, peak, info.bound[i])
     assert checks["pid_sm_robot_xi"].passed is True and checks["pid_sm_robot_in_band"].passed is True
     assert f"m2 = {m2:.4g} kg" in checks["pid_sm_robot_xi"].detail
 

@@ -52,12 +52,12 @@ def test_the_layer_leaves_slm_near_eps_xi_over_M_and_the_integral_removes_the_er
     """With sat(slm/eps) and a constant load, slm settles at g xi/(|p3| + g M/eps) < eps xi/M, and the position
     returns onto the sliding motion (the integral is in slm)."""
     result = _run(2.0, 0.5, 0.5, ", epsilon: 0.002")
-    info = result.design.extra["pid_sm"]
+    info = result.design.data
     slm = np.asarray(result.simulation.signals["slm"], float)
-    g = info["a2"] * 2.0 / 0.5
-    expected = g * 0.5 / (abs(info["p3"]) + g * info["M"] / 0.002)
+    g = info.a2 * 2.0 / 0.5
+    expected = g * 0.5 / (abs(info.p3) + g * info.M / 0.002)
     assert slm[-1] == pytest.approx(expected, rel=1e-3)
-    assert abs(slm[-1]) < 0.002 * 0.5 / info["M"]
+    assert abs(slm[-1]) < 0.002 * 0.5 / info.M
     data = measure(result.design, result.simulation).data
     assert abs(data["x1"][-1] - data["x1_ideal"][-1]) < 1e-4  # on the plant-independent motion to 0.1 mrad
 

@@ -40,10 +40,10 @@ def test_characteristic_polynomial_at_the_end_is_the_requested_one(fixture, requ
     d = result.design
     s = samples(result.simulation, d)
     assert _check(result, "characteristic_polynomial").passed is True
-    Ts = d.extra["Ts"]
+    Ts = d.data.settings.Ts
     # the estimated model's polynomials, then A R + B S by numpy against the requested z-poles
     th = s.theta[-1]
-    if d.extra["form"] == "position":
+    if d.data.settings.form == "position":
         A = np.poly([1.0, th[0]])
         B = th[1:]
     else:  # speed form: the link the estimates stand for, discretized by python-control
@@ -52,7 +52,7 @@ def test_characteristic_polynomial_at_the_end_is_the_requested_one(fixture, requ
         A, B = den / den[0], num[-2:] / den[0]
     R1, S0, S1 = s.coefs[-1, :3]
     got = np.polyadd(np.polymul(A, [1.0, R1]), np.polymul(B, [S0, S1]))
-    want = np.poly(np.exp(np.array([-4.0, -5.0, d.extra["observer"]]) * Ts))
+    want = np.poly(np.exp(np.array([-4.0, -5.0, d.data.settings.observer]) * Ts))
     np.testing.assert_allclose(got, want, atol=1e-9)
 
 
@@ -61,13 +61,13 @@ def test_true_loop_poles_are_python_controls(fixture, request):
     result = request.getfixturevalue(fixture)
     d = result.design
     s = samples(result.simulation, d)
-    num, den = position_tf(1.0, 0.8, d.extra["Ts"])  # the true link at the end
+    num, den = position_tf(1.0, 0.8, d.data.settings.Ts)  # the true link at the end
     R1, S0, S1 = s.coefs[-1, :3]
-    z = closed_loop_poles(num, den, np.array([1.0, R1]), np.array([S0, S1]), d.extra["Ts"])
+    z = closed_loop_poles(num, den, np.array([1.0, R1]), np.array([S0, S1]), d.data.settings.Ts)
     check = _check(result, "true_loop")
     got = np.sort_complex(np.array([complex(a, b) for a, b in check.certificate["z"]]))
     np.testing.assert_allclose(got, z, atol=1e-6)
-    want = np.exp(np.array([-4.0, -5.0, -10.0]) * d.extra["Ts"])
+    want = np.exp(np.array([-4.0, -5.0, -10.0]) * d.data.settings.Ts)
     converged = fixture != "failing_result"
     assert check.passed is converged
     assert bool(np.max(np.abs(np.sort(z.real) - np.sort(want))) < 1e-4) is converged
@@ -96,7 +96,7 @@ def test_parameter_step_reconverges_within_the_run(speed_result):
 def test_excitation_indicator_against_numpy_on_the_last_window(speed_result):
     d = speed_result.design
     s = samples(speed_result.simulation, d)
-    w = int(round(d.extra["excitation_window"] / d.extra["Ts"]))
+    w = int(round(d.data.excitation_window / d.data.settings.Ts))
     R = s.phi[-w:].T @ s.phi[-w:]
     C = R / np.sqrt(np.outer(np.diag(R), np.diag(R)))
     check = _check(speed_result, "excitation")

@@ -34,7 +34,7 @@ def test_the_covariance_bound_row_ends_at_the_bound(speed_result):
     rows = sec.questions[3].tables[1].rows
     bounded = next(r for r in rows if r[0].startswith("quiet reference with noise, with"))
     free = next(r for r in rows if r[0].startswith("quiet reference with noise, without"))
-    assert float(bounded[1]) == speed_result.design.extra["max_trace"] and int(bounded[2]) > 0
+    assert float(bounded[1]) == speed_result.design.data.settings.max_trace and int(bounded[2]) > 0
     assert float(free[1]) > 10 * float(bounded[1]) and int(free[2]) == 0
 
 

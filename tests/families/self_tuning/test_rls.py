@@ -59,7 +59,7 @@ def test_rls_without_forgetting_recovers_the_exact_zoh_parameters(form):
     np.testing.assert_allclose(th[-1], exact, rtol=1e-8)  # RLS (lambda = 1, P0 = 1e10) on them
     np.testing.assert_allclose(th[-1], theta_ls, rtol=1e-8)
     # RLS is exactly the batch solution with the prior (theta0, P0 I): (I/P0 + Phi'Phi) theta = theta0/P0 + Phi'y
-    theta0 = np.asarray(design.extra["initial"])
+    theta0 = np.asarray(design.data.settings.theta0)
     prior = np.linalg.solve(np.eye(len(theta0)) / P0 + Phi.T @ Phi, theta0 / P0 + Phi.T @ out)
     np.testing.assert_allclose(th[-1], prior, rtol=1e-12)
 

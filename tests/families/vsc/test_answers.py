@@ -33,7 +33,7 @@ def test_printed_c4_is_figure_5_3_as_printed(result):
     c2 = 1.0
     # figure 5.3 as printed: c4 = (J2/(KR R2^2))(p3 p1 + p3 p2 + p1 p2) - 1 - c1 J2/(c2 KR R2^2)
     printed = (p.J2 / (p.KR * p.R2**2)) * (p3 * p1 + p3 * p2 + p1 * p2) - 1 - c1 * p.J2 / (c2 * p.KR * p.R2**2)
-    c = result.design.extra["vsc"]["c"]
+    c = result.design.data.c
     assert printed_c4(c, p.tau2, p.KR * p.R2**2 / p.J2) == pytest.approx(printed, rel=1e-12)
     # ... and the designed c4 is the derivation's (tau2 in the last term), which places -8, -10, -12
     assert c[3] == pytest.approx(printed + c1 / (c2 * 400.0) - c1 / (p.tau2 * 400.0), rel=1e-12)
@@ -43,7 +43,7 @@ def test_printed_c4_is_figure_5_3_as_printed(result):
 
 def test_the_load_offset_prediction_is_the_reduced_system_at_rest(result):
     p = elastic_link()
-    c = np.asarray(result.design.extra["vsc"]["c"])
+    c = np.asarray(result.design.data.c)
     k2 = p.KR * p.R2**2 / p.J2
     _, x3 = np.linalg.solve(np.array([[c[0], c[2]], [k2, -k2]]), [0.0, -p.R2 / p.J2 * 0.2])  # x2 = x4 = 0, c x = 0
     assert family("vsc").prediction("load_offset").value(result) == pytest.approx(abs(x3), rel=1e-9)

@@ -22,9 +22,9 @@ def _invariant(sim, design):
     assert k == run.reach
     assert np.all(np.abs(sigma[k:]) <= band[k:] * (1 + 1e-9))
     # the band itself: h times the bound on |sigma'| over the box, recomputed from the states
-    info = design.extra["vsc"]
-    xt = sim.state - np.outer(sim.reference[:, 0, 0], info["rest_direction"])
-    S = info["cB_max"] * (np.abs(xt) @ np.asarray(info["G"]) + info["delta"]) + info["cD_max"] * info["d_bar"]
+    info = design.data
+    xt = sim.state - np.outer(sim.reference[:, 0, 0], info.rest_direction)
+    S = info.cB_max * (np.abs(xt) @ np.asarray(info.G) + info.delta) + info.cD_max * info.d_bar
     assert np.all(band <= sim.settings["dt"] * np.maximum.accumulate(S) + 1e-15)
     return run
 
@@ -47,7 +47,7 @@ def test_random_interior_elastic_plants_reach_and_stay(elastic_simulator, elasti
         e = sim.state[:, 2] - sim.reference[:, 0, 0]
         # on sigma = 0 the load 0.2 N*m leaves x3~ = c1 w/(KR (c1 + c3)) whatever J2 and Km (derived by hand:
         # x2 = x4 = 0, k2 (x1 - x3) + (R2/J2) w = 0, c1 x1~ + c3 x3~ = 0)
-        c = elastic_result.design.extra["vsc"]["c"]
+        c = elastic_result.design.data.c
         assert e[-1] == pytest.approx(c[0] * 0.2 / (DEFAULTS.KR * (c[0] + c[2])), rel=0.02)
 
 
@@ -67,7 +67,7 @@ def test_random_interior_link_plants_reach_and_stay(link_result):
 def test_recorded_equivalent_control_against_numpy(elastic_result):
     sim, d = elastic_result.simulation, elastic_result.design
     A, B = elastic_state_space(DEFAULTS)
-    c = np.asarray(d.extra["vsc"]["c"])
+    c = np.asarray(d.data.c)
     xt = sim.state - np.outer(sim.reference[:, 0, 0], [1.0, 0.0, 1.0, 0.0])
     want = -(xt @ (c @ A)) / (c @ B.ravel())
     assert np.asarray(sim.signals["u_eq"]) == pytest.approx(want, rel=1e-9, abs=1e-9)
@@ -124,10 +124,10 @@ def test_boundary_layer_keeps_sigma_in_the_layer():
     run = measure(r.design, r.simulation)
     sigma = np.asarray(r.simulation.signals["sigma"])
     assert run.reach is not None and np.all(np.abs(sigma[run.reach:]) <= eps)
-    assert r.design.extra["vsc"]["max_step"] <= eps / (10 * r.design.extra["vsc"]["S0"]) * (1 + 1e-12)
+    assert r.design.data.max_step <= eps / (10 * r.design.data.S0) * (1 + 1e-12)
     assert check(r, "vsc_band").passed is True
     g = measure(r.design, r.simulation).sigma_gain  # rest offset per unit sigma: c x~ = sigma, x~ at rest
-    c = r.design.extra["vsc"]["c"]
+    c = r.design.data.c
     assert g == pytest.approx(1.0 / (c[0] + c[2]), rel=1e-9)  # x1 = x3 at rest (no load), (c1 + c3) x3 = sigma
     assert "leaves the controlled position within" in check(r, "vsc_band").detail
 
@@ -152,6 +152,6 @@ def test_at_an_interior_plant_the_run_slides_with_that_plants_reduced_poles(elas
     assert sim.settings["plant"]["J2"] == 0.54
     run = measure(elastic_result.design, sim)
     A, B = elastic_state_space(dataclasses.replace(DEFAULTS, **p))
-    want = np.sort(reduced_poles(A, B, np.asarray(elastic_result.design.extra["vsc"]["c"])).real)
+    want = np.sort(reduced_poles(A, B, np.asarray(elastic_result.design.data.c)).real)
     assert np.max(np.abs(want - np.array([-12.0, -10.0, -8.0]))) > 0.05  # not the requested ones
     assert np.sort([z.real for z in run.poles]) == pytest.approx(want, rel=1e-3)

@@ -152,8 +152,8 @@ def test_the_box_holds_the_nominal_plant_and_the_plant_change():
     text = LINK_SPEC.read_text().replace("  perturbation: {value: 1.0, time: 1.0}\n", "  perturbation: {value: 1.0, "
                                          "time: 1.0}\n  plant_change: {time: 2.0, values: {Km: 3.0}}\n")
     result = run(parse_spec(text))
-    assert {k: list(v) for k, v in result.design.extra["vsc"]["box"].items()} == {"Km": [1.4, 3.0], "tau": [0.35, 0.65]}
-    lo, hi = result.design.extra["vsc"]["bounds"]["l_2"]["lower"], result.design.extra["vsc"]["bounds"]["l_2"]["upper"]
+    assert {k: list(v) for k, v in result.design.data.box.items()} == {"Km": [1.4, 3.0], "tau": [0.35, 0.65]}
+    lo, hi = result.design.data.bounds["l_2"].lower, result.design.data.bounds["l_2"].upper
     # l_2 = (1 - c1 tau)/Km with c1 = 5: negative on the box, so smallest at Km = 1.4, tau = 0.65, largest at
     # Km = 3.0, tau = 0.35
     assert lo == pytest.approx((1 - 5 * 0.65) / 1.4) and hi == pytest.approx((1 - 5 * 0.35) / 3.0)

@@ -99,7 +99,7 @@ def test_chattering_of_a_known_command():
 
 def test_state_regulator_corners_against_scipy(comparison, lab):
     run = comparison["state-regulator"]
-    K, N = run.design.extra["state_regulator"]["K"], run.design.extra["state_regulator"]["N"]
+    K, N = run.design.data.K, run.design.data.N
     at = corners(comparison)
     rows = _entry(lab, "state-regulator: corners of the box").rows
     assert len(at) == len(rows) == 8 and all(r.outcome == "verified" for r in rows)
@@ -145,14 +145,14 @@ def test_load_effect_against_closed_form_offsets(comparison, lab):
     effects = {label: load_effect(m, plan) for label, m in found.items()}
     # state regulator: -C (A - BK)^-1 D w, computed here from the model's NumPy state space
     A, B = elastic_state_space(p)
-    K = np.asarray(comparison["state-regulator"].design.extra["state_regulator"]["K"])
+    K = np.asarray(comparison["state-regulator"].design.data.K)
     D = np.array([0.0, 0.0, 0.0, p.R2 / p.J2])
     sr = -np.linalg.solve(A - B @ K[None, :], D)[2] * W
     assert effects["state-regulator"].predicted == pytest.approx(abs(sr), rel=1e-9)
     assert effects["state-regulator"].final == pytest.approx(abs(sr), rel=2e-3)
     # sliding-mode regulator: the rest of the reduced system on sigma = 0 solved by numpy (x2 = x4 = 0, c x = 0,
     # the link's equation at rest with the load)
-    c = np.asarray(comparison["sliding-regulator"].design.extra["vsc"]["c"])
+    c = np.asarray(comparison["sliding-regulator"].design.data.c)
     k2 = p.KR * p.R2**2 / p.J2
     x1, x3 = np.linalg.solve(np.array([[c[0], c[2]], [k2, -k2]]), [0.0, -p.R2 / p.J2 * W])
     assert effects["sliding-regulator"].predicted == pytest.approx(abs(x3), rel=1e-9)
@@ -191,7 +191,7 @@ def test_the_surface_words_come_from_the_family(comparison, lab_text):
 
 
 def test_sliding_poles_over_the_box_against_the_reduced_system(comparison, lab_text):
-    c = np.asarray(comparison["sliding-regulator"].design.extra["vsc"]["c"])
+    c = np.asarray(comparison["sliding-regulator"].design.data.c)
     keep = [0, 2, 3]
     rates = []
     for J2, Km, KR in itertools.product((0.45, 0.55), (1.8, 2.2), (180.0, 220.0)):

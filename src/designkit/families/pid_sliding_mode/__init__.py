@@ -50,17 +50,11 @@ from designkit.errors import SpecError
 from designkit.families.pid_sliding_mode import answers
 from designkit.families.pid_sliding_mode.bound import corners, design_box, perturbation_bound
 from designkit.families.pid_sliding_mode.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.pid_sliding_mode.data import LinkSlidingData
 from designkit.families.pid_sliding_mode.diagnoses import diagnose
 from designkit.families.pid_sliding_mode.figures import FIGURES
 from designkit.families.pid_sliding_mode.measure import json_summary
-from designkit.families.pid_sliding_mode.spec import (
-    EXTRA,
-    KIND,
-    PID_GAINS,
-    PidSlidingModeSpec,
-    perturbation_level,
-    validate,
-)
+from designkit.families.pid_sliding_mode.spec import KIND, PidSlidingModeSpec, perturbation_level, validate
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
 from designkit.simulation.reference import reference_for
 from designkit.synthesis import pid
@@ -164,18 +158,13 @@ def synthesize(spec: Any, plant: Any) -> Design:
     names = ("K1", "K2", "K3", "K4") if form == "servo" else ("K1", "K2", "K3")
     gains = Gains.of(Gain(k, val, *GAIN_INFO[k]) for k, val in
                      [*((k, float(values[k])) for k in names), ("a1", sf.a1), ("a2", sf.a2), ("M", M)])
-    extra = {EXTRA: {
-        "form": form, "sliding_variable": ("slm = a1 x1 + a2 x2 + x3" if form == "servo" else
-                                           "slm = a1 (x1 - xD) + a2 (x2 - xD') + x3"),
-        PID_GAINS: list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3, "g_nominal": sf.a2 * Km0 / tau0,
-        "g_range": [g_min, g_max], "M": M, "M_given": ctl.M is not None, "margin": m,
-        "xi_total": xi, "xi_parameter": xb.parameter, "xi_external": external, "xi_corner": list(xb.corner),
-        "xi_at": xb.at, "xi_sampled": xb.sampled, "hull": [list(p) for p in xb.points],
-        "x2_max": xb.x2_max, "u0_max": xb.u0_max,
-        "box": {k: list(val) for k, val in box.items()}, "nominal": [Km0, tau0], "q0": q0, "e_max": e_max,
-        "epsilon": eps, "layer": ctl.layer, "band_source": source, "band_certified": certified,
-        "strip": strip, "sdot_max": sdot, "max_step": h, "discontinuous": discontinuous, "l1": l1,
-    }}
+    data = LinkSlidingData(
+        form=form, sliding_variable=("slm = a1 x1 + a2 x2 + x3" if form == "servo" else
+                                     "slm = a1 (x1 - xD) + a2 (x2 - xD') + x3"),
+        pid_gains=names, a1=sf.a1, a2=sf.a2, p3=sf.p3, g_nominal=sf.a2 * Km0 / tau0, M=M, M_given=ctl.M is not None,
+        margin=m, perturbation=xb, box={k: tuple(val) for k, val in box.items()}, nominal=(Km0, tau0), q0=q0,
+        epsilon=eps, layer=ctl.layer, band_certified=certified, sdot_max=sdot, max_step=h,
+        discontinuous=discontinuous, l1=l1)
     zero = (complex(sf.p3),) if form == "servo" else ()
     formulas = (
         "slm' = p3 slm + (a2 Km/τ)(Δu + ξ), i.e. slm(s) = Km (Δu + ξ)/(τ p1 p2 (s − p3)) (the notes' Km/τ lacks "
@@ -187,7 +176,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         f"integration step h = {h:.4g} s (ṡlm_max = {sdot:.4g} rad)",
     )
     d = Design(kind=KIND, plant=plant, gains=gains, poles=poles, zeros=zero, reference=ref_kind, formulas=formulas,
-               notes=tuple(notes), extra=extra)
+               notes=tuple(notes), data=data)
     return with_law(d, law(d), Linearization("none", reason=REASON))
 
 
@@ -195,11 +184,11 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = u0 - M sign(slm)`` (or ``sat``, or the dead zone) with the integral ``x3' = x1 - xD`` (N*m); records
     ``slm`` (rad*s), the switching part ``du`` and the PID part ``u0`` (N*m).  ``anti_windup`` is refused at the
     spec."""
-    info = design.extra[EXTRA]
-    G = {k: float(design.gains[k]) for k in (*info[PID_GAINS], "a1", "a2", "M")}
+    info: LinkSlidingData = design.data
+    G = {k: float(design.gains[k]) for k in (*info.pid_gains, "a1", "a2", "M")}
     a1, a2, M = G["a1"], G["a2"], G["M"]
-    Km0, tau0 = info["nominal"]
-    eps, layer, form = info["epsilon"], info["layer"], info["form"]
+    Km0, tau0 = info.nominal
+    eps, layer, form = info.epsilon, info.layer, info.form
 
     def e(s: Any) -> Any:
         return s.q[0] - s.qD[0]
@@ -223,19 +212,19 @@ def law(design: Design, anti_windup: Any = None) -> Law:
             return -M * ca.fmin(ca.fmax(v / eps, -1.0), 1.0)
         return ca.if_else(ca.fabs(v) > eps, -M * ca.sign(v), 0.0)
 
-    x30 = -a1 * float(info["q0"]) if form == "servo" else 0.0
+    x30 = -a1 * float(info.q0) if form == "servo" else 0.0
     reason = (f"the relay is held over each step, so slm moves at most h sdot_max per step; "
-              f"h = {info['max_step']:.4g} s keeps that within "
-              f"the band (sdot_max = {info['sdot_max']:.4g} rad over the box)"
-              if info["discontinuous"] else
-              f"h = {info['max_step']:.4g} s resolves the boundary layer's rate |p3| + g_max M/epsilon")
+              f"h = {info.max_step:.4g} s keeps that within "
+              f"the band (sdot_max = {info.sdot_max:.4g} rad over the box)"
+              if info.discontinuous else
+              f"h = {info.max_step:.4g} s resolves the boundary layer's rate |p3| + g_max M/epsilon")
     return dynamic_law(
         KIND, design.plant, command=lambda s: u0(s) + du(s),
-        states=[State("x3", e, initial=x30)],
+        states=[State("x3", e, initial=x30, integral=True)],
         settings={"gains": design.gains.to_json(), "epsilon": eps, "layer": layer if eps is not None else None,
                   "form": form},
         signals={"slm": slm, "du": du, "u0": u0}, signal_units=("rad*s", "N*m", "N*m"),
-        discontinuous=bool(info["discontinuous"]), max_step=float(info["max_step"]), max_step_reason=reason,
+        discontinuous=bool(info.discontinuous), max_step=float(info.max_step), max_step_reason=reason,
     )
 
 

@@ -1,7 +1,7 @@
 """What the PID/sliding-mode family says of one of its runs when a study asks
 (:attr:`designkit.synthesis.family.Family.answers`) and what it predicts in closed form
 (:attr:`~designkit.synthesis.family.Family.predictions`), on the link and on the elastic joint
-(:mod:`~designkit.families.pid_sliding_mode.elastic`, its data under its own key).
+(:mod:`~designkit.families.pid_sliding_mode.elastic`, its own data type).
 
 * ``how``: how the relay held the sliding variable in its band in the run, and what that leaves free (on the
   elastic joint: the link hanging on the spring with its own lightly damped mode);
@@ -16,18 +16,18 @@ from __future__ import annotations
 from typing import Any
 
 from designkit.display.numbers import fmt_number, fmt_poles
-from designkit.families.pid_sliding_mode.spec import EXTRA, IN_BAND
+from designkit.families.pid_sliding_mode.data import ElasticSlidingData, LinkSlidingData
+from designkit.families.pid_sliding_mode.spec import IN_BAND
 from designkit.synthesis.knobs import Metric
 
 __all__ = ["ANSWERS", "PREDICTIONS", "how", "load_offset", "strategy"]
 
-def _elastic() -> tuple[str, str]:
-    """The elastic joint's design-data key and in-band check name (:mod:`~designkit.families.pid_sliding_mode.elastic`,
-    imported when asked: it extends this package's family)."""
+def _elastic_band() -> str:
+    """The elastic joint's in-band check name (:mod:`~designkit.families.pid_sliding_mode.elastic`, imported when
+    asked: it extends this package's family)."""
     from designkit.families.pid_sliding_mode.elastic import BAND
-    from designkit.families.pid_sliding_mode.elastic import EXTRA as ELASTIC
 
-    return ELASTIC, BAND
+    return BAND
 
 
 def _check(run: Any, name: str) -> Any:
@@ -39,19 +39,18 @@ def how(result: Any) -> tuple[str, ...]:
     d = result.design
     if result.simulation is None:
         return ()
-    elastic, elastic_band = _elastic()
-    if elastic in d.extra:
-        info = d.extra[elastic]
-        band = _check(result, elastic_band)
+    info = d.data
+    if isinstance(info, ElasticSlidingData):
+        band = _check(result, _elastic_band())
         if band is None:
             return ()
-        mode = info["load_mode"]
+        mode = info.load_mode
         return (f"It slides on the motor: |slm| stays at most {fmt_number(band.achieved, 3)} rad·s against the band "
-                f"{fmt_number(info['band'], 3)} rad·s ({band.status}), so the motor follows its model 1/(1 + a1 s + "
-                f"a2 s²) exactly; the link hangs on the spring with its own mode ({fmt_number(mode['omega'], 3)} "
-                f"rad/s, damping {fmt_number(mode['zeta'], 3)}), which the motor-side surface cannot damp.",)
+                f"{fmt_number(info.band, 3)} rad·s ({band.status}), so the motor follows its model 1/(1 + a1 s + "
+                f"a2 s²) exactly; the link hangs on the spring with its own mode ({fmt_number(mode.omega, 3)} "
+                f"rad/s, damping {fmt_number(mode.zeta, 3)}), which the motor-side surface cannot damp.",)
     band = _check(result, IN_BAND)
-    if EXTRA not in d.extra or band is None:
+    if not isinstance(info, LinkSlidingData) or band is None:
         return ()
     return (f"The relay holds slm = a1 x1 + a2 x2 + x3 within {fmt_number(band.achieved, 3)} rad·s of 0 "
             f"({band.status} against its band), where the response is 1/(1 + a1 s + a2 s²) whatever Km, τ and a "
@@ -63,14 +62,13 @@ def strategy(result: Any) -> tuple[str, ...]:
     d = result.design
     unit = d.plant.inputs[0].unit
     poles = fmt_poles(d.poles)
-    elastic, _ = _elastic()
-    if elastic in d.extra:
-        info = d.extra[elastic]
+    info = d.data
+    if isinstance(info, ElasticSlidingData):
         return (f"slm = a1 x1 + a2 x2 + z on the motor, z' = x1 − xD, u = u0 − M sign(slm) with u0 the PID on the "
                 f"motor: its design needs the PID matching on the rigid approximation (poles {poles} 1/s, zero on "
-                f"p3), a1 and a2 from the sliding poles, and M = {fmt_number(info['M'], 4)} {unit} above the "
+                f"p3), a1 and a2 from the sliding poles, and M = {fmt_number(info.M, 4)} {unit} above the "
                 "equivalent control along the sliding motions of the box's corners.",)
-    if EXTRA not in d.extra:
+    if not isinstance(info, LinkSlidingData):
         return ()
     return (f"u = u0 − M sign(slm), slm = a1 x1 + a2 x2 + x3, u0 the one-link PID (poles {poles} 1/s, zero on p3): its "
             "design needs the PID matching, a1 and a2 from the sliding poles, and M above the input-equivalent "
@@ -83,7 +81,7 @@ def load_offset(result: Any) -> float | None:
     d = result.design
     if pert is None or d.plant.kind == "robot":
         return None
-    if _elastic()[0] not in d.extra:
+    if not isinstance(d.data, ElasticSlidingData):
         return 0.0
     values = pert.value if isinstance(pert.value, list | tuple) else [pert.value]
     p = d.plant.params

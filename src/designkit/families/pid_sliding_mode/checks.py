@@ -21,9 +21,10 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from designkit.families.pid_sliding_mode.bound import PARAMETERS, PerturbationBound, relay_set
+from designkit.families.pid_sliding_mode.bound import PARAMETERS, relay_set
+from designkit.families.pid_sliding_mode.data import LinkSlidingData
 from designkit.families.pid_sliding_mode.measure import measure
-from designkit.families.pid_sliding_mode.spec import CHATTERING, EXTRA, IN_BAND, PRECISION
+from designkit.families.pid_sliding_mode.spec import CHATTERING, IN_BAND, PRECISION
 from designkit.verification.check import Check
 from designkit.verification.conditions import Condition, ConditionSet, certify
 from designkit.verification.suite import CheckRule, Context
@@ -31,13 +32,11 @@ from designkit.verification.suite import CheckRule, Context
 __all__ = ["CERTIFICATE_RULE", "RUN_RULE", "condition_sets", "shortfall"]
 
 
-def condition_sets(info: dict) -> dict[str, ConditionSet]:
+def condition_sets(info: LinkSlidingData) -> dict[str, ConditionSet]:
     """The labelled sets the certificate checks (module docstring)."""
-    a1, a2, p3, M = info["a1"], info["a2"], info["p3"], info["M"]
-    bound = PerturbationBound(info["xi_parameter"], info["xi_external"], tuple(info["xi_corner"]), info["xi_at"],
-                              tuple(tuple(p) for p in info["hull"]), 0.0, 0.0,
-                              info["xi_sampled"])
-    Km0, tau0 = info["nominal"]
+    a1, a2, p3, M = info.a1, info.a2, info.p3, info.M
+    bound = info.perturbation
+    Km0, tau0 = info.nominal
     sets = {
         "pid_sm_dynamics": ConditionSet(
             title="the sliding variable's dynamics and the sliding motion", parameters=PARAMETERS,
@@ -53,9 +52,9 @@ def condition_sets(info: dict) -> dict[str, ConditionSet]:
             )),
         "pid_sm_relay": relay_set(M, bound, Km0, tau0),
     }
-    band = info["band_certified"]
+    band = info.band_certified
     if band is not None:
-        xi = info["xi_total"]
+        xi = info.xi_total
         sets["pid_sm_band"] = ConditionSet(
             title="the band inside the strip where slm slm' < 0", parameters=PARAMETERS,
             conditions=(Condition(
@@ -65,25 +64,26 @@ def condition_sets(info: dict) -> dict[str, ConditionSet]:
     return sets
 
 
-def shortfall(info: dict) -> str:
+def shortfall(info: LinkSlidingData) -> str:
     """``"M = 0.8 N*m is below sup|xi| = 1.2 N*m by 0.4 N*m; M >= 1.44 N*m with the 20 % margin"``."""
-    M, xi, m = info["M"], info["xi_total"], info["margin"]
-    return (f"M = {M:.4g} N*m is below sup|ξ| = {xi:.4g} N*m (parameter change {info['xi_parameter']:.4g} N*m, "
-            f"external {info['xi_external']:.4g} N*m) by {xi - M:.3g} N*m; any M above {xi:.4g} N*m meets the "
+    M, xi, m = info.M, info.xi_total, info.margin
+    xb = info.perturbation
+    return (f"M = {M:.4g} N*m is below sup|ξ| = {xi:.4g} N*m (parameter change {xb.parameter:.4g} N*m, "
+            f"external {xb.external:.4g} N*m) by {xi - M:.3g} N*m; any M above {xi:.4g} N*m meets the "
             f"condition, M = {(1 + m) * xi:.4g} N*m keeps the {100 * m:g} % margin")
 
 
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[EXTRA]
-    box = {k: tuple(v) for k, v in info["box"].items()}
+    info: LinkSlidingData = design.data
+    xb = info.perturbation
+    box = {k: tuple(v) for k, v in info.box.items()}
     out = []
     for name, set_ in condition_sets(info).items():
         check = certify(name, set_, box, solver=ctx.solver)
         if name == "pid_sm_relay":
-            cert = {**dict(check.certificate), "M": info["M"], "sup_xi": info["xi_total"],
-                    "sup_xi_parameter": info["xi_parameter"], "sup_xi_external": info["xi_external"],
-                    "worst_corner": info["xi_corner"], "worst_time": info["xi_at"], "shortfall": info["xi_total"]
-                    - info["M"]}
+            cert = {**dict(check.certificate), "M": info.M, "sup_xi": info.xi_total,
+                    "sup_xi_parameter": xb.parameter, "sup_xi_external": xb.external,
+                    "worst_corner": list(xb.corner), "worst_time": xb.at, "shortfall": info.xi_total - info.M}
             detail = check.detail
             if check.passed is False:
                 detail = shortfall(info) + ". " + detail[:1].upper() + detail[1:]
@@ -93,7 +93,7 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="pid_sm_conditions", order=55, applies=lambda d, c: EXTRA in d.extra, run=_certificates,
+    name="pid_sm_conditions", order=55, applies=lambda d, c: isinstance(d.data, LinkSlidingData), run=_certificates,
     label="PID/sliding-mode conditions on the parameter box",
     labels={"pid_sm_dynamics": "Sliding variable and sliding motion stable (whole box)",
             "pid_sm_relay": "Relay dominates the input-equivalent perturbation (whole box)",
@@ -104,12 +104,12 @@ CERTIFICATE_RULE = CheckRule(
 
 
 def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[EXTRA]
+    info: LinkSlidingData = design.data
     run = measure(design, ctx.simulation)
     cert = {"band": run.band, "hold": run.hold, "reaching_time": run.reaching_time, "max_abs_slm": run.slm_max}
     what = {None: "the band the relay held over a step leaves",
             "saturation": "the boundary layer ε", "dead_zone": "the dead zone ε plus one held step"}[
-        None if info["epsilon"] is None else info["layer"]]
+        None if info.epsilon is None else info.layer]
     if run.reach is None:
         band = Check(IN_BAND, False, f"|slm| <= {run.band:.4g} rad*s after reaching", None, None, "rad*s",
                      f"|slm| never entered {what} ({run.band:.4g} rad*s): the loop does not slide", cert)
@@ -125,10 +125,10 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         PRECISION, dev_ok, "|x1 − x1 of the sliding motion| <= ||s/N||₁ max|slm|", run.deviation,
         run.deviation_bound - run.deviation, "rad",
         f"the position stays within {run.deviation:.4g} rad of the plant-independent sliding motion, against the "
-        f"bound ||s/N||₁ max|slm| = {info['l1']:.4g} 1/s × {run.slm_max:.4g} rad*s = {run.deviation_bound:.4g} rad "
+        f"bound ||s/N||₁ max|slm| = {info.l1:.4g} 1/s × {run.slm_max:.4g} rad*s = {run.deviation_bound:.4g} rad "
         f"and ||s/N||₁ × band = {run.deviation_at_band:.4g} rad [informational]",
         {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
-         "l1": info["l1"]}, required=False)
+         "l1": info.l1}, required=False)
     freq = run.switching_frequency
     chatter = Check(
         CHATTERING, True if ok else None, "reported", freq, None, "1/s",
@@ -145,7 +145,8 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 RUN_RULE = CheckRule(
     name="pid_sm_run", order=127,
-    applies=lambda d, c: c.simulation is not None and EXTRA in d.extra and "slm" in c.simulation.signals,
+    applies=lambda d, c: (c.simulation is not None and isinstance(d.data, LinkSlidingData)
+                          and "slm" in c.simulation.signals),
     run=_run_checks, label="Sliding mode in the simulated run",
     labels={IN_BAND: "The run stays in the band around slm = 0",
             PRECISION: "Distance from the sliding motion (measured)",

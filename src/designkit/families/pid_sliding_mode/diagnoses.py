@@ -28,8 +28,8 @@ from typing import Any
 import numpy as np
 
 from designkit.display.numbers import fmt_number, quantity
-from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA
-from designkit.families.pid_sliding_mode.spec import EXTRA, IN_BAND
+from designkit.families.pid_sliding_mode.data import LinkSlidingData, RobotSlidingData
+from designkit.families.pid_sliding_mode.spec import IN_BAND
 from designkit.synthesis.spec_change import SpecChange
 
 __all__ = ["diagnose", "run_xi"]
@@ -44,14 +44,14 @@ def _up(x: float) -> float:
     return float(f"{math.ceil(x / 10.0 ** e - 1e-9) * 10.0 ** e:.4g}")
 
 
-def run_xi(info: dict[str, Any], sim: Any) -> tuple[np.ndarray, np.ndarray] | None:
+def run_xi(info: LinkSlidingData, sim: Any) -> tuple[np.ndarray, np.ndarray] | None:
     """``(t, xi_p)``: the input-equivalent perturbation (N*m) of the run's parameter change along the run (zero
     before the change), None without a ``simulation.plant_change`` of ``Km`` or ``tau``."""
     change = (getattr(sim, "settings", None) or {}).get("plant_change") or {}
     values = change.get("values") or {}
     if change.get("time_applied") is None or not {"Km", "tau"} & set(values):
         return None
-    Km0, tau0 = (float(v) for v in info["nominal"])
+    Km0, tau0 = (float(v) for v in info.nominal)
     Km, tau = float(values.get("Km", Km0)), float(values.get("tau", tau0))
     t = np.asarray(sim.time, dtype=float)
     x2 = np.asarray(sim.state, dtype=float)[:, sim.velocities[0]]
@@ -60,27 +60,28 @@ def run_xi(info: dict[str, Any], sim: Any) -> tuple[np.ndarray, np.ndarray] | No
     return t, np.where(t >= float(change["time_applied"]), xi, 0.0)
 
 
-def _link_fix(info: dict[str, Any]) -> tuple[str, tuple[SpecChange, ...]]:
-    xi, m = float(info["xi_total"]), float(info["margin"])
+def _link_fix(info: LinkSlidingData) -> tuple[str, tuple[SpecChange, ...]]:
+    xi, m = float(info.xi_total), float(info.margin)
     value = _up((1.0 + m) * xi)
     text = (f"Give the relay M above sup|ξ| = {quantity(xi, 'N*m')}: M = {quantity(value, 'N*m')} keeps the "
             f"{fmt_number(100 * m)} % margin, the value the design chooses when the spec gives no M.")
     return text, (SpecChange(f"a relay M = {quantity(value, 'N*m')}", (("controller.M", value),)),)
 
 
-def _link_condition(info: dict[str, Any]) -> str:
-    M, xi = float(info["M"]), float(info["xi_total"])
-    box = info["box"]
-    Km, tau = info["xi_corner"]
+def _link_condition(info: LinkSlidingData) -> str:
+    M, xi = float(info.M), float(info.xi_total)
+    box = info.box
+    xb = info.perturbation
+    Km, tau = xb.corner
     return (f"the relay M = {quantity(M, 'N*m')} is below sup|ξ| = {quantity(xi, 'N*m')} over the parameter box "
             f"(Km from {fmt_number(box['Km'][0])} to {fmt_number(box['Km'][1])} (rad/s)/(N·m), τ from "
             f"{quantity(box['tau'][0], 's')} to {quantity(box['tau'][1], 's')}) by {quantity(xi - M, 'N*m')}: the "
-            f"parameter change contributes {quantity(float(info['xi_parameter']), 'N*m')} (at Km = {fmt_number(Km)}, "
-            f"τ = {quantity(tau, 's')}) and the external perturbation {quantity(float(info['xi_external']), 'N*m')}")
+            f"parameter change contributes {quantity(float(xb.parameter), 'N*m')} (at Km = {fmt_number(Km)}, "
+            f"τ = {quantity(tau, 's')}) and the external perturbation {quantity(float(xb.external), 'N*m')}")
 
 
-def _link(result: Any, check: Any, info: dict[str, Any]) -> tuple[str, str, tuple[SpecChange, ...]] | None:
-    M, xi = float(info["M"]), float(info["xi_total"])
+def _link(result: Any, check: Any, info: LinkSlidingData) -> tuple[str, str, tuple[SpecChange, ...]] | None:
+    M, xi = float(info.M), float(info.xi_total)
     if xi <= M:
         return None
     consequence = ("where ξ opposes the relay by more than M, slm slm' = p3 slm² − g (M − ξ sign(slm)) |slm| is no "
@@ -112,8 +113,8 @@ def _link(result: Any, check: Any, info: dict[str, Any]) -> tuple[str, str, tupl
     return (cause + ".", *_link_fix(info))
 
 
-def _robot_fix(info: dict[str, Any]) -> tuple[str, tuple[SpecChange, ...]]:
-    bound, m = np.asarray(info["bound"], dtype=float), float(info["margin"])
+def _robot_fix(info: RobotSlidingData) -> tuple[str, tuple[SpecChange, ...]]:
+    bound, m = np.asarray(info.bound, dtype=float), float(info.margin)
     per_joint = [_up((1.0 + m) * b) for b in bound]
     value = max(per_joint)
     worst = int(np.argmax(bound))
@@ -125,8 +126,8 @@ def _robot_fix(info: dict[str, Any]) -> tuple[str, tuple[SpecChange, ...]]:
                   SpecChange("M left out of the spec, for the design to choose per joint", (("controller.M", None),)))
 
 
-def _robot(result: Any, check: Any, info: dict[str, Any]) -> tuple[str, str, tuple[SpecChange, ...]] | None:
-    M, bound, sampled = (np.asarray(info[k], dtype=float) for k in ("M", "bound", "sampled"))
+def _robot(result: Any, check: Any, info: RobotSlidingData) -> tuple[str, str, tuple[SpecChange, ...]] | None:
+    M, bound, sampled = (np.asarray(v, dtype=float) for v in (info.M, info.bound, info.sampled))
     short = [i for i in range(M.size) if not M[i] > bound[i]]
     if not short:
         return None
@@ -164,9 +165,9 @@ def diagnose(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]]
     fail with it (module docstring), else None."""
     if check.passed is not False:
         return None
-    extra = result.design.extra
-    if check.name in LINK and EXTRA in extra:
-        return _link(result, check, extra[EXTRA])
-    if check.name in ROBOT and ROBOT_EXTRA in extra:
-        return _robot(result, check, extra[ROBOT_EXTRA])
+    data = result.design.data
+    if check.name in LINK and isinstance(data, LinkSlidingData):
+        return _link(result, check, data)
+    if check.name in ROBOT and isinstance(data, RobotSlidingData):
+        return _robot(result, check, data)
     return None

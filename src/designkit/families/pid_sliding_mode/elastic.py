@@ -39,7 +39,8 @@ import casadi as ca
 import numpy as np
 
 from designkit.errors import SpecError
-from designkit.families.pid_sliding_mode.spec import KIND, PID_GAINS
+from designkit.families.pid_sliding_mode.data import ElasticSlidingData, LoadMode
+from designkit.families.pid_sliding_mode.spec import KIND
 from designkit.families.pid_sliding_mode.surface import l1_norm, surface
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
@@ -49,10 +50,10 @@ from designkit.synthesis.linearization import Linearization
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
-__all__ = ["BAND", "EXTRA", "RELAY", "RELAY_RULE", "RUN_RULE", "extend", "law", "sliding_motion", "synthesize"]
+__all__ = ["BAND", "JSON_KEY", "RELAY", "RELAY_RULE", "RUN_RULE", "extend", "law", "sliding_motion", "synthesize"]
 
-EXTRA = "pid_sm_elastic"
-"""The key of this design's data in ``Design.extra`` (and of its ``--json`` object)."""
+JSON_KEY = "pid_sm_elastic"
+"""The key of this design's ``--json`` object (its data is an :class:`ElasticSlidingData`)."""
 RELAY, BAND = "pid_sm_elastic_relay", "pid_sm_elastic_band"
 """The names of the relay-amplitude check and of the in-band run check (read by the lab 3 answers)."""
 BAND_FRACTION = 1e-3
@@ -169,15 +170,12 @@ def synthesize(spec: Any, plant: Any) -> Design:
     nominal = sliding_motion(plant.params, sf.a1, sf.a2, values, t, r, w, q0)
     k2 = plant.params.KR * plant.params.R2**2 / plant.params.J2
     zeta = 1.0 / (2.0 * plant.params.tau2 * np.sqrt(k2))
-    extra = {EXTRA: {
-        "a1": sf.a1, "a2": sf.a2, "p3": sf.p3, "M": M, "M_given": ctl.M is not None, "margin": m,
-        "sup_du_eq": worst, "sup_at": at, "box": {k: list(v) for k, v in box.items()}, "band": band if eps is None
-        else eps, "epsilon": eps, "max_step": h, "g_range": [min(g), g_max], "l1": l1, "q0": q0,
-        "rigid": {"Km": Km_r, "tau": tau_r}, "load_mode": {"k2": k2, "omega": float(np.sqrt(k2)), "zeta": zeta},
-        "ideal_t": t[:: max(1, len(t) // 2000)].tolist(),
-        "ideal_x3": nominal["x"][:: max(1, len(t) // 2000), 2].tolist(), PID_GAINS: list(values),
-        "ideal_x1": nominal["x"][:: max(1, len(t) // 2000), 0].tolist(),
-    }}
+    every = max(1, len(t) // 2000)
+    data = ElasticSlidingData(
+        pid_gains=tuple(values), a1=sf.a1, a2=sf.a2, p3=sf.p3, M=M, sup_du_eq=worst, sup_at=at,
+        band=band if eps is None else eps, epsilon=eps, max_step=h, q0=q0, rigid=(Km_r, tau_r),
+        load_mode=LoadMode(k2, float(np.sqrt(k2)), zeta), ideal_t=t[::every], ideal_x1=nominal["x"][::every, 0],
+        ideal_x3=nominal["x"][::every, 2])
     formulas = (
         "slm = a1 x1 + a2 x2 + z (motor side), z' = x1 − xD; u = u0 − M sign(slm)",
         "on slm = 0: x1 = xD/(1 + a1 s + a2 s²), x3 = k2 x1/(s² + s/τ2 + k2) (+ the load through R2/J2)",
@@ -188,15 +186,15 @@ def synthesize(spec: Any, plant: Any) -> Design:
              f"(relative degree 3). The load's mode on slm = 0 has ω = {np.sqrt(k2):.4g} rad/s and damping "
              f"{zeta:.3g} (the link's friction only).",)
     d = Design(kind=KIND, plant=plant, gains=gains, poles=poles, zeros=(complex(sf.p3),), reference="step",
-               formulas=formulas, notes=notes, extra=extra)
+               formulas=formulas, notes=notes, data=data)
     return with_law(d, law(d), Linearization("none", reason=REASON))
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = u0 - M sign(slm)`` (or ``sat(slm/epsilon)``) on the motor side; records ``slm``, ``du``, ``u0``."""
-    info = design.extra[EXTRA]
-    G = {k: float(design.gains[k]) for k in (*info[PID_GAINS], "a1", "a2", "M")}
-    eps = info["epsilon"]
+    info: ElasticSlidingData = design.data
+    G = {k: float(design.gains[k]) for k in (*info.pid_gains, "a1", "a2", "M")}
+    eps = info.epsilon
 
     def slm(s: Any) -> Any:
         return G["a1"] * s.y[0] + G["a2"] * s.y[1] + s.state("z")
@@ -211,40 +209,42 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 
     return dynamic_law(
         KIND, design.plant, command=lambda s: u0(s) + du(s),
-        states=[State("z", lambda s: s.y[0] - s.qD[0], initial=-G["a1"] * float(info["q0"]))],
+        # z integrates the motor's position error, not the controlled (link) position's: no integral action on the
+        # link (a load leaves w/(KR R2) there), so not one of the law's integral_states
+        states=[State("z", lambda s: s.y[0] - s.qD[0], initial=-G["a1"] * float(info.q0))],
         settings={"gains": design.gains.to_json(), "epsilon": eps, "side": "motor"},
         signals={"slm": slm, "du": du, "u0": u0}, signal_units=("rad*s", "input", "input"),
-        discontinuous=eps is None, max_step=float(info["max_step"]),
-        max_step_reason=f"h = {info['max_step']:.4g} s keeps the held relay within the band {info['band']:.4g} rad*s",
+        discontinuous=eps is None, max_step=float(info.max_step),
+        max_step_reason=f"h = {info.max_step:.4g} s keeps the held relay within the band {info.band:.4g} rad*s",
     )
 
 
 def _relay(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[EXTRA]
-    M, sup = info["M"], info["sup_du_eq"]
-    at = ", ".join(f"{k} = {v:g}" for k, v in info["sup_at"].items()) or "the nominal plant"
+    info: ElasticSlidingData = design.data
+    M, sup = info.M, info.sup_du_eq
+    at = ", ".join(f"{k} = {v:g}" for k, v in info.sup_at.items()) or "the nominal plant"
     ok = sup < M
     return (Check(RELAY, ok, "M > sup|Δu_eq| on the sliding motions", M, M - sup, "input",
                   f"M = {M:.4g} is {'above' if ok else 'NOT above'} the largest equivalent switching control "
                   f"{sup:.4g} needed to stay on slm = 0 (at {at}; the nominal plant and every corner of the box "
                   "simulated with the spec's step and load): a bound from simulations, not a certificate",
-                  {"M": M, "sup_du_eq": sup, "at": info["sup_at"]}),)
+                  {"M": M, "sup_du_eq": sup, "at": dict(info.sup_at)}),)
 
 
 def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[EXTRA]
+    info: ElasticSlidingData = design.data
     sim = ctx.simulation
     t = np.asarray(sim.time, float)
     slm = np.asarray(sim.signals["slm"], float)
     u = np.asarray(sim.u_command[:, 0], float)
-    band = float(info["band"])
+    band = float(info.band)
     worst = float(np.max(np.abs(slm)))
     ok = worst <= band * (1 + 1e-9)
     switches = int(np.count_nonzero(np.diff(np.sign(slm)) != 0))
     rate = switches / float(t[-1] - t[0])
     tv = float(np.sum(np.abs(np.diff(u))))
     x3 = np.asarray(sim.state[:, 2], float)
-    ideal = np.interp(t, info["ideal_t"], info["ideal_x3"])
+    ideal = np.interp(t, info.ideal_t, info.ideal_x3)
     dev = float(np.max(np.abs(x3 - ideal)))
     return (
         Check(BAND, ok, f"|slm| <= {band:.4g} rad*s", worst, band - worst, "rad*s",
@@ -256,16 +256,17 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
               "[informational]", {"switches": switches, "total_variation_u": tv}, required=False),
         Check("pid_sm_elastic_motion", True, "reported", dev, None, "rad",
               f"the load stays within {dev:.4g} rad of its sliding motion x3 = k2 x1/(s² + s/τ2 + k2) at the "
-              f"nominal plant (mode {info['load_mode']['omega']:.4g} rad/s, damping {info['load_mode']['zeta']:.3g})"
+              f"nominal plant (mode {info.load_mode.omega:.4g} rad/s, damping {info.load_mode.zeta:.3g})"
               " [informational]", {"deviation": dev}, required=False),
     )
 
 
-RELAY_RULE = CheckRule(name=RELAY, order=55, applies=lambda d, c: EXTRA in d.extra, run=_relay,
+RELAY_RULE = CheckRule(name=RELAY, order=55, applies=lambda d, c: isinstance(d.data, ElasticSlidingData), run=_relay,
                        label="Relay dominates the equivalent control (elastic joint)")
 RUN_RULE = CheckRule(
     name="pid_sm_elastic_run", order=127,
-    applies=lambda d, c: c.simulation is not None and EXTRA in d.extra and "slm" in c.simulation.signals,
+    applies=lambda d, c: (c.simulation is not None and isinstance(d.data, ElasticSlidingData)
+                          and "slm" in c.simulation.signals),
     run=_run, label="Sliding mode of the motor in the simulated run (elastic joint)",
     labels={BAND: "The motor stays in the band around slm = 0",
             "pid_sm_elastic_chattering": "Chattering (measured)",
@@ -295,9 +296,9 @@ def sliding_variable_figure(result: Any) -> Any:
     from designkit.display.svg import render_tagged
 
     sim = result.simulation
-    if sim is None or EXTRA not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, ElasticSlidingData):
         return None
-    band = float(result.design.extra[EXTRA]["band"])
+    band = float(result.design.data.band)
     svg, keys, _ = render_tagged(_draw_slm, np.asarray(sim.time, float), np.asarray(sim.signals["slm"], float), band)
     drawn = [w for k, w in (("band", "the band (green)"), ("slm", "the motor's sliding variable (blue)")) if k in keys]
     return Figure("PID/sliding mode on the elastic joint: the motor's sliding variable",
@@ -305,16 +306,16 @@ def sliding_variable_figure(result: Any) -> Any:
                   + " and ".join(drawn) + ".", svg, "fig-pid-sm-elastic-slm.svg", (BAND,))
 
 
-def _draw_motion(t: np.ndarray, ref: np.ndarray, x: np.ndarray, info: dict) -> Any:
+def _draw_motion(t: np.ndarray, ref: np.ndarray, x: np.ndarray, info: ElasticSlidingData) -> Any:
     from designkit.display.figure import REFERENCE_STYLE
     from designkit.display.svg import BLUE, GREEN, ORANGE, PURPLE, RED, new_figure, plot_decimated, tag
 
     fig, (ax,) = new_figure(6.8, 4.0)
     tag(fig, "reference", *plot_decimated(ax, t, ref, color=GREEN, **REFERENCE_STYLE, label="reference xD"))
-    it = np.asarray(info["ideal_t"], float)
-    tag(fig, "ideal-motor", ax.plot(it, info["ideal_x1"], color=ORANGE, lw=1.6, label="motor on slm = 0: xD/N(s)")[0])
+    it = np.asarray(info.ideal_t, float)
+    tag(fig, "ideal-motor", ax.plot(it, info.ideal_x1, color=ORANGE, lw=1.6, label="motor on slm = 0: xD/N(s)")[0])
     tag(fig, "motor", *plot_decimated(ax, t, x[:, 0], color=BLUE, lw=1.0, label="motor x1"))
-    tag(fig, "ideal-link", ax.plot(it, info["ideal_x3"], color=RED, lw=1.6, ls="--",
+    tag(fig, "ideal-link", ax.plot(it, info.ideal_x3, color=RED, lw=1.6, ls="--",
                                    label="link on slm = 0: k2 x1/(s² + s/τ2 + k2)")[0])
     tag(fig, "link", *plot_decimated(ax, t, x[:, 2], color=PURPLE, lw=1.0, label="link x3"))
     ax.set_xlim(t[0], t[-1])
@@ -330,19 +331,19 @@ def motion_figure(result: Any) -> Any:
     from designkit.display.svg import render_tagged
 
     sim = result.simulation
-    if sim is None or EXTRA not in result.design.extra:
+    info = result.design.data
+    if sim is None or not isinstance(info, ElasticSlidingData):
         return None
-    info = result.design.extra[EXTRA]
     t = np.asarray(sim.time, float)
     svg, keys, _ = render_tagged(_draw_motion, t, np.asarray(sim.reference[:, 0, 0], float),
                                  np.asarray(sim.state, float), info)
     words = {"reference": "the reference (dash-dot)", "ideal-motor": "the motor's sliding motion (orange)",
              "motor": "the simulated motor (blue)", "ideal-link": "the link's motion on the surface (dashed, red)",
              "link": "the simulated link (purple)"}
-    mode = info["load_mode"]
+    mode = info.load_mode
     return Figure("PID/sliding mode on the elastic joint: motor and link",
                   f"The motor follows its sliding motion; the link hangs on the spring with its own mode "
-                  f"({mode['omega']:.4g} rad/s, damping {mode['zeta']:.3g}). Drawn: "
+                  f"({mode.omega:.4g} rad/s, damping {mode.zeta:.3g}). Drawn: "
                   + ", ".join(words[k] for k in keys if k in words) + ".", svg, "fig-pid-sm-elastic-motion.svg",
                   ("pid_sm_elastic_motion",))
 
@@ -350,25 +351,28 @@ def motion_figure(result: Any) -> Any:
 def json_summary(result: Any) -> dict[str, Any]:
     """The gains, ``M`` against ``sup|du_eq|``, the load mode on the sliding surface."""
     d = result.design
-    info = d.extra[EXTRA]
-    return {EXTRA: {"gains": {k: float(d.gains[k]) for k in info[PID_GAINS]}, "a1": info["a1"], "a2": info["a2"],
-                    "p3": info["p3"], "M": info["M"], "sup_du_eq": info["sup_du_eq"], "band": info["band"],
-                    "max_step": info["max_step"], "rigid": info["rigid"], "load_mode": info["load_mode"]}}
+    info: ElasticSlidingData = d.data
+    return {JSON_KEY: {"gains": {k: float(d.gains[k]) for k in info.pid_gains}, "a1": info.a1, "a2": info.a2,
+                       "p3": info.p3, "M": info.M, "sup_du_eq": info.sup_du_eq, "band": info.band,
+                       "max_step": info.max_step, "rigid": {"Km": info.rigid[0], "tau": info.rigid[1]},
+                       "load_mode": info.load_mode.to_json()}}
 
 
 def extend(family: Any) -> Any:
     """``family`` (the link's) also designing for the elastic joint: synthesis, law, checks and JSON dispatched on
-    the plant kind (the elastic design's data is under :data:`EXTRA`)."""
+    the plant kind (an elastic design's data is an :class:`ElasticSlidingData`)."""
     base_synth, base_law, base_json = family.synthesize, family.law, family.json
 
     def synth(spec: Any, plant: Any) -> Design:
         return synthesize(spec, plant) if plant.kind == "elastic_joint" else base_synth(spec, plant)
 
     def law_of(design: Design, anti_windup: Any = None) -> Law:
-        return law(design, anti_windup) if EXTRA in design.extra else base_law(design, anti_windup)
+        if isinstance(design.data, ElasticSlidingData):
+            return law(design, anti_windup)
+        return base_law(design, anti_windup)
 
     def json_of(result: Any) -> Any:
-        if EXTRA in result.design.extra:
+        if isinstance(result.design.data, ElasticSlidingData):
             return json_summary(result)
         return base_json(result) if base_json is not None else {}
 

@@ -15,8 +15,9 @@ import numpy as np
 from designkit.display.figure import EVENT_STYLE, REFERENCE_STYLE, Figure, plain_ticks
 from designkit.display.numbers import sci
 from designkit.display.svg import BLUE, GREEN, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
+from designkit.families.pid_sliding_mode.data import LinkSlidingData
 from designkit.families.pid_sliding_mode.measure import Run, measure
-from designkit.families.pid_sliding_mode.spec import CHATTERING, EXTRA, IN_BAND, PRECISION
+from designkit.families.pid_sliding_mode.spec import CHATTERING, IN_BAND, PRECISION
 
 __all__ = ["FIGURES"]
 
@@ -73,7 +74,7 @@ _SLM = {
 def sliding_variable_figure(result: Any) -> Figure | None:
     """``slm(t)`` on a symmetric-log axis linear within the band."""
     sim = result.simulation
-    if sim is None or EXTRA not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, LinkSlidingData):
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_slm, run, sim)
@@ -121,7 +122,7 @@ _POS = {
 def position_figure(result: Any) -> Figure | None:
     """The position against the sliding motion, and their difference against the band's precision."""
     sim = result.simulation
-    if sim is None or EXTRA not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, LinkSlidingData):
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_position, run, sim)
@@ -158,7 +159,7 @@ _U = {
 def control_figure(result: Any) -> Figure | None:
     """The command and its PID and switching parts."""
     sim = result.simulation
-    if sim is None or EXTRA not in result.design.extra:
+    if sim is None or not isinstance(result.design.data, LinkSlidingData):
         return None
     run = measure(result.design, sim)
     svg, keys, _ = render_tagged(_draw_u, run, sim)

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.pid_sliding_mode.spec import EXTRA, KIND, PID_GAINS
+from designkit.families.pid_sliding_mode.data import LinkSlidingData
+from designkit.families.pid_sliding_mode.spec import KIND
 from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 
 __all__ = ["Run", "json_summary", "measure"]
@@ -54,18 +55,18 @@ def hold_of(sim: Any) -> float:
     return max(float(st["dt"]), float(st.get("sampling_period") or 0.0)) + float(st.get("delay") or 0.0)
 
 
-def band_of(info: dict, hold: float) -> float:
-    """The band ``|slm| <= band`` (rad*s) this run's hold leaves (module docstring)."""
-    if info["epsilon"] is None:
-        return hold * float(info["sdot_max"])
-    if info["layer"] == "saturation":
-        return float(info["epsilon"])
-    return float(info["epsilon"]) + hold * float(info["sdot_max"])
+def band_of(info: LinkSlidingData, hold: float) -> float:
+    """The band ``|slm| <= band`` (rad*s) this run's hold (s) leaves (module docstring)."""
+    if info.epsilon is None:
+        return hold * float(info.sdot_max)
+    if info.layer == "saturation":
+        return float(info.epsilon)
+    return float(info.epsilon) + hold * float(info.sdot_max)
 
 
 def measure(design: Any, sim: Any) -> Run:
     """The measurements of ``sim``, a run of ``design`` (module docstring)."""
-    info = design.extra[EXTRA]
+    info: LinkSlidingData = design.data
     sf = surface(design.poles)
     t = np.asarray(sim.time, float)
     ref = np.asarray(sim.reference[:, 0, :], float)
@@ -75,10 +76,10 @@ def measure(design: Any, sim: Any) -> Run:
     u = np.asarray(sim.u_command[:, 0], float)
     hold = hold_of(sim)
     band = band_of(info, hold)
-    x1i = ideal_motion(sf, t, ref, info["form"], start=float(x1[0]))[0]
+    x1i = ideal_motion(sf, t, ref, info.form, start=float(x1[0]))[0]
     idx = np.flatnonzero(np.abs(slm) <= band * (1 + 1e-9))
     reach = int(idx[0]) if idx.size else None
-    l1 = float(info["l1"])
+    l1 = float(info.l1)
     slm_max = float(np.max(np.abs(slm)))
     if reach is None:
         return Run(band, hold, None, None, None, None, slm_max, None, l1 * slm_max, l1 * band, 0, 0.0, None,
@@ -113,20 +114,21 @@ def json_summary(result: Any) -> dict[str, Any]:
     """The family's object of ``synth --json`` / ``verify --json``: the PID gains, ``M`` with the bound
     it covers, and what the run measured."""
     d = result.design
-    info = d.extra[EXTRA]
+    info: LinkSlidingData = d.data
+    xb = info.perturbation
     out: dict[str, Any] = {
-        "form": info["form"], "sliding_variable": info["sliding_variable"],
-        "gains": {k: float(d.gains[k]) for k in info[PID_GAINS]},
-        "a1": info["a1"], "a2": info["a2"], "p3": info["p3"], "zero": info["p3"],
-        "sliding_gain_nominal": info["g_nominal"],
-        "M": [info["M"]], "M_given": info["M_given"],
-        "bound": {"total": info["xi_total"], "parameter_change": info["xi_parameter"],
-                  "external": info["xi_external"], "parameter_change_on_samples": info["xi_sampled"],
-                  "worst_corner": info["xi_corner"], "at_time": info["xi_at"],
-                  "box": info["box"], "margin": info["margin"]},
-        "M_over_bound": info["M"] / info["xi_total"] if info["xi_total"] > 0 else None,
-        "epsilon": info["epsilon"], "layer": info["layer"] if info["epsilon"] is not None else None,
-        "max_step": info["max_step"], "sdot_max": info["sdot_max"], "l1_deviation_per_slm": info["l1"],
+        "form": info.form, "sliding_variable": info.sliding_variable,
+        "gains": {k: float(d.gains[k]) for k in info.pid_gains},
+        "a1": info.a1, "a2": info.a2, "p3": info.p3, "zero": info.p3,
+        "sliding_gain_nominal": info.g_nominal,
+        "M": [info.M], "M_given": info.M_given,
+        "bound": {"total": info.xi_total, "parameter_change": xb.parameter,
+                  "external": xb.external, "parameter_change_on_samples": xb.sampled,
+                  "worst_corner": list(xb.corner), "at_time": xb.at,
+                  "box": {k: list(v) for k, v in info.box.items()}, "margin": info.margin},
+        "M_over_bound": info.M / info.xi_total if info.xi_total > 0 else None,
+        "epsilon": info.epsilon, "layer": info.layer if info.epsilon is not None else None,
+        "max_step": info.max_step, "sdot_max": info.sdot_max, "l1_deviation_per_slm": info.l1,
     }
     sim = result.simulation
     if sim is not None and "slm" in sim.signals:

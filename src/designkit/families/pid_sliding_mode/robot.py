@@ -27,27 +27,27 @@ measured (:mod:`~designkit.families.pid_sliding_mode.robot_checks`) on the true 
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from designkit.errors import ModelError, SpecError
-from designkit.families.pid_sliding_mode.spec import KIND, PID_GAINS
+from designkit.families.pid_sliding_mode.data import RobotSlidingData
+from designkit.families.pid_sliding_mode.spec import KIND
 from designkit.families.pid_sliding_mode.surface import Surface, ideal_motion, l1_norm, surface
 from designkit.simulation.reference import reference_for
 from designkit.spec.fields import joint_values
 from designkit.spec.workspace import workspace_box
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_law
-from designkit.synthesis.design import Design, Gain, Gains
+from designkit.synthesis.design import Design, Gain, Gains, freeze
 from designkit.synthesis.law import Law, State, dynamic_law
 from designkit.synthesis.linearization import Linearization
 
-__all__ = ["ROBOT_EXTRA", "law", "motion_box", "parameter_box", "sliding_acceleration", "synthesize"]
+__all__ = ["law", "motion_box", "parameter_box", "sliding_acceleration", "synthesize"]
 
-ROBOT_EXTRA = "pid_sm_robot"
-"""The key of the robot design's data in ``Design.extra``."""
 BAND_FRACTION, LAYER_STEPS, SAT_RESOLUTION = 1e-3, 10.0, 0.2
 """As the one-link design (package module): default switching band, dead-zone and saturation steps."""
 GAIN_INFO = {"K1": ("N*m/rad", "proportional"), "K2": ("N*m*s/rad", "derivative (rate feedback)"),
@@ -201,36 +201,29 @@ def synthesize(spec: Any, plant: Any) -> Design:
             narrowed = (strip > 0) & (band > strip / 2)
             band = np.where(narrowed, strip / 2, band)
         sdot = abs(sf.p3) * band + g * (M + upper)
-        h, certified, discontinuous = float(np.min(band / sdot)), band, True
+        h, discontinuous = float(np.min(band / sdot)), True
     elif ctl.layer == "dead_zone":
         sdot = abs(sf.p3) * eps + g * (M + upper)
         h = float(np.min(eps / (LAYER_STEPS * sdot)))
-        certified, discontinuous = np.full(n, eps * (1 + 1 / LAYER_STEPS)), True
+        discontinuous = True
     else:
         sdot = abs(sf.p3) * eps + g * (M + upper)
         h = float(SAT_RESOLUTION / np.max(abs(sf.p3) + g * M / eps))
-        certified, discontinuous = None, False
+        discontinuous = False
     names = ("K1", "K2", "K3", "K4") if form == "servo" else ("K1", "K2", "K3")
     glist = [Gain(k, [float(gj[k]) for gj in gains], *GAIN_INFO[k]) for k in names]
     glist += [Gain("a1", sf.a1, "s", "sliding variable, q coefficient: -(1/p1 + 1/p2)"),
               Gain("a2", sf.a2, "s^2", "sliding variable, q' coefficient: 1/(p1 p2)"),
               Gain("M", M.tolist(), "N*m", "relay amplitude per joint (the hierarchy of control)")]
-    extra = {ROBOT_EXTRA: {
-        "form": form, PID_GAINS: list(names), "a1": sf.a1, "a2": sf.a2, "p3": sf.p3,
-        "gains": [{k: float(gj[k]) for k in names} for gj in gains],
-        "links": [{"Km": lk.Km, "tau": lk.tau, "inertia": lk.inertia, "damping": lk.damping} for lk in links],
-        "inertia_range": d_range, "gravity_feedforward": ctl.gravity_feedforward,
-        "M": M.tolist(), "M_given": ctl.M is not None, "margin": m,
-        "bound": list(enc.upper), "sampled": list(enc.sampled), "argmax": list(enc.argmax),
-        "terms": list(enc.terms), "boxes": enc.boxes, "converged": list(enc.converged), "seconds": enc.seconds,
-        "tolerance": enc.rel_tol, "work_limit": enc.max_boxes,
-        "workspace": box, "parameter_box": box_rows,
-        "acceleration_rows": rows.tolist(), "sliding_acceleration": ahat.tolist(),
-        "coulomb": Fc.tolist(), "q0": starts.tolist(), "e_max": e_max.tolist(),
-        "epsilon": eps, "layer": ctl.layer, "band_certified": None if certified is None else list(certified),
-        "strip": strip.tolist(), "sdot_max": sdot.tolist(), "sliding_gain": g.tolist(), "max_step": h,
-        "discontinuous": discontinuous, "l1": l1,
-    }}
+    data = RobotSlidingData(
+        form=form, pid_gains=names, a1=sf.a1, a2=sf.a2, p3=sf.p3,
+        gains=tuple({k: float(gj[k]) for k in names} for gj in gains), links=tuple(links),
+        inertia_range=tuple(tuple(r) for r in d_range), gravity_feedforward=ctl.gravity_feedforward,
+        M=tuple(M.tolist()), M_given=ctl.M is not None, margin=m,
+        enclosure=dataclasses.replace(enc, argmax=freeze(tuple(enc.argmax)), terms=freeze(tuple(enc.terms))),
+        workspace=box, parameter_box=tuple(box_rows), acceleration_rows=tuple(map(tuple, rows.tolist())),
+        sliding_acceleration=tuple(ahat.tolist()), coulomb=tuple(Fc.tolist()), q0=tuple(starts.tolist()),
+        epsilon=eps, layer=ctl.layer, sdot_max=tuple(sdot.tolist()), max_step=h, discontinuous=discontinuous, l1=l1)
     formulas = (
         "−ξ_i = (D_ii(q) − D̂_i) q̈_i + Σ_{j≠i} D_ij(q) q̈_j + Σ_jk Γ_ijk(q) q̇_j q̇_k + [g_i(q)] + Fc_i sign(q̇_i)"
         if not box_rows else
@@ -242,7 +235,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     )
     d = Design(kind=KIND, plant=plant, gains=Gains.of(glist), poles=poles,
                zeros=(complex(sf.p3),) if form == "servo" else (), reference=ref_kind, formulas=formulas,
-               notes=tuple(notes), extra=extra)
+               notes=tuple(notes), data=data)
     reason = ("the law switches on slm_i = 0 (the relays M_i sign(slm_i)): no linearization describes the loop; "
               "the relay amplitudes are certified over the workspace, velocity and acceleration box"
               + (" and the parameter box" if box_rows else "") + " instead")
@@ -252,12 +245,12 @@ def synthesize(spec: Any, plant: Any) -> Design:
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u_i = u0_i + du_i (+ g^_i(q))`` per joint, with the integrals ``x3_i' = q_i - qD_i`` (N*m); records
     ``slm<i>`` (rad*s), ``du<i>`` and ``u0<i>`` (N*m)."""
-    info = design.extra[ROBOT_EXTRA]
+    info: RobotSlidingData = design.data
     plant = design.plant
     n = plant.n_joints
-    a1, a2 = info["a1"], info["a2"]
-    M, G, links = info["M"], info["gains"], info["links"]
-    eps, layer, form = info["epsilon"], info["layer"], info["form"]
+    a1, a2 = info.a1, info.a2
+    M, G, links = info.M, info.gains, info.links
+    eps, layer, form = info.epsilon, info.layer, info.form
     gravity = plant.robot.functions["gravity_torque"]
     p = plant.model_parameters()
 
@@ -279,7 +272,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
             e = s.q[i] - s.qD[i]
             if form == "servo":
                 return -k["K1"] * e - k["K2"] * s.qd[i] - k["K3"] * s.state(f"x3_{i + 1}") + k["K3"] * k["K4"] * s.qD[i]
-            return (links[i]["inertia"] * s.qDdd[i] + links[i]["damping"] * s.qd[i] - k["K1"] * e
+            return (links[i].inertia * s.qDdd[i] + links[i].damping * s.qd[i] - k["K1"] * e
                     - k["K2"] * (s.qd[i] - s.qDd[i]) - k["K3"] * s.state(f"x3_{i + 1}"))
         return f
 
@@ -295,25 +288,26 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 
     def command(s: Any) -> Any:
         u = ca.vertcat(*[u0(i)(s) + du(i)(s) for i in range(n)])
-        return u + g_hat(s) if info["gravity_feedforward"] == "measured" else u
+        return u + g_hat(s) if info.gravity_feedforward == "measured" else u
 
     def error(i: int) -> Any:
         return lambda s: s.q[i] - s.qD[i]
 
-    q0 = info["q0"]
-    states = [State(f"x3_{i + 1}", error(i), initial=(-a1 * q0[i] if form == "servo" else 0.0)) for i in range(n)]
+    q0 = info.q0
+    states = [State(f"x3_{i + 1}", error(i), initial=(-a1 * q0[i] if form == "servo" else 0.0), integral=True)
+              for i in range(n)]
     signals: dict[str, Any] = {}
     for i in range(n):
         signals[f"slm{i + 1}"] = slm(i)
         signals[f"du{i + 1}"] = du(i)
         signals[f"u0{i + 1}"] = u0(i)
-    reason = (f"h = {info['max_step']:.4g} s: the relays held over a step move each slm_i by at most h sdot_max_i, "
-              "within its band" if info["discontinuous"] else
-              f"h = {info['max_step']:.4g} s resolves the boundary layers' rate |p3| + g_i M_i/epsilon")
+    reason = (f"h = {info.max_step:.4g} s: the relays held over a step move each slm_i by at most h sdot_max_i, "
+              "within its band" if info.discontinuous else
+              f"h = {info.max_step:.4g} s resolves the boundary layers' rate |p3| + g_i M_i/epsilon")
     return dynamic_law(
         KIND, plant, command=command, states=states,
         settings={"M": list(M), "epsilon": eps, "layer": layer if eps is not None else None, "form": form,
-                  "gravity_feedforward": info["gravity_feedforward"]},
+                  "gravity_feedforward": info.gravity_feedforward},
         signals=signals, signal_units=("rad*s", "N*m", "N*m") * n,
-        discontinuous=bool(info["discontinuous"]), max_step=float(info["max_step"]), max_step_reason=reason,
+        discontinuous=bool(info.discontinuous), max_step=float(info.max_step), max_step_reason=reason,
     )

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.pid_sliding_mode.data import RobotSlidingData
 from designkit.families.pid_sliding_mode.measure import hold_of
-from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA
 from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
@@ -42,7 +42,7 @@ def _vec(values: Any, fmt: str = "{:.3g}") -> str:
     return "(" + ", ".join(fmt.format(float(v)) for v in values) + ")"
 
 
-def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+def xi_at(plant: Any, info: RobotSlidingData, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
           P: np.ndarray | None = None) -> np.ndarray:
     """``xi`` (N*m, shape (N, n)) at the points ``(q, qd, qdd)`` by Newton--Euler: ``D^_i q_i'' + f_i q_i' - (tau_i
     - g^_i)`` with ``tau`` the inverse dynamics (friction included) of the arm with the parameters ``P`` of each
@@ -53,27 +53,27 @@ def xi_at(plant: Any, info: dict, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray
     robot, p = plant.robot, plant.model_parameters()
     q, qd, qdd = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (q, qd, qdd))
     tau = evaluate_rows(robot, "inverse_dynamics", [q, qd, qdd], P, p).reshape(q.shape)
-    if info["gravity_feedforward"] == "measured":
+    if info.gravity_feedforward == "measured":
         tau = tau - robot.gravity_torque(q, p=p).reshape(q.shape)
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
-    f = np.array([lk["damping"] for lk in info["links"]])
+    Dh = np.array([lk.inertia for lk in info.links])
+    f = np.array([lk.damping for lk in info.links])
     return Dh * qdd + f * qd - tau
 
 
-def parameter_values(info: dict, p: Any) -> dict[str, float]:
+def parameter_values(info: RobotSlidingData, p: Any) -> dict[str, float]:
     """The uncertain parameters' values (SI units) in a whole parameter vector ``p``, by name."""
-    return {row["name"]: float(p[row["index"]]) for row in info.get("parameter_box", [])}
+    return {row["name"]: float(p[row["index"]]) for row in info.parameter_box}
 
 
-def recheck(plant: Any, info: dict, points: int = RECHECK, seed: int = 1) -> tuple[np.ndarray, list[dict]]:
+def recheck(plant: Any, info: RobotSlidingData, points: int = RECHECK, seed: int = 1) -> tuple[np.ndarray, list[dict]]:
     """Per joint the largest ``|xi_i|`` at ``points`` random points of its box (half of them on the velocity,
     acceleration and parameter vertices; the parameters drawn from ``plant.uncertainty``'s box), and where: a NumPy
     re-check of the proven bound."""
-    ws = info["workspace"]
+    ws = info.workspace
     lo, hi = np.array(ws["low"]), np.array(ws["high"])
     V = np.array(ws["velocity"])
-    rows = np.array(info["acceleration_rows"])
-    box = info.get("parameter_box", [])
+    rows = np.array(info.acceleration_rows)
+    box = info.parameter_box
     n = lo.size
     rng = np.random.default_rng(seed)
     best, where = np.zeros(n), []
@@ -101,18 +101,18 @@ def recheck(plant: Any, info: dict, points: int = RECHECK, seed: int = 1) -> tup
     return best, where
 
 
-def _at(info: dict, at: dict) -> str:
+def _at(info: RobotSlidingData, at: dict) -> str:
     """Where a value is attained, in words and units."""
     s = f"q = {_vec(at['q'])} rad, q̇ = {_vec(at['qd'])} rad/s, q̈ = {_vec(at['qdd'])} rad/s²"
-    units = {row["name"]: row["unit"] for row in info.get("parameter_box", [])}
+    units = {row["name"]: row["unit"] for row in info.parameter_box}
     if "p" in at:
         s += "".join(f", {k} = {v:.4g} {units[k]}" for k, v in parameter_values(info, at["p"]).items())
     return s
 
 
-def box_words(info: dict) -> str:
+def box_words(info: RobotSlidingData) -> str:
     """The parameter box in words (empty without one)."""
-    box = info.get("parameter_box", [])
+    box = info.parameter_box
     if not box:
         return ""
     return ("the true arm's parameters anywhere in " + ", ".join(
@@ -121,15 +121,15 @@ def box_words(info: dict) -> str:
 
 
 def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[ROBOT_EXTRA]
-    M, bound, sampled = (np.array(info[k]) for k in ("M", "bound", "sampled"))
+    info: RobotSlidingData = design.data
+    M, bound, sampled = (np.array(v) for v in (info.M, info.bound, info.sampled))
     re, re_at = recheck(design.plant, info)
     covered = re <= bound * (1 + 1e-12) + 1e-12
     dominates = bound < M
     ok = bool(np.all(covered) and np.all(dominates))
     parts = []
     for i in range(M.size):
-        at = info["argmax"][i]
+        at = info.enclosure.argmax[i]
         s = (f"joint {i + 1}: M = {M[i]:.4g} N·m against the proven sup|ξ| = {bound[i]:.4g} N·m (attained "
              f"{sampled[i]:.4g} N·m at {_at(info, at)}; re-check by Newton–Euler at {RECHECK} random points: "
              f"largest {re[i]:.4g} N·m)")
@@ -137,28 +137,29 @@ def _hierarchy(design: Any, ctx: Context) -> tuple[Check, ...]:
             s += (f" — M is below the bound by {bound[i] - M[i]:.4g} N·m ({100 * (bound[i] - M[i]) / bound[i]:.3g} %)"
                   + (", and below the attained value: the relay certainly does not dominate ξ there"
                      if M[i] < sampled[i] else "")
-                  + f"; M ≥ {bound[i]:.4g} N·m meets the condition, {(1 + info['margin']) * bound[i]:.4g} N·m keeps "
-                    f"the {100 * info['margin']:g} % margin")
+                  + f"; M ≥ {bound[i]:.4g} N·m meets the condition, {(1 + info.margin) * bound[i]:.4g} N·m keeps "
+                    f"the {100 * info.margin:g} % margin")
         if not covered[i]:
             s += f" — the re-check found {re[i]:.4g} N·m above the proven bound: the enclosure is wrong"
         parts.append(s)
     over = box_words(info)
+    enc = info.enclosure
     work = (("over " + over + "; " if over else "")
-            + f"{info['boxes']} {'boxes of configurations and parameters' if over else 'configuration boxes'} in "
-            f"{info['seconds']:.3g} s (tolerance {info['tolerance']:g}, work "
-            f"limit {info['work_limit']} boxes per joint; converged: "
-            + ", ".join("yes" if c else "no" for c in info["converged"]) + ")")
-    cert = {"M": info["M"], "bound": info["bound"], "sampled": info["sampled"], "argmax": info["argmax"],
-            "terms": info["terms"], "recheck_max": re.tolist(), "recheck_at": re_at, "recheck_points": RECHECK,
-            "boxes": info["boxes"], "seconds": info["seconds"], "converged": info["converged"],
-            "acceleration_rows": info["acceleration_rows"], "workspace": info["workspace"],
-            "parameter_box": info.get("parameter_box", [])}
+            + f"{enc.boxes} {'boxes of configurations and parameters' if over else 'configuration boxes'} in "
+            f"{enc.seconds:.3g} s (tolerance {enc.rel_tol:g}, work "
+            f"limit {enc.max_boxes} boxes per joint; converged: "
+            + ", ".join("yes" if c else "no" for c in info.enclosure.converged) + ")")
+    cert = {"M": info.M, "bound": info.bound, "sampled": info.sampled, "argmax": info.enclosure.argmax,
+            "terms": info.enclosure.terms, "recheck_max": re.tolist(), "recheck_at": re_at, "recheck_points": RECHECK,
+            "boxes": info.enclosure.boxes, "seconds": info.enclosure.seconds, "converged": info.enclosure.converged,
+            "acceleration_rows": info.acceleration_rows, "workspace": info.workspace,
+            "parameter_box": info.parameter_box}
     return (Check(HIERARCHY, ok, "M_i > proven sup|ξ_i| over joint i's box, every joint", float(np.min(M - bound)),
                   float(np.min(M - bound)), "N*m", "; ".join(parts) + ". Bound: " + work + ".", cert),)
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="pid_sm_hierarchy", order=55, applies=lambda d, c: ROBOT_EXTRA in d.extra, run=_hierarchy,
+    name="pid_sm_hierarchy", order=55, applies=lambda d, c: isinstance(d.data, RobotSlidingData), run=_hierarchy,
     label="Hierarchy of control: each relay above its joint's proven perturbation bound",
     labels={HIERARCHY: "Every joint's relay dominates its proven sup|ξ| (workspace, velocity and acceleration box)"},
     glossary=(("ξ_i", "the torque joint i's simplified link leaves out: inertia variation, coupling, Coriolis and "
@@ -188,7 +189,7 @@ def run_perturbation(design: Any, sim: Any, plant: Any = None) -> tuple[np.ndarr
     design's (nominal parameters)."""
     from designkit.models.perturbation import evaluate_rows
 
-    info = design.extra[ROBOT_EXTRA]
+    info: RobotSlidingData = design.data
     true = design.plant if plant is None else plant
     n = true.n_joints
     x = np.asarray(sim.state, dtype=float)
@@ -197,12 +198,12 @@ def run_perturbation(design: Any, sim: Any, plant: Any = None) -> tuple[np.ndarr
     P = run_parameters(sim, true)
     p0 = design.plant.model_parameters()
     qdd = evaluate_rows(true.robot, "forward_dynamics", [q, qd, u], P, p0).reshape(q.shape)
-    ghat = true.robot.gravity_torque(q, p=p0).reshape(q.shape) if info["gravity_feedforward"] == "measured" else 0.0
-    Dh = np.array([lk["inertia"] for lk in info["links"]])
-    f = np.array([lk["damping"] for lk in info["links"]])
+    ghat = true.robot.gravity_torque(q, p=p0).reshape(q.shape) if info.gravity_feedforward == "measured" else 0.0
+    Dh = np.array([lk.inertia for lk in info.links])
+    f = np.array([lk.damping for lk in info.links])
     xi = Dh * qdd + f * qd - (u - ghat)
-    ws = info["workspace"]
-    rows = np.array(info["acceleration_rows"])
+    ws = info.workspace
+    rows = np.array(info.acceleration_rows)
     tol = 1e-9
     state_in = (np.all((q >= np.array(ws["low"]) - tol) & (q <= np.array(ws["high"]) + tol), axis=1)
                 & np.all(np.abs(qd) <= np.array(ws["velocity"]) + tol, axis=1))
@@ -212,29 +213,29 @@ def run_perturbation(design: Any, sim: Any, plant: Any = None) -> tuple[np.ndarr
     return xi, inside, qdd
 
 
-def in_parameter_box(info: dict, nominal: Any, params: np.ndarray) -> np.ndarray:
+def in_parameter_box(info: RobotSlidingData, nominal: Any, params: np.ndarray) -> np.ndarray:
     """Per row of ``params`` (N, n_p), whether those parameters are ones the bound covers: in the parameter box,
     the others at the nominal plant's values."""
     p0 = np.asarray(nominal.model_parameters(), dtype=float)
     lo, hi = p0.copy(), p0.copy()
-    for row in info.get("parameter_box", []):
+    for row in info.parameter_box:
         lo[row["index"]], hi[row["index"]] = row["low"], row["high"]
     return np.all((lo <= params) & (params <= hi), axis=1)
 
 
-def bands(info: dict, hold: float) -> np.ndarray:
+def bands(info: RobotSlidingData, hold: float) -> np.ndarray:
     """Per joint the band ``|slm_i| <= band_i`` (rad*s) the run's hold leaves."""
-    n = len(info["M"])
-    if info["epsilon"] is None:
-        return hold * np.array(info["sdot_max"])
-    if info["layer"] == "saturation":
-        return np.full(n, float(info["epsilon"]))
-    return float(info["epsilon"]) + hold * np.array(info["sdot_max"])
+    n = len(info.M)
+    if info.epsilon is None:
+        return hold * np.array(info.sdot_max)
+    if info.layer == "saturation":
+        return np.full(n, float(info.epsilon))
+    return float(info.epsilon) + hold * np.array(info.sdot_max)
 
 
-def _arm_words(info: dict, sim: Any, true: Any) -> str:
+def _arm_words(info: RobotSlidingData, sim: Any, true: Any) -> str:
     """The simulated arm's uncertain parameters in words (empty without a parameter box)."""
-    box = info.get("parameter_box", [])
+    box = info.parameter_box
     P = run_parameters(sim, true)
     if not box or P is None:
         return ""
@@ -250,10 +251,10 @@ def _arm_words(info: dict, sim: Any, true: Any) -> str:
 
 
 def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[ROBOT_EXTRA]
+    info: RobotSlidingData = design.data
     sim = ctx.simulation
-    n = len(info["M"])
-    M, bound = np.array(info["M"]), np.array(info["bound"])
+    n = len(info.M)
+    M, bound = np.array(info.M), np.array(info.bound)
     true = ctx.true_plant(design)
     xi, inside, qdd = run_perturbation(design, sim, true)
     peak = np.max(np.abs(xi), axis=0)
@@ -283,7 +284,7 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     xi_check = Check(XI, ok_xi, "|ξ_i(t)| ≤ proven bound < M_i wherever the run is inside joint i's box",
                      float(np.min(bound - peak_in)), float(np.min(bound - peak_in)), "N*m", _arm_words(info, sim, true)
                      + "; ".join(parts) + f". Largest accelerations of the run {_vec(qdd_peak)} rad/s² (limits "
-                     f"{_vec(info['workspace']['acceleration'])} rad/s²).",
+                     f"{_vec(info.workspace['acceleration'])} rad/s²).",
                      {"peak_xi": peak.tolist(), "peak_xi_inside": peak_in.tolist(), "inside_fraction": frac.tolist(),
                       "peak_acceleration": qdd_peak.tolist()})
     hold = hold_of(sim)
@@ -309,26 +310,27 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
                        f"after it {worst:.4g} rad·s" + ("" if inside_band else f" ({worst / band[i]:.3g} times the "
                                                                                 "band)"))
         qi = x[:, design.plant.positions[i]]
-        ideal = ideal_motion(sf, t, ref[:, i, :], info["form"], start=float(qi[0]))[0]
+        ideal = ideal_motion(sf, t, ref[:, i, :], info.form, start=float(qi[0]))[0]
         dev = float(np.max(np.abs(qi[r:] - ideal[r:])))
-        lim = float(info["l1"]) * float(np.max(np.abs(slm)))
+        lim = float(info.l1) * float(np.max(np.abs(slm)))
         dev_ok &= dev <= lim * (1 + 1e-3) + 1e-12
         dev_parts.append(f"joint {i + 1}: {dev:.4g} rad from its sliding motion (bound ‖s/N‖₁ max|slm| = {lim:.4g} "
-                         f"rad, ‖s/N‖₁ × band = {float(info['l1']) * band[i]:.4g} rad)")
+                         f"rad, ‖s/N‖₁ × band = {float(info.l1) * band[i]:.4g} rad)")
     what = {None: "the band the relays held over a step leave", "saturation": "the boundary layer ε",
-            "dead_zone": "the dead zone ε plus one held step"}[None if info["epsilon"] is None else info["layer"]]
+            "dead_zone": "the dead zone ε plus one held step"}[None if info.epsilon is None else info.layer]
     margin = float(np.min(band - np.array(worst_all)))
     band_check = Check(IN_BAND, bool(ok_band), f"|slm_i| within {what} after reaching, every joint",
                        float(np.max(worst_all)), margin, "rad*s", "; ".join(b_parts) + ".",
                        {"band": band.tolist(), "worst": worst_all, "hold": hold})
     precision = Check(PRECISION, bool(dev_ok), "|q_i − q_i of the sliding motion| ≤ ‖s/N‖₁ max|slm_i|", None, None,
-                      "rad", "; ".join(dev_parts) + " [informational]", {"l1": info["l1"]}, required=False)
+                      "rad", "; ".join(dev_parts) + " [informational]", {"l1": info.l1}, required=False)
     return xi_check, band_check, precision
 
 
 RUN_RULE = CheckRule(
     name="pid_sm_robot_run", order=127,
-    applies=lambda d, c: c.simulation is not None and ROBOT_EXTRA in d.extra and "slm1" in c.simulation.signals,
+    applies=lambda d, c: (c.simulation is not None and isinstance(d.data, RobotSlidingData)
+                          and "slm1" in c.simulation.signals),
     run=_run, label="Sliding mode on every joint of the simulated arm",
     labels={XI: "The perturbation the run meets inside the box stays below the proven bound (every joint)",
             IN_BAND: "Every joint stays in its band around slm_i = 0",

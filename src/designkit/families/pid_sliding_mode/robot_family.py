@@ -12,7 +12,8 @@ from typing import Any
 
 from designkit.display.numbers import fmt_percent
 from designkit.display.section import Question, ReportSection, Table
-from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA, law, synthesize
+from designkit.families.pid_sliding_mode.data import RobotSlidingData
+from designkit.families.pid_sliding_mode.robot import law, synthesize
 from designkit.families.pid_sliding_mode.robot_checks import (
     CERTIFICATE_RULE,
     RUN_RULE,
@@ -26,29 +27,36 @@ from designkit.families.pid_sliding_mode.spec import KIND
 __all__ = ["extend", "json_summary", "section"]
 
 
+def _link_json(link: Any) -> dict[str, float]:
+    """A joint's simplified link: ``Km`` ((rad/s)/(N*m)), ``tau`` (s), ``inertia`` (kg*m^2), ``damping``
+    (N*m*s/rad)."""
+    return {"Km": link.Km, "tau": link.tau, "inertia": link.inertia, "damping": link.damping}
+
+
 def json_summary(result: Any) -> dict[str, Any]:
     """The family's ``--json`` object for a robot design (module docstring)."""
-    info = result.design.extra[ROBOT_EXTRA]
+    info: RobotSlidingData = result.design.data
     joints = []
-    for i, M in enumerate(info["M"]):
-        at = {k: v for k, v in info["argmax"][i].items() if k != "p"}
-        if "p" in info["argmax"][i]:
-            at["parameters"] = parameter_values(info, info["argmax"][i]["p"])
+    for i, M in enumerate(info.M):
+        at = {k: v for k, v in info.enclosure.argmax[i].items() if k != "p"}
+        if "p" in info.enclosure.argmax[i]:
+            at["parameters"] = parameter_values(info, info.enclosure.argmax[i]["p"])
         joints.append({
-            "joint": i + 1, "gains": info["gains"][i], "M": M, "bound": info["bound"][i],
-            "sampled_lower_bound": info["sampled"][i], "attained_at": at, "terms": info["terms"][i],
-            "converged": info["converged"][i], "acceleration_box": info["acceleration_rows"][i],
-            "sliding_acceleration": info["sliding_acceleration"][i], "link": info["links"][i],
-            "inertia_range": info["inertia_range"][i]})
-    out = {"form": info["form"], "a1": info["a1"], "a2": info["a2"], "p3": info["p3"], "zero": info["p3"],
-           "M": list(info["M"]), "M_given": info["M_given"], "margin": info["margin"],
-           "bound": {"per_joint": list(info["bound"]), "sampled": list(info["sampled"]), "boxes": info["boxes"],
-                     "seconds": info["seconds"], "tolerance": info["tolerance"], "work_limit": info["work_limit"],
-                     "workspace": info["workspace"], "gravity_feedforward": info["gravity_feedforward"],
+            "joint": i + 1, "gains": info.gains[i], "M": M, "bound": info.bound[i],
+            "sampled_lower_bound": info.sampled[i], "attained_at": at, "terms": info.enclosure.terms[i],
+            "converged": info.enclosure.converged[i], "acceleration_box": info.acceleration_rows[i],
+            "sliding_acceleration": info.sliding_acceleration[i], "link": _link_json(info.links[i]),
+            "inertia_range": info.inertia_range[i]})
+    enc = info.enclosure
+    out = {"form": info.form, "a1": info.a1, "a2": info.a2, "p3": info.p3, "zero": info.p3,
+           "M": list(info.M), "M_given": info.M_given, "margin": info.margin,
+           "bound": {"per_joint": list(info.bound), "sampled": list(info.sampled), "boxes": enc.boxes,
+                     "seconds": enc.seconds, "tolerance": enc.rel_tol, "work_limit": enc.max_boxes,
+                     "workspace": info.workspace, "gravity_feedforward": info.gravity_feedforward,
                      "parameter_box": {r["name"]: {"low": r["low"], "high": r["high"], "nominal": r["nominal"],
-                                                   "unit": r["unit"]} for r in info.get("parameter_box", [])}},
-           "joints": joints, "epsilon": info["epsilon"], "layer": info["layer"] if info["epsilon"] is not None
-           else None, "max_step": info["max_step"]}
+                                                   "unit": r["unit"]} for r in info.parameter_box}},
+           "joints": joints, "epsilon": info.epsilon, "layer": info.layer if info.epsilon is not None
+           else None, "max_step": info.max_step}
     sim = result.simulation
     if sim is not None and "slm1" in sim.signals:
         xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
@@ -63,21 +71,21 @@ def _fmt(values: Any) -> str:
 
 def section(result: Any) -> ReportSection | None:
     """"Hierarchy of control": per joint the box, the proven bound and its parts, the attained value and where."""
-    if ROBOT_EXTRA not in result.design.extra:
+    info = result.design.data
+    if not isinstance(info, RobotSlidingData):
         return None
-    info = result.design.extra[ROBOT_EXTRA]
-    n = len(info["M"])
+    n = len(info.M)
     rows = []
-    units = {r["name"]: r["unit"] for r in info.get("parameter_box", [])}
+    units = {r["name"]: r["unit"] for r in info.parameter_box}
     for i in range(n):
-        t, at = info["terms"][i], info["argmax"][i]
+        t, at = info.enclosure.terms[i], info.enclosure.argmax[i]
         named = parameter_values(info, at["p"]) if "p" in at else {}
-        rows.append((f"joint {i + 1}", _fmt(info["acceleration_rows"][i]) + " rad/s²",
-                     f"{info['bound'][i]:.4g} N·m", f"{info['sampled'][i]:.4g} N·m",
+        rows.append((f"joint {i + 1}", _fmt(info.acceleration_rows[i]) + " rad/s²",
+                     f"{info.bound[i]:.4g} N·m", f"{info.sampled[i]:.4g} N·m",
                      f"q = {_fmt(at['q'])} rad, q̇ = {_fmt(at['qd'])} rad/s, q̈ = {_fmt(at['qdd'])} rad/s²"
                      + "".join(f", {k} = {v:.4g} {units[k]}" for k, v in named.items()),
                      f"{t['own_inertia']:.3g} / {t['coupling']:.3g} / {t['coriolis']:.3g} / {t['gravity']:.3g} / "
-                     f"{t['friction']:.3g} N·m", f"{info['M'][i]:.4g} N·m"))
+                     f"{t['friction']:.3g} N·m", f"{info.M[i]:.4g} N·m"))
     parts = ("Coriolis and centrifugal / gravity, with the feed-forward its residual / friction: Coulomb and the "
              "viscous change over the parameter box" if units else "Coriolis and centrifugal / gravity / Coulomb "
              "friction")
@@ -87,18 +95,18 @@ def section(result: Any) -> ReportSection | None:
                   f"{parts}) and the relay amplitude.",
                   ("joint", "|q̈_j| ≤", "proven sup|ξ_i|", "attained", "attained at", "parts", "M_i"),
                   tuple(reversed(rows)))
-    ws = info["workspace"]
+    ws = info.workspace
     over = box_words(info)
     sentences = [
         f"The box: q from {_fmt(ws['low'])} to {_fmt(ws['high'])} rad, |q̇| ≤ {_fmt(ws['velocity'])} rad/s, "
         f"|q̈| ≤ {_fmt(ws['acceleration'])} rad/s² (the plant's limits)" + (f"; {over}" if over else "")
-        + f"; the sliding motions' largest accelerations are {_fmt(info['sliding_acceleration'])} rad/s².",
+        + f"; the sliding motions' largest accelerations are {_fmt(info.sliding_acceleration)} rad/s².",
         "The bound is proven by ball arithmetic on the inertia matrix, the Christoffel symbols and the gravity "
         + ("torque (with the feed-forward, its residual: the true arm's gravity minus the nominal model's), "
            "the parameters bounded inputs of the enclosure like the joints, "
-           f"over {info['boxes']} boxes of configurations and parameters " if over else
-           f"torque over {info['boxes']} configuration boxes ")
-        + f"({info['seconds']:.3g} s), combined with the velocity and "
+           f"over {info.enclosure.boxes} boxes of configurations and parameters " if over else
+           f"torque over {info.enclosure.boxes} configuration boxes ")
+        + f"({info.enclosure.seconds:.3g} s), combined with the velocity and "
         "acceleration boxes by interval arithmetic; the attained value is the model's inverse dynamics at a point "
         "of the box, so sup|ξ_i| lies between the two.",
     ]
@@ -120,18 +128,18 @@ def section(result: Any) -> ReportSection | None:
 
 
 def extend(family: Any) -> Any:
-    """``family`` also designing for robots (dispatched on the plant kind; the design's data under
-    :data:`~designkit.families.pid_sliding_mode.robot.ROBOT_EXTRA`)."""
+    """``family`` also designing for robots (dispatched on the plant kind; a robot design's data is a
+    :class:`~designkit.families.pid_sliding_mode.data.RobotSlidingData`)."""
     base_synth, base_law, base_json = family.synthesize, family.law, family.json
 
     def synth(spec: Any, plant: Any) -> Any:
         return synthesize(spec, plant) if plant.kind == "robot" else base_synth(spec, plant)
 
     def law_of(design: Any, anti_windup: Any = None) -> Any:
-        return law(design, anti_windup) if ROBOT_EXTRA in design.extra else base_law(design, anti_windup)
+        return law(design, anti_windup) if isinstance(design.data, RobotSlidingData) else base_law(design, anti_windup)
 
     def json_of(result: Any) -> Any:
-        if ROBOT_EXTRA in result.design.extra:
+        if isinstance(result.design.data, RobotSlidingData):
             return json_summary(result)
         return base_json(result) if base_json is not None else {}
 

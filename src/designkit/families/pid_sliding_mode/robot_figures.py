@@ -13,8 +13,8 @@ import numpy as np
 
 from designkit.display.figure import Figure
 from designkit.display.svg import BLUE, GREEN, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
+from designkit.families.pid_sliding_mode.data import RobotSlidingData
 from designkit.families.pid_sliding_mode.measure import hold_of
-from designkit.families.pid_sliding_mode.robot import ROBOT_EXTRA
 from designkit.families.pid_sliding_mode.robot_checks import IN_BAND, PRECISION, XI, bands, run_perturbation
 from designkit.families.pid_sliding_mode.surface import ideal_motion, surface
 
@@ -30,11 +30,11 @@ def _evidence(result: Any, names: tuple[str, ...]) -> tuple[str, ...]:
 
 def _ok(result: Any) -> bool:
     sim = result.simulation
-    return sim is not None and ROBOT_EXTRA in result.design.extra and "slm1" in sim.signals
+    return sim is not None and isinstance(result.design.data, RobotSlidingData) and "slm1" in sim.signals
 
 
 def _draw_slm(result: Any) -> tuple[Any, dict[str, Any]]:
-    info, sim = result.design.extra[ROBOT_EXTRA], result.simulation
+    info, sim = result.design.data, result.simulation
     t = np.asarray(sim.time, float)
     band = bands(info, hold_of(sim))
     fig, (ax,) = new_figure(6.8, 3.6)
@@ -63,10 +63,10 @@ def sliding_variables_figure(result: Any) -> Figure | None:
 
 
 def _draw_xi(result: Any) -> tuple[Any, dict[str, Any]]:
-    info, sim = result.design.extra[ROBOT_EXTRA], result.simulation
+    info, sim = result.design.data, result.simulation
     t = np.asarray(sim.time, float)
     xi, inside, _ = run_perturbation(result.design, sim, getattr(result, "plant", None))
-    bound, M = np.array(info["bound"]), np.array(info["M"])
+    bound, M = np.array(info.bound), np.array(info.M)
     fig, (ax,) = new_figure(6.8, 3.6)
     tag(fig, "bound", ax.axhline(1.0, color="black", lw=1.0, label="the proven bound"))
     for i in range(len(bound)):
@@ -102,14 +102,14 @@ def perturbation_figure(result: Any) -> Figure | None:
 
 def _draw_deviation(result: Any) -> tuple[Any, dict[str, Any]]:
     d = result.design
-    info, sim = d.extra[ROBOT_EXTRA], result.simulation
+    info, sim = d.data, result.simulation
     t = np.asarray(sim.time, float)
     x, ref = np.asarray(sim.state, float), np.asarray(sim.reference, float)
     sf = surface(d.poles)
     fig, (ax,) = new_figure(6.8, 3.6)
-    for i in range(len(info["M"])):
+    for i in range(len(info.M)):
         q = x[:, d.plant.positions[i]]
-        ideal = ideal_motion(sf, t, ref[:, i, :], info["form"], start=float(q[0]))[0]
+        ideal = ideal_motion(sf, t, ref[:, i, :], info.form, start=float(q[0]))[0]
         tag(fig, "deviation", *plot_decimated(ax, t, q - ideal, color=COLORS[i % len(COLORS)], lw=0.9,
                                               label=f"joint {i + 1}"))
     ax.set_xlim(t[0], t[-1])

@@ -38,15 +38,10 @@ from designkit.spec.ranges import Ranged, RangedInt
 from designkit.spec.workspace import Workspace, joint_limits_word, workspace_schema
 
 KIND = "pid_sliding_mode"
-
-EXTRA = "pid_sm"
-"""The key of the family's design data in ``Design.extra`` (and of its JSON object)."""
-PID_GAINS = "pid_gains"
-"""The key, inside the design data, of the names of the PID part's gains."""
+"""The controller kind of this family (the spec's ``controller.kind``)."""
 
 IN_BAND, PRECISION, CHATTERING = "pid_sm_in_band", "pid_sm_precision", "pid_sm_chattering"
 """The names of the run checks the figures are the evidence of."""
-"""The controller kind of this family (the spec's ``controller.kind``)."""
 
 __all__ = ["KIND", "PidSlidingModeSpec", "perturbation_level", "validate"]
 

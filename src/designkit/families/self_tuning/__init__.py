@@ -29,8 +29,9 @@ from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from designkit.families.self_tuning.data import SelfTuningData
 from designkit.families.self_tuning.laws import KIND, Settings, self_tuning_law
-from designkit.families.self_tuning.model import PARAMETER_NAMES, PARAMETER_UNITS, position_model, theta_of
+from designkit.families.self_tuning.model import PARAMETER_NAMES, PARAMETER_UNITS, theta_of
 from designkit.spec.fields import Pole, PositiveFinite, Section, check_conjugates
 from designkit.spec.ranges import Ranged, check_poles
 from designkit.synthesis.closed_loop import with_law
@@ -181,7 +182,6 @@ def design(nominal: Any, st: Settings, *, excitation_window: float = 2.0, notes:
     Km, tau = link_values(nominal)
     names, units = PARAMETER_NAMES[st.form], PARAMETER_UNITS[st.form]
     coefs = initial_controller(st)
-    model = position_model(st.theta0, st.Ts, st.form)
     gains = [Gain("Ts", st.Ts, "s", "sampling period"), Gain("λ", st.forgetting, "", "forgetting factor"),
              Gain("P(0)", st.P0, "", "initial covariance (times the identity)"),
              Gain("tr P max", st.max_trace, "", "covariance bound (trace)" + ("" if st.safeguards else ", off"))]
@@ -194,14 +194,9 @@ def design(nominal: Any, st: Settings, *, excitation_window: float = 2.0, notes:
         gains += [Gain("K1", coefs[0], "N*m/rad", "proportional, at the initial estimates"),
                   Gain("K2", coefs[1], "N*m*s/rad", "rate feedback, at the initial estimates"),
                   Gain("K3", coefs[2], "N*m/(rad*s)", "integral, at the initial estimates")]
-    extra = {"form": st.form, "parameters": list(names), "units": list(units), "initial": list(st.theta0),
-             "Ts": st.Ts, "forgetting": st.forgetting, "P0": st.P0, "max_trace": st.max_trace,
-             "safeguards": st.safeguards, "design": st.design, "observer": st.observer,
-             "poles": [[complex(p).real, complex(p).imag] for p in st.poles],
-             "nominal": {"Km": Km, "tau": tau}, "excitation_window": excitation_window,
-             "initial_model": list(model)}
-    if st.design == "pole_placement":
-        extra["desired"] = list(st.desired())
+    data = SelfTuningData(settings=st, parameters=tuple(names), units=tuple(units), nominal=(Km, tau),
+                          excitation_window=excitation_window,
+                          desired=tuple(st.desired()) if st.design == "pole_placement" else None)
     formulas = (
         "x(k+1) = A x(k) + B u(k),  A = e^(F Ts),  B = ∫₀^Ts e^(F s) ds b  (exact zero-order hold)",
         ("x2(k) = A22 x2(k−1) + B2 u(k−1)" if st.form == "speed" else
@@ -212,21 +207,18 @@ def design(nominal: Any, st: Settings, *, excitation_window: float = 2.0, notes:
     )
     poles = tuple(complex(p) for p in st.poles) + ((complex(st.observer),) if st.design == "pole_placement" else ())
     d = Design(kind=KIND, plant=nominal, gains=Gains.of(gains), poles=poles, reference="step", formulas=formulas,
-               notes=notes, extra=extra)
+               notes=notes, data=data)
     return with_law(d, self_tuning_law(nominal, st), Linearization("none", reason=REASON))
 
 
 def law(design: Design, anti_windup: Any = None) -> Any:
-    """The self-tuning law of ``design`` (rebuilt from ``design.extra``)."""
+    """The self-tuning law of ``design`` (rebuilt from its :class:`Settings`)."""
     return self_tuning_law(design.plant, settings_from(design))
 
 
 def settings_from(design: Design) -> Settings:
-    """The :class:`Settings` stored in ``design.extra``."""
-    x = design.extra
-    return Settings(form=x["form"], Ts=x["Ts"], forgetting=x["forgetting"], P0=x["P0"], theta0=tuple(x["initial"]),
-                    max_trace=x["max_trace"], safeguards=x["safeguards"], design=x["design"],
-                    poles=tuple(complex(a, b) for a, b in x["poles"]), observer=x["observer"])
+    """The :class:`Settings` the design's law is made of (its :class:`SelfTuningData`)."""
+    return design.data.settings
 
 
 def _family() -> Family:

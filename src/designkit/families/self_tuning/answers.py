@@ -24,29 +24,29 @@ def how(result: Any) -> tuple[str, ...]:
 
     if result.simulation is None:
         return ()
-    x = result.design.extra
+    x = result.design.data
     own = json(result)
     info = own[result.design.kind]
-    form = "speed equation" if x["form"] == "speed" else "position differences"
+    form = "speed equation" if x.settings.form == "speed" else "position differences"
     acted = (f"; the covariance bound fired on {info['bounded']} of its {info['samples']} samples and the controller "
-             f"was held on {info['held']}" if x["safeguards"] else "; its safeguards are off")
-    return (f"It adapts because its estimates of the sampled {form} ({', '.join(x['parameters'])}) must fit the "
+             f"was held on {info['held']}" if x.settings.safeguards else "; its safeguards are off")
+    return (f"It adapts because its estimates of the sampled {form} ({', '.join(x.parameters)}) must fit the "
             f"measurements of the link it drives: recursive least squares ends at {_vector(own['theta_hat'])} against "
             f"the true link's {_vector(own['theta_true'])} at the end of the run, and the "
-            f"{x['design'].replace('_', ' ')} redesigned from the estimates at every sample places the requested "
+            f"{x.settings.design.replace('_', ' ')} redesigned from the estimates at every sample places the requested "
             f"poles on the estimated model{acted}.",)
 
 
 def strategy(result: Any) -> tuple[str, ...]:
     """The estimator, its sampling and forgetting, and the redesign with its poles (1/s)."""
-    x = result.design.extra
-    poles = fmt_poles(complex(a, b) for a, b in x["poles"])
-    observer = f" (observer pole {fmt_number(x['observer'], 3)} 1/s)" if x["design"] == "pole_placement" else ""
-    design = ("a pole placement redesign (Diophantine equation)" if x["design"] == "pole_placement" else
+    st = result.design.data.settings
+    poles = fmt_poles(st.poles)
+    observer = f" (observer pole {fmt_number(st.observer, 3)} 1/s)" if st.design == "pole_placement" else ""
+    design = ("a pole placement redesign (Diophantine equation)" if st.design == "pole_placement" else
               "a PID redesign on the estimated Km and τ")
-    return (f"Recursive least squares with forgetting factor {fmt_number(x['forgetting'], 4)} on the "
-            f"{'speed equation' if x['form'] == 'speed' else 'position differences'}, sampled every "
-            f"{fmt_number(x['Ts'], 3)} s, and {design} at every sample for the poles {poles} 1/s{observer}: an "
+    return (f"Recursive least squares with forgetting factor {fmt_number(st.forgetting, 4)} on the "
+            f"{'speed equation' if st.form == 'speed' else 'position differences'}, sampled every "
+            f"{fmt_number(st.Ts, 3)} s, and {design} at every sample for the poles {poles} 1/s{observer}: an "
             "indirect scheme, which estimates the link's parameters and recomputes the controller from them.",)
 
 

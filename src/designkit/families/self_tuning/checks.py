@@ -63,18 +63,18 @@ def _f(x: float | None, digits: int = 4) -> str:
 
 
 def _window(design: Any) -> int:
-    return max(1, int(round(design.extra["excitation_window"] / design.extra["Ts"])))
+    return max(1, int(round(design.data.excitation_window / design.data.settings.Ts)))
 
 
 def _pid_error(s: Any, design: Any) -> np.ndarray:
-    x = design.extra
-    m = position_models(s.theta, x["Ts"], x["form"])
+    x = design.data
+    m = position_models(s.theta, x.settings.Ts, x.settings.form)
     a = np.clip(s.theta[:, 0], 1e-9, 1 - 1e-12)
-    tau = -x["Ts"] / np.log(a)
-    Km = (m[:, 2] + m[:, 3]) / (x["Ts"] * (1 - a))
+    tau = -x.settings.Ts / np.log(a)
+    Km = (m[:, 2] + m[:, 3]) / (x.settings.Ts * (1 - a))
     K1, K2, K3 = s.coefs[:, 0], s.coefs[:, 1], s.coefs[:, 2]
     got = np.column_stack([(1 + Km * K2) / tau, Km * K1 / tau, Km * K3 / tau])
-    want = np.real(np.poly([complex(a_, b_) for a_, b_ in x["poles"]]))[1:]
+    want = np.real(np.poly(list(x.settings.poles)))[1:]
     err = np.max(np.abs(got - want), axis=1) / max(1.0, float(np.max(np.abs(want))))
     err[s.held] = np.nan
     return err
@@ -82,7 +82,7 @@ def _pid_error(s: Any, design: Any) -> np.ndarray:
 
 def _characteristic(design: Any, ctx: Context) -> tuple[Check, ...]:
     s = samples(ctx.simulation, design)
-    pp = design.extra["design"] == "pole_placement"
+    pp = design.data.settings.design == "pole_placement"
     err = characteristic_error(s, design) if pp else _pid_error(s, design)
     cond = sylvester_condition(s, design)
     finite = err[np.isfinite(err)]
@@ -125,7 +125,7 @@ def _excitation(design: Any, ctx: Context) -> tuple[Check, ...]:
     e = excitation_summary(design, ctx)
     v = e["final"]
     passed = math.isfinite(v) and v >= EXCITATION_MIN
-    window_s = e["window"] * design.extra["Ts"]
+    window_s = e["window"] * design.data.settings.Ts
     lost = np.flatnonzero(np.nan_to_num(e["norm"], nan=1.0) < EXCITATION_MIN)
     detail = (f"smallest eigenvalue of the windowed information matrix (last {window_s:g} s, {e['window']} samples), "
               f"normalized to a unit diagonal: {_f(v, 3)} (at least {EXCITATION_MIN:g}); unnormalized "
@@ -155,7 +155,7 @@ def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
     rel = _relative(s.theta[-1], true)
     worst = float(np.max(rel)) if np.all(np.isfinite(rel)) else float("inf")
     excited = excitation_summary(design, ctx)["final"] >= EXCITATION_MIN
-    names = design.extra["parameters"]
+    names = design.data.parameters
     parts = ", ".join(f"{n} {_f(a, 6)} against {_f(b, 6)}" for n, a, b in zip(names, s.theta[-1], true, strict=True))
     detail = (f"final estimates against the exactly discretized true link: {parts}; largest relative error "
               f"{_f(worst, 3)}")
@@ -191,10 +191,10 @@ def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
     else:
         detail = (f"the link changes at t = {t0:g} s ({moved}); the estimates are within {CONVERGED_REL:.0%} of the "
                   f"new link's parameters {took:.4g} s later and stay there")
-    if design.extra["design"] == "pole_placement":
+    if design.data.settings.design == "pole_placement":
         ts, x1, ym = designed_response(ctx.simulation, design, ctx.spec, ctx.true_plant(design))
         after = ts >= t0
-        tail = ts >= ts[-1] - design.extra["excitation_window"]
+        tail = ts >= ts[-1] - design.data.excitation_window
         if after.any():
             dev = np.abs(x1 - ym)
             peak, last = _f(float(np.max(dev[after])), 3), _f(float(np.max(dev[tail])), 3)
@@ -208,20 +208,20 @@ def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 def true_loop_poles(design: Any, theta_true: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     """Poles ``z`` of the true sampled link ``B/A`` (exact ``theta_true``) under ``R u = T r - S y``."""
-    x = design.extra
-    a1, a2, b0, b1 = position_models(np.asarray(theta_true, dtype=float)[None, :], x["Ts"], x["form"])[0]
+    x = design.data
+    a1, a2, b0, b1 = position_models(np.asarray(theta_true, dtype=float)[None, :], x.settings.Ts, x.settings.form)[0]
     R1, S0, S1 = (float(v) for v in coefs[:3])
     return np.roots([1.0, a1 + R1 + b0 * S0, a2 + a1 * R1 + b1 * S0 + b0 * S1, a2 * R1 + b1 * S1])
 
 
 def _true_loop(design: Any, ctx: Context) -> tuple[Check, ...]:
-    x = design.extra
+    x = design.data
     s = samples(ctx.simulation, design)
     true = true_theta(ctx.spec, ctx.true_plant(design), design, s.t[-1:])[0]
     z = true_loop_poles(design, true, s.coefs[-1])
     with np.errstate(all="ignore"):
-        got = np.log(z.astype(complex)) / x["Ts"]
-    want = [complex(a, b) for a, b in x["poles"]] + [complex(x["observer"])]
+        got = np.log(z.astype(complex)) / x.settings.Ts
+    want = list(x.settings.poles) + [complex(x.settings.observer)]
     rel = []
     pool = list(got)
     for p in want:
@@ -306,7 +306,7 @@ def _has_change(design: Any, ctx: Context) -> bool:
 
 
 def _pole_placement(design: Any, ctx: Context) -> bool:
-    return _applies(design, ctx) and design.extra["design"] == "pole_placement"
+    return _applies(design, ctx) and design.data.settings.design == "pole_placement"
 
 
 RULES = (

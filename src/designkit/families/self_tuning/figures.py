@@ -48,7 +48,7 @@ def _draw_estimates(result: Any) -> tuple[Any, dict[str, Any]]:
     d = result.design
     s = samples(result.simulation, d)
     true = true_theta(result.loaded.spec, _plant(result), d, s.t)
-    names = d.extra["parameters"]
+    names = d.data.parameters
     fig, axes = new_figure(6.8, 1.9 * len(names) + 0.8, rows=len(names))
     axes = list(np.atleast_1d(axes))
     for j, ax in enumerate(axes):
@@ -60,7 +60,7 @@ def _draw_estimates(result: Any) -> tuple[Any, dict[str, Any]]:
         pad = 0.15 * ((hi - lo) or abs(hi) or 1.0)
         if np.isfinite(lo) and np.isfinite(hi):
             ax.set_ylim(lo - pad, hi + pad)
-        unit = d.extra["units"][j]
+        unit = d.data.units[j]
         ax.set_ylabel(names[j] + (f" ({unit})" if unit else ""), fontsize=7)
         ax.legend(loc="best", framealpha=0.9, fontsize=7)
     info = {"onset": _onset(result, axes, fig)}
@@ -74,7 +74,8 @@ def estimates_figure(result: Any) -> Figure | None:
     if result.simulation is None:
         return None
     svg, keys, info = render_tagged(_draw_estimates, result)
-    form = "speed measured" if result.design.extra["form"] == "speed" else "speed not measured (position differences)"
+    measured = result.design.data.settings.form == "speed"
+    form = "speed measured" if measured else "speed not measured (position differences)"
     caption = (f"The recursive least-squares estimates ({form}, blue) against the parameters of the true link "
                "discretized exactly with a zero-order hold (dashed green), one panel per parameter, at the sample "
                "instants.")
@@ -129,7 +130,7 @@ def _draw_conditioning(result: Any) -> tuple[Any, dict[str, Any]]:
     ax.set_yscale("log")
     tag(fig, "condition", *plot_decimated(ax_c, s.t, cond, color=GREEN, lw=1.2, label="Sylvester condition number"))
     ax_c.set_yscale("log")
-    info = {"onset": _onset(result, (ax, ax_c), fig), "window": e["window"] * d.extra["Ts"]}
+    info = {"onset": _onset(result, (ax, ax_c), fig), "window": e["window"] * d.data.settings.Ts}
     ax.set_ylabel("excitation (–)")
     ax_c.set_ylabel("condition number (–)")
     ax_c.set_xlabel("time (s)")

@@ -23,15 +23,15 @@ def json(result: Any) -> dict[str, Any]:
     sampling period, design; after a run the samples taken, the samples where the controller was held and where
     the covariance bound fired, the final excitation indicator and the final Sylvester condition number)."""
     d, sim = result.design, result.simulation
-    x = d.extra
-    info = {"form": x["form"], "parameters": list(x["parameters"]), "units": list(x["units"]),
-            "initial": list(x["initial"]), "sampling_period": x["Ts"], "design": x["design"]}
+    x = d.data
+    info = {"form": x.settings.form, "parameters": list(x.parameters), "units": list(x.units),
+            "initial": list(x.settings.theta0), "sampling_period": x.settings.Ts, "design": x.settings.design}
     if sim is None:
-        return {"theta_hat": list(x["initial"]), KIND: info}
+        return {"theta_hat": list(x.settings.theta0), KIND: info}
     s = samples(sim, d)
     plant = result.plant if result.plant is not None else d.plant
     true = true_theta(result.loaded.spec, plant, d, s.t[-1:])[0]
-    window = max(1, int(round(x["excitation_window"] / x["Ts"])))
+    window = max(1, int(round(x.excitation_window / x.settings.Ts)))
     norm = excitation(s, window)[1]
     cond = sylvester_condition(s, d)
     return {"theta_hat": [_num(v) for v in s.theta[-1]], "theta_true": [float(v) for v in true],

@@ -55,14 +55,14 @@ class Samples:
 def samples(sim: Any, design: Any) -> Samples:
     """The sample instants of ``sim`` (a run of ``design``'s law)."""
     sig = sim.signals
-    n = len(design.extra["initial"])
+    n = len(design.data.settings.theta0)
     k = np.asarray(sig["k"], dtype=float)
     idx = np.flatnonzero(np.diff(k, prepend=0.0) > 0.5)
     col = lambda name: np.asarray(sig[name], dtype=float)[idx]  # noqa: E731
     return Samples(t=np.asarray(sim.time, dtype=float)[idx],
                    theta=np.column_stack([col(f"th{i + 1}") for i in range(n)]),
                    phi=np.column_stack([col(f"phi{i + 1}") for i in range(n)]), eps=col("eps"),
-                   coefs=np.column_stack([col(c) for c in controller_names(design.extra["design"])]),
+                   coefs=np.column_stack([col(c) for c in controller_names(design.data.settings.design)]),
                    held=col("held") > 0.5, bounded=col("bounded") > 0.5,
                    trace=sum(col(f"P{i + 1}{i + 1}") for i in range(n)))
 
@@ -81,16 +81,16 @@ def true_link_at(spec: Any, plant: Any, t: np.ndarray) -> np.ndarray:
 
 def true_theta(spec: Any, plant: Any, design: Any, t: np.ndarray) -> np.ndarray:
     """The exactly discretized parameters of the true link at each instant, in the estimates' order."""
-    x = design.extra
+    x = design.data
     links = true_link_at(spec, plant, np.asarray(t, dtype=float))
     cache: dict[tuple[float, float], tuple[float, ...]] = {}
     rows = []
     for Km, tau in links:
         key = (float(Km), float(tau))
         if key not in cache:
-            cache[key] = theta_of(key[0], key[1], x["Ts"], x["form"])
+            cache[key] = theta_of(key[0], key[1], x.settings.Ts, x.settings.form)
         rows.append(cache[key])
-    return np.asarray(rows, dtype=float).reshape(len(links), len(x["initial"]))
+    return np.asarray(rows, dtype=float).reshape(len(links), len(x.settings.theta0))
 
 
 def position_models(theta: np.ndarray, Ts: float, form: str) -> np.ndarray:
@@ -111,7 +111,7 @@ def position_models(theta: np.ndarray, Ts: float, form: str) -> np.ndarray:
 
 def sylvester_condition(s: Samples, design: Any) -> np.ndarray:
     """2-norm condition number of the Sylvester matrix of the estimated model at each sample."""
-    m = position_models(s.theta, design.extra["Ts"], design.extra["form"])
+    m = position_models(s.theta, design.data.settings.Ts, design.data.settings.form)
     M = np.zeros((len(m), 3, 3))
     M[:, 0, 0] = 1.0
     M[:, 0, 1], M[:, 1, 0], M[:, 1, 1], M[:, 1, 2] = m[:, 2], m[:, 0], m[:, 3], m[:, 2]
@@ -123,12 +123,12 @@ def sylvester_condition(s: Samples, design: Any) -> np.ndarray:
 def characteristic_error(s: Samples, design: Any) -> np.ndarray:
     """Per sample, ``max |coef(A R + B S) - coef(Acl)| / max(1, |coef(Acl)|)`` of the estimated model and the
     coefficients in use (pole placement; NaN where the controller was held)."""
-    x = design.extra
-    m = position_models(s.theta, x["Ts"], x["form"])
+    x = design.data
+    m = position_models(s.theta, x.settings.Ts, x.settings.form)
     a1, a2, b0, b1 = m.T
     R1, S0, S1 = s.coefs[:, 0], s.coefs[:, 1], s.coefs[:, 2]
     got = np.column_stack([a1 + R1 + b0 * S0, a2 + a1 * R1 + b1 * S0 + b0 * S1, a2 * R1 + b1 * S1])
-    want = np.asarray(x["desired"], dtype=float)
+    want = np.asarray(x.desired, dtype=float)
     err = np.max(np.abs(got - want), axis=1) / max(1.0, float(np.max(np.abs(want))))
     err[s.held] = np.nan
     return err
@@ -169,15 +169,15 @@ def designed_response(sim: Any, design: Any, spec: Any, plant: Any) -> tuple[np.
     """``(t, x1, ym)`` at the sample instants: the position and the response the requested loop gives on the true
     link, ``ym = (Am(1)/B(1)) B(z)/Am(z) xD`` (pole placement: ``A R + B S = Am Ao`` cancels the observer), ``B``
     the true sampled link's numerator at each sample; started at rest at the initial position."""
-    x = design.extra
+    x = design.data
     s = samples(sim, design)
     idx = np.searchsorted(np.asarray(sim.time, dtype=float), s.t)
     x1 = np.asarray(sim.position, dtype=float)[idx]
     r = np.asarray(sim.desired, dtype=float)[idx, 0]
-    Ts = x["Ts"]
-    am = np.real(np.poly(np.exp(np.array([complex(a, b) for a, b in x["poles"]]) * Ts)))
+    Ts = x.settings.Ts
+    am = np.real(np.poly(np.exp(np.array(x.settings.poles) * Ts)))
     th = true_theta(spec, plant, design, s.t)
-    model = position_models(th, Ts, x["form"])
+    model = position_models(th, Ts, x.settings.form)
     ym = np.empty_like(r)
     y1 = y2 = float(x1[0])
     r1 = r2 = float(x1[0])

@@ -106,7 +106,7 @@ def measure(label: str, sim: Any, design: Any, spec: Any, plant: Any) -> Measure
     pre = np.flatnonzero(s.t < end)
     first = None if not pre.size or not ok0[pre[-1]] else float(s.t[bad0[-1] + 1] if bad0.size else s.t[0])
     follow = follow_last = math.nan
-    if design.extra["design"] == "pole_placement" and finite:
+    if design.data.settings.design == "pole_placement" and finite:
         ts, x1, ym = designed_response(sim, design, spec, plant)
         f = x1 - ym
         follow, follow_last = _rms(f), _rms(f[ts >= ts[0] + 0.75 * (ts[-1] - ts[0])])
@@ -196,14 +196,14 @@ def section(result: Any) -> ReportSection | None:
         return None
     r = _Runner(result)
     d, spec = result.design, r.spec
-    x = d.extra
+    x = d.data
     main = measure("this spec", result.simulation, d, spec, r.plant)
     fixed = r.run("estimator off (designed on the initial estimates)", estimate=False)
     questions = [_why(main, fixed, r), _parameters(main, r), _strategies(main, r), _ad_hoc(main, r),
                  _performance(main, r)]
-    form = "with the speed measured" if x["form"] == "speed" else "without a speed measurement"
+    form = "with the speed measured" if x.settings.form == "speed" else "without a speed measurement"
     intro = (f"Notes §4.3 and the SELFTUNE simulator ({form}): each answer below is measured on a re-simulation of "
-             f"this report's scenario ({r.count + 1} runs in all, sampled every {x['Ts']:g} s). \"Final estimate "
+             f"this report's scenario ({r.count + 1} runs in all, sampled every {x.settings.Ts:g} s). \"Final estimate "
              "error\" is the largest relative error of the final estimates against the parameters of the true link "
              f"at the end of the run, discretized exactly; \"re-converged\" is the time after the link's change until "
              f"every estimate stays within {CONVERGED_REL:.0%} of the new link's parameters.")
@@ -212,11 +212,11 @@ def section(result: Any) -> ReportSection | None:
 
 
 def _why(main: Measure, fixed: Measure | None, r: _Runner) -> Question:
-    x = r.design.extra
+    x = r.design.data
     spec = r.spec
-    nominal = x["nominal"]
-    sentences = [f"The regulator starts from the estimates of a link with Km = {nominal['Km']:g} (rad/s)/(N·m) and "
-                 f"τ = {nominal['tau']:g} s while the true link is {_link_words(r.plant)}"
+    nominal = x.nominal
+    sentences = [f"The regulator starts from the estimates of a link with Km = {nominal[0]:g} (rad/s)/(N·m) and "
+                 f"τ = {nominal[1]:g} s while the true link is {_link_words(r.plant)}"
                  + (f" and changes at t = {spec.simulation.plant_change.time:g} s" if spec.simulation.plant_change
                     else "") + ". Why adapt: a controller designed once for a wrong model places the wrong poles."]
     if fixed is not None:
@@ -272,11 +272,11 @@ def _parameters(main: Measure, r: _Runner) -> Question:
 
 def _strategies(main: Measure, r: _Runner) -> Question:
     c = r.spec.controller
-    x = r.design.extra
-    poles = [complex(a, b) for a, b in x["poles"]]
+    x = r.design.data
+    poles = list(x.settings.poles)
     if c.design == "pole_placement":
         other = r.run("PID on the estimated Km, τ (poles: the two requested and the observer's)",
-                      controller={"design": "pid", "poles": [*poles, complex(x["observer"])], "observer": None})
+                      controller={"design": "pid", "poles": [*poles, complex(x.settings.observer)], "observer": None})
         words = ("This spec places the poles of the estimated sampled model by the Diophantine equation "
                  "A R + B S = Am Ao (a Sylvester system solved at every sample; its condition number reached "
                  f"{_f(main.condition)}). The alternative re-computes the one-link PID from the estimated Km and τ.")
@@ -293,7 +293,7 @@ def _strategies(main: Measure, r: _Runner) -> Question:
 
 def _ad_hoc(main: Measure, r: _Runner) -> Question:
     c, sim = r.spec.controller, r.spec.simulation
-    x = r.design.extra
+    x = r.design.data
     flipped = r.run("without the modifications" if c.safeguards else "with the modifications",
                     controller={"safeguards": not c.safeguards})
     quiet = {"trajectory": None, "step": 0.5, "noise": _noise(), "plant_change": None}
@@ -303,7 +303,7 @@ def _ad_hoc(main: Measure, r: _Runner) -> Question:
                   simulation=quiet)
     sentences = [f"designkit applies two modifications of the textbook estimator (on in this spec: "
                  f"{'yes' if c.safeguards else 'no'}): a covariance bound -- when the trace of P exceeds "
-                 f"{_f(x['max_trace'])} after an update P is scaled back to that trace; it fires when forgetting "
+                 f"{_f(x.settings.max_trace)} after an update P is scaled back to that trace; it fires when forgetting "
                  "inflates P along directions the data no longer excite -- and a controller hold: an estimate with "
                  "the pole outside (0, 1), a non-positive static gain or a near-singular Sylvester matrix keeps the "
                  "previous controller.",

@@ -22,8 +22,9 @@ import casadi as ca
 import numpy as np
 
 from designkit.families.state_regulator import answers
+from designkit.families.state_regulator.data import StateRegulatorData
 from designkit.families.state_regulator.gains import load_offset, reference_gain
-from designkit.families.state_regulator.spec import EXTRA, KIND, StateRegulatorSpec, validate
+from designkit.families.state_regulator.spec import KIND, StateRegulatorSpec, validate
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
@@ -59,12 +60,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
     gains.append(Gain("N", N, f"{u_unit}/({units[position]})", "reference gain (unit static gain)"))
     open_loop = np.linalg.eigvals(A)
     d_unit = plant.disturbances[0].unit if plant.disturbances else ""
-    extra = {EXTRA: {
-        "K": K.tolist(), "N": N, "poles": [[p.real, p.imag] for p in poles],
-        "open_loop_poles": [[complex(p).real, complex(p).imag] for p in open_loop],
-        "position_index": position, "load_offset_per_unit": offset, "load_offset_unit": f"{units[position]} per "
-        f"{d_unit}", "model": [A.tolist(), B.tolist(), D.tolist()],
-    }}
+    data = StateRegulatorData(K=tuple(K.tolist()), N=N, open_loop_poles=tuple(complex(p) for p in open_loop),
+                              position_index=position, load_offset_per_unit=offset,
+                              load_offset_unit=f"{units[position]} per {d_unit}")
     formulas = (
         "u = −K x + N xD; K = e P(A) (Ackermann), e the last row of [B AB … A^(n−1)B]^−1, P(s) = Π (s − p_j)",
         f"N = −1/(C (A − BK)^−1 B) = {N:.6g} (unit static gain of the controlled position)",
@@ -72,23 +70,25 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "(no integral action)",
     )
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=(), reference="step",
-               formulas=formulas, extra=extra)
+               formulas=formulas, data=data)
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -K x + N xD`` (input units); records nothing of its own (no state, no switching)."""
-    info = design.extra[EXTRA]
-    K, N = np.asarray(info["K"], float), float(info["N"])
+    info: StateRegulatorData = design.data
+    K, N = np.asarray(info.K, float), float(info.N)
     return dynamic_law(KIND, design.plant, command=lambda s: -ca.dot(ca.DM(K), s.y) + N * s.qD[0],
                        settings={"gains": design.gains.to_json()})
 
 
 def json_summary(result: Any) -> dict[str, Any]:
-    """``K``, ``N``, the requested and open-loop poles and the load offset per unit load."""
-    info = result.design.extra[EXTRA]
-    return {EXTRA: {k: info[k] for k in ("K", "N", "poles", "open_loop_poles", "load_offset_per_unit",
-                                         "load_offset_unit")}}
+    """A ``state_regulator`` object: ``K``, ``N``, the requested and open-loop poles (``[re, im]`` in 1/s) and the
+    load offset per unit load."""
+    info: StateRegulatorData = result.design.data
+    return {KIND: {"K": list(info.K), "N": info.N, "poles": [[p.real, p.imag] for p in result.design.poles],
+                   "open_loop_poles": [[p.real, p.imag] for p in info.open_loop_poles],
+                   "load_offset_per_unit": info.load_offset_per_unit, "load_offset_unit": info.load_offset_unit}}
 
 
 FAMILY = Family(

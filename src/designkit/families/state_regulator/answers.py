@@ -10,7 +10,7 @@ import math
 from typing import Any
 
 from designkit.display.numbers import fmt_number, fmt_poles
-from designkit.families.state_regulator.spec import EXTRA
+from designkit.families.state_regulator.data import StateRegulatorData
 from designkit.synthesis.knobs import Metric
 
 __all__ = ["ANSWERS", "PREDICTIONS", "load_offset", "strategy"]
@@ -18,24 +18,24 @@ __all__ = ["ANSWERS", "PREDICTIONS", "load_offset", "strategy"]
 
 def strategy(result: Any) -> tuple[str, ...]:
     """The law and what its design needs, with the placed poles (1/s)."""
-    info = result.design.extra.get(EXTRA)
-    if info is None:
+    info = result.design.data
+    if not isinstance(info, StateRegulatorData):
         return ()
-    poles = fmt_poles(complex(a, b) for a, b in info["poles"])
+    poles = fmt_poles(result.design.poles)
     return (f"u = −K x + N xD: K places the closed-loop poles {poles} 1/s of x' = (A − B K) x by Ackermann's "
-            f"formula on the plant linearised at rest, N = {fmt_number(info['N'], 4)} gives the controlled position "
+            f"formula on the plant linearised at rest, N = {fmt_number(info.N, 4)} gives the controlled position "
             "a unit static gain; no integral action, so a constant load leaves an offset.",)
 
 
 def load_offset(result: Any) -> float | None:
     """``|C (A - B K)^-1 D w|`` with ``w`` the spec's constant perturbation (module docstring); None without one."""
-    info = result.design.extra.get(EXTRA)
+    info = result.design.data
     pert = result.loaded.spec.simulation.perturbation
-    if info is None or pert is None:
+    if not isinstance(info, StateRegulatorData) or pert is None:
         return None
     values = pert.value if isinstance(pert.value, list | tuple) else [pert.value]
     w = max((float(v) for v in values), key=abs)
-    value = abs(w * float(info["load_offset_per_unit"]))
+    value = abs(w * float(info.load_offset_per_unit))
     return value if math.isfinite(value) else None
 
 

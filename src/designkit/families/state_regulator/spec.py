@@ -19,13 +19,10 @@ from designkit.spec.ranges import check_poles
 KIND = "state_regulator"
 """The controller kind of this family (the spec's ``controller.kind``)."""
 
-EXTRA = "state_regulator"
-"""The key of the family's design data in ``Design.extra`` (and of its ``--json`` object)."""
-
 STATES = {"link": 2, "elastic_joint": 4}
 """States of the plant kinds the family designs for."""
 
-__all__ = ["EXTRA", "KIND", "STATES", "StateRegulatorSpec", "validate"]
+__all__ = ["KIND", "STATES", "StateRegulatorSpec", "validate"]
 
 
 class StateRegulatorSpec(Section):

@@ -48,6 +48,7 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.families.vsc import answers
 from designkit.families.vsc.checks import CERTIFICATE_RULE, RUN_RULE
+from designkit.families.vsc.data import CornerPoles, VscData
 from designkit.families.vsc.diagnoses import diagnose
 from designkit.families.vsc.figures import FIGURES
 from designkit.families.vsc.gains import bound_ranges, design_gains, rational_forms
@@ -165,20 +166,15 @@ def synthesize(spec: Any, plant: Any) -> Design:
     vertex_poles = []
     for v in itertools.product(*[sorted(set(box[nm])) for nm in names]):
         Av, Bv, _ = model.at(dict(zip(names, v, strict=True)))
-        vertex_poles.append({"at": dict(zip(names, v, strict=True)),
-                             "poles": [[z.real, z.imag] for z in reduced_poles(Av, Bv, c)]})
-    extra = {KIND: {
-        "c": c.tolist(), "alpha": list(al), "beta": list(be), "delta": delta, "margin": m, "S": list(S),
-        "box": {kk: list(v) for kk, v in box.items()}, "d_bar": d_bar, "bounds": {
-            kk: {"lower": b.lower, "upper": b.upper, "argmin": b.argmin, "argmax": b.argmax, "method": b.method,
-                 "form": b.form, "min_value": b.min_value, "max_value": b.max_value} for kk, b in bounds.items()},
-        "G": G.tolist(), "cB_max": cB_max, "cD_max": cD_max, "cB_nominal": cB_nom, "cA_nominal": cA.tolist(),
-        "rest_direction": rest.tolist(), "position_index": position, "band": band, "max_step": h,
-        "sigma0": sigma0, "S0": float(S0), "boundary_layer": eps, "plant_kind": plant.kind,
-        "nominal_model": [A.tolist(), B.tolist(), D.tolist()], "run_model": [A.tolist(), B.tolist(), D.tolist()],
-        "sliding_poles": [[complex(p).real, complex(p).imag] for p in ctl.sliding_poles],
-        "drive_index": k, "vertex_poles": vertex_poles,
-    }}
+        vertex_poles.append(CornerPoles(dict(zip(names, v, strict=True)),
+                                        tuple(complex(z) for z in reduced_poles(Av, Bv, c))))
+    data = VscData(
+        c=tuple(c.tolist()), alpha=tuple(al), beta=tuple(be), delta=delta, margin=m, S=tuple(S),
+        box={kk: tuple(v) for kk, v in box.items()}, d_bar=d_bar, bounds=bounds, G=tuple(G.tolist()),
+        cB_max=cB_max, cD_max=cD_max, cB_nominal=cB_nom, cA_nominal=tuple(cA.tolist()),
+        rest_direction=tuple(rest.tolist()), position_index=position, band=band, max_step=h, S0=float(S0),
+        boundary_layer=eps, plant_kind=plant.kind, nominal_model=(A, B, D), drive_index=k,
+        vertex_poles=tuple(vertex_poles))
     formulas = (
         "σ = c x̃ with c from the sliding poles (Ackermann: c = e P(A), e = last row of [B AB … A^(n−1)B]^−1), "
         "normalised c_drive = 1",
@@ -189,7 +185,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     )
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains),
                poles=tuple(complex(p) for p in ctl.sliding_poles), reference="step", formulas=formulas,
-               notes=tuple(notes), extra=extra)
+               notes=tuple(notes), data=data)
     return with_law(d, law(d), Linearization("none", reason=REASON))
 
 
@@ -198,11 +194,11 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     layer the continuous ``u = sum_i m_i x~_i + (sum_i h_i |x~_i| - delta) sat(sigma/epsilon)``, ``m_i = (alpha_i +
     beta_i)/2``, ``h_i = (alpha_i - beta_i)/2`` (the same law outside the layer: ``psi_i x_i = m_i x_i +
     h_i |x_i| sign(sigma)``).  Records ``sigma`` and ``u_eq = -(cB)^-1 c A x~`` (nominal model, no perturbation)."""
-    info = design.extra[KIND]
-    c, al, be = (np.asarray(info[k], float) for k in ("c", "alpha", "beta"))
-    delta, eps = float(info["delta"]), info["boundary_layer"]
-    rest = np.asarray(info["rest_direction"], float)
-    cA, cB = np.asarray(info["cA_nominal"], float), float(info["cB_nominal"])
+    data: VscData = design.data
+    c, al, be = (np.asarray(v, float) for v in (data.c, data.alpha, data.beta))
+    delta, eps = float(data.delta), data.boundary_layer
+    rest = np.asarray(data.rest_direction, float)
+    cA, cB = np.asarray(data.cA_nominal, float), float(data.cB_nominal)
 
     def error(s: Any) -> Any:
         return s.y - ca.DM(rest) * s.qD[0]
@@ -229,15 +225,15 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     def u_eq(s: Any) -> Any:
         return -ca.dot(ca.DM(cA), error(s)) / cB
 
-    reason = (f"the command is held over each step; h = {info['max_step']:.4g} s moves sigma by at most "
-              f"{'a tenth of the boundary layer' if eps is not None else 'the band'} ({info['band']:.4g}) at the "
-              f"initial error (largest |sigma'| there over the box {info['S0']:.4g})")
-    unit = design.plant.states[info["drive_index"]].unit if info["drive_index"] is not None else ""
+    reason = (f"the command is held over each step; h = {data.max_step:.4g} s moves sigma by at most "
+              f"{'a tenth of the boundary layer' if eps is not None else 'the band'} ({data.band:.4g}) at the "
+              f"initial error (largest |sigma'| there over the box {data.S0:.4g})")
+    unit = design.plant.states[data.drive_index].unit if data.drive_index is not None else ""
     return dynamic_law(
         KIND, design.plant, command=command,
-        settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": info["band"]},
+        settings={"gains": design.gains.to_json(), "boundary_layer": eps, "band": data.band},
         signals={"sigma": sigma, "u_eq": u_eq}, signal_units=(unit, design.plant.inputs[0].unit),
-        discontinuous=eps is None, max_step=float(info["max_step"]), max_step_reason=reason,
+        discontinuous=eps is None, max_step=float(data.max_step), max_step_reason=reason,
     )
 
 
@@ -271,8 +267,8 @@ FAMILY = Family(
            Knob("margin", "", "relative margin of the designed gains on every condition", 1e-3, 10,
                 path="controller.margin"),
            Knob("chattering_band", "rad/s", "band |σ| ≤ band the command held over one step may leave (sets the "
-                "step)", 1e-12, 1e6, path="controller.chattering_band", current=lambda d: float(d.extra[KIND]["band"]),
-                when=lambda d: d.extra[KIND]["boundary_layer"] is None)),
+                "step)", 1e-12, 1e6, path="controller.chattering_band", current=lambda d: float(d.data.band),
+                when=lambda d: d.data.boundary_layer is None)),
     traits=("switching", "state_feedback"),
     metrics=(SETTLED_ERROR, COMMAND_VARIATION),
     answers=answers.ANSWERS,

@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from designkit.display.numbers import fmt_number, fmt_poles
-from designkit.families.vsc.spec import KIND, perturbation_level
+from designkit.families.vsc.data import VscData
+from designkit.families.vsc.spec import perturbation_level
 from designkit.synthesis.knobs import Metric
 
 __all__ = ["ANSWERS", "PREDICTIONS", "how", "load_offset", "printed_c4", "strategy", "surface_sentence"]
@@ -37,18 +38,18 @@ def how(result: Any) -> tuple[str, ...]:
     """Theorem 3 on the box, the sliding motion at the corners, and the run's reaching and sliding (module
     docstring)."""
     d = result.design
-    if KIND not in d.extra or result.simulation is None:
+    info = d.data
+    if not isinstance(info, VscData) or result.simulation is None:
         return ()
-    info = d.extra[KIND]
-    unit = d.plant.states[int(info["position_index"])].unit
+    unit = d.plant.states[int(info.position_index)].unit
     gains = _check(result, "vsc_gains")
     out = [f"Once the state is on the surface σ = c x̃ = 0 the motion has the poles chosen for it "
-           f"({_poles(info['sliding_poles'])} 1/s) whatever the parameters that enter only the driven state's "
+           f"({fmt_poles(d.poles)} 1/s) whatever the parameters that enter only the driven state's "
            f"equation, and the switching gains keep it there for every plant of the box (theorem 3, certified: "
            f"{gains.status if gains is not None else 'not run'})."]
-    vertex = [min(-complex(*z).real for z in v["poles"]) for v in info.get("vertex_poles", ())]
+    vertex = [min(-z.real for z in v.poles) for v in info.vertex_poles]
     if vertex and max(vertex) - min(vertex) > 1e-9 * max(vertex):
-        requested = min(-complex(*z).real for z in info["sliding_poles"])
+        requested = min(-z.real for z in d.poles)
         out.append(f"The sliding motion does depend on the other parameters (those of the reduced system): at the "
                    f"corners of the box its slowest decay rate is {fmt_number(min(vertex), 3)} 1/s to "
                    f"{fmt_number(max(vertex), 3)} 1/s, against {fmt_number(requested, 3)} 1/s requested at the nominal "
@@ -78,11 +79,11 @@ def surface_sentence(result: Any) -> str:
     from designkit.families.vsc.surface import reduced_poles
 
     d = result.design
-    info = d.extra.get(KIND)
-    if info is None or info["plant_kind"] != "elastic_joint":
+    info = d.data
+    if not isinstance(info, VscData) or info.plant_kind != "elastic_joint":
         return ""
-    c = np.asarray(info["c"], float)
-    A, B, _ = (np.asarray(m, float) for m in info["nominal_model"])
+    c = np.asarray(info.c, float)
+    A, B, _ = (np.asarray(m, float) for m in info.nominal_model)
     p = d.plant.params
     wrong = c.copy()
     wrong[3] = printed_c4(c, p.tau2, p.KR * p.R2**2 / p.J2)
@@ -96,13 +97,13 @@ def surface_sentence(result: Any) -> str:
 def strategy(result: Any) -> tuple[str, ...]:
     """What its design needs, and the surface against figure 5.3 as printed."""
     d = result.design
-    if KIND not in d.extra:
+    info = d.data
+    if not isinstance(info, VscData):
         return ()
-    info = d.extra[KIND]
-    out = [f"σ = c x̃ with c from the sliding poles {_poles(info['sliding_poles'])} 1/s (Ackermann's formula for "
+    out = [f"σ = c x̃ with c from the sliding poles {fmt_poles(d.poles)} 1/s (Ackermann's formula for "
            "surfaces); u = Σ ψᵢ x̃ᵢ − δ sign(σ) with ψᵢ switching between αᵢ and βᵢ on the sign of x̃ᵢ σ. Its design "
            "needs c, the ranges of the equivalent-control gains lᵢ over the parameter box and the certificate that "
-           f"αᵢ < lᵢ < βᵢ there (relay δ = {fmt_number(info['delta'], 4)} {d.plant.inputs[0].unit})."]
+           f"αᵢ < lᵢ < βᵢ there (relay δ = {fmt_number(info.delta, 4)} {d.plant.inputs[0].unit})."]
     words = surface_sentence(result)
     return (*out, words) if words else tuple(out)
 
@@ -111,14 +112,14 @@ def load_offset(result: Any) -> float | None:
     """``|x - xD|`` at rest under the spec's constant load (module docstring); None without a perturbation."""
     from designkit.families.vsc.measure import static_offset
 
-    info = result.design.extra.get(KIND)
+    info = result.design.data
     w = perturbation_level(result.loaded.spec.simulation)
-    if info is None or w is None:
+    if not isinstance(info, VscData) or w is None:
         return None
-    A, B, D = (np.asarray(m, float) for m in info["nominal_model"])
+    A, B, D = (np.asarray(m, float) for m in info.nominal_model)
     if not D.size:
         return None
-    value = static_offset(A, B, D, np.asarray(info["c"], float), w)[int(info["position_index"])]
+    value = static_offset(A, B, D, np.asarray(info.c, float), w)[int(info.position_index)]
     return abs(float(value)) if math.isfinite(value) else None
 
 

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.vsc.data import VscData, bound_json
 from designkit.families.vsc.gains import VscGains, condition_sets, rational_forms
 from designkit.families.vsc.measure import measure
-from designkit.families.vsc.spec import KIND
 from designkit.synthesis.state_space import linear_model
 from designkit.verification.check import Check
 from designkit.verification.conditions import certify
@@ -40,25 +40,25 @@ UEQ_FRACTION = 0.99
 
 def gains_of(design: Any) -> VscGains:
     """The design's gains."""
-    info = design.extra[KIND]
-    return VscGains(tuple(info["alpha"]), tuple(info["beta"]), float(info["delta"]), tuple(info["c"]))
+    info: VscData = design.data
+    return VscGains(tuple(info.alpha), tuple(info.beta), float(info.delta), tuple(info.c))
 
 
 def gain_shortfalls(design: Any) -> list[dict[str, Any]]:
     """Per gain that does not bracket its ``l_i``: which, where on the box, by how much, what would do (with
     and without the margin)."""
-    info = design.extra[KIND]
+    info: VscData = design.data
     out = []
-    m = float(info["margin"])
-    for i, (al, be) in enumerate(zip(info["alpha"], info["beta"], strict=True)):
-        b = info["bounds"][f"l_{i + 1}"]
-        s = float(info["S"][i])
-        if al >= b["lower"]:
-            out.append({"gain": f"alpha_{i + 1}", "value": al, "bound": b["lower"], "relation": "<",
-                        "at": b["argmin"], "shortfall": al - b["lower"], "with_margin": b["lower"] - m * s})
-        if be <= b["upper"]:
-            out.append({"gain": f"beta_{i + 1}", "value": be, "bound": b["upper"], "relation": ">",
-                        "at": b["argmax"], "shortfall": b["upper"] - be, "with_margin": b["upper"] + m * s})
+    m = float(info.margin)
+    for i, (al, be) in enumerate(zip(info.alpha, info.beta, strict=True)):
+        b = info.bounds[f"l_{i + 1}"]
+        s = float(info.S[i])
+        if al >= b.lower:
+            out.append({"gain": f"alpha_{i + 1}", "value": al, "bound": b.lower, "relation": "<",
+                        "at": b.argmin, "shortfall": al - b.lower, "with_margin": b.lower - m * s})
+        if be <= b.upper:
+            out.append({"gain": f"beta_{i + 1}", "value": be, "bound": b.upper, "relation": ">",
+                        "at": b.argmax, "shortfall": b.upper - be, "with_margin": b.upper + m * s})
     return out
 
 
@@ -73,42 +73,39 @@ def shortfall_sentence(f: dict[str, Any], margin: float) -> str:
 
 
 def _enclosed(design: Any) -> Check | None:
-    info = design.extra[KIND]
+    info: VscData = design.data
     rows = []
     ok: bool | None = True
-    for i, (al, be) in enumerate(zip(info["alpha"], info["beta"], strict=True)):
-        b = info["bounds"][f"l_{i + 1}"]
-        if b["method"] != "enclosure":
+    for i, (al, be) in enumerate(zip(info.alpha, info.beta, strict=True)):
+        b = info.bounds[f"l_{i + 1}"]
+        if b.method != "enclosure":
             continue
-        if al >= b["min_value"] or be <= b["max_value"]:  # violated at an evaluated point of the box
+        if al >= b.min_value or be <= b.max_value:  # violated at an evaluated point of the box
             ok = False
-        elif not (al < b["lower"] and be > b["upper"]) and ok is not False:  # between the bound and the value
+        elif not (al < b.lower and be > b.upper) and ok is not False:  # between the bound and the value
             ok = None
-        rows.append(f"alpha_{i + 1} = {al:.4g} {'<' if al < b['lower'] else '>='} {b['lower']:.6g} <= l_{i + 1} <= "
-                    f"{b['upper']:.6g} {'<' if be > b['upper'] else '>='} beta_{i + 1} = {be:.4g}")
+        rows.append(f"alpha_{i + 1} = {al:.4g} {'<' if al < b.lower else '>='} {b.lower:.6g} <= l_{i + 1} <= "
+                    f"{b.upper:.6g} {'<' if be > b.upper else '>='} beta_{i + 1} = {be:.4g}")
     if not rows:
         return None
     return Check("vsc_gains_enclosed", ok, "alpha_i < l_i < beta_i on the whole box (proven enclosure of l_i)",
                  None, None, "", "proven ranges of l_i over the box (ball arithmetic, branch and bound; the cleared "
                  "condition is not multi-affine; a gain inside the enclosure's gap is undecided, one beyond a value "
-                 "attained at a point of the box fails): " + "; ".join(rows), {"bounds": info["bounds"]})
+                 "attained at a point of the box fails): " + "; ".join(rows),
+                 {"bounds": {k: bound_json(b) for k, b in info.bounds.items()}})
 
 
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
-    info = design.extra[KIND]
+    info: VscData = design.data
     g = gains_of(design)
     plant = design.plant
     model = linear_model(plant)
-    box = {k: tuple(v) for k, v in info["box"].items()}
-    from designkit.families.vsc.gains import Bound
-
-    bounds = {k: Bound(k, v["lower"], v["upper"], v["argmin"], v["argmax"], v["method"], v["form"],
-                   v["min_value"], v["max_value"])
-              for k, v in info["bounds"].items()}
-    forms = rational_forms(info["plant_kind"], g.c)
+    box = {k: tuple(v) for k, v in info.box.items()}
+    bounds = dict(info.bounds)
+    forms = rational_forms(info.plant_kind, g.c)
     out = []
     short = gain_shortfalls(design)
-    for key, cs in condition_sets(g, forms, model, box, bounds, float(info["d_bar"])).items():
+    for key, cs in condition_sets(g, forms, model, box, bounds, float(info.d_bar)).items():
         if not cs.conditions:
             continue
         check = certify(NAMES[key], cs, box, solver=ctx.solver)
@@ -116,13 +113,13 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
             import dataclasses
 
             check = dataclasses.replace(
-                check, detail="; ".join(shortfall_sentence(f, info["margin"]) for f in short) + ". " + check.detail,
+                check, detail="; ".join(shortfall_sentence(f, info.margin) for f in short) + ". " + check.detail,
                 certificate={**dict(check.certificate), "shortfalls": short})
         out.append(check)
     enc = _enclosed(design)
     if enc is not None:
         out.append(enc)
-    A, B, D = (np.asarray(m, float) for m in info["nominal_model"])
+    A, B, D = (np.asarray(m, float) for m in info.nominal_model)
     matched = bool(np.linalg.matrix_rank(np.column_stack([B, D])) == np.linalg.matrix_rank(B))
     where = "enters with the input" if matched else "does not enter where the input does"
     out.append(Check(
@@ -139,7 +136,7 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 
 CERTIFICATE_RULE = CheckRule(
-    name="vsc_conditions", order=55, applies=lambda d, c: KIND in d.extra, run=_certificates,
+    name="vsc_conditions", order=55, applies=lambda d, c: isinstance(d.data, VscData), run=_certificates,
     label="Theorem 3's conditions on the parameter box",
     labels={"vsc_gains": "Switching gains bracket l_i (whole box)", "vsc_relay": "Relay dominates the perturbation",
             "vsc_orientation": "Orientation cB > 0 (whole box)", "vsc_gains_enclosed": "Gains bracket l_i (proven "
@@ -154,7 +151,7 @@ def _poles(poles: list[complex]) -> str:
 
 def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
-    info = design.extra[KIND]
+    info: VscData = design.data
     run = measure(design, sim)
     cert = {"hold": run.hold, "reaching_time": run.reaching_time}
     if run.reach is None:
@@ -169,11 +166,11 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     band = Check("vsc_band", ok, "|sigma| <= h S(x~) after reaching", run.worst_ratio, 1 - run.worst_ratio, "1",
                  f"after reaching, the largest |sigma| relative to the hold band is {run.worst_ratio:.3g} (at t = "
                  f"{run.worst_at:.4g} s); " + ("it stays within the band" if ok else "it leaves the band") + (
-                     "" if info["boundary_layer"] is None else
-                     f"; the layer |sigma| <= {info['boundary_layer']:.4g} leaves the controlled position within "
-                     f"{abs(run.sigma_gain) * info['boundary_layer']:.3g} rad of the sliding motion's rest"), cert)
+                     "" if info.boundary_layer is None else
+                     f"; the layer |sigma| <= {info.boundary_layer:.4g} leaves the controlled position within "
+                     f"{abs(run.sigma_gain) * info.boundary_layer:.3g} rad of the sliding motion's rest"), cert)
     out = [reach, band]
-    req = [complex(*p) for p in info["sliding_poles"]]
+    req = list(design.poles)
     want = sorted(run.expected_poles or req, key=lambda z: (z.real, z.imag))
     at = "" if all(min(abs(w - r) for r in req) <= 1e-9 * abs(w) for w in want) else (
         f" (the reduced system's poles at the run's plant; requested at the nominal plant: {_poles(req)} 1/s)")
@@ -217,7 +214,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
 RUN_RULE = CheckRule(
     name="vsc_run", order=127,
-    applies=lambda d, c: c.simulation is not None and KIND in d.extra and "sigma" in c.simulation.signals,
+    applies=lambda d, c: c.simulation is not None and isinstance(d.data, VscData) and "sigma" in c.simulation.signals,
     run=_run_checks, label="Variable structure control in the simulated run",
     labels={"vsc_reaching_time": "Reaching time (measured)", "vsc_band": "The run stays in the hold band",
             "vsc_sliding_poles": "Sliding poles (measured)", "vsc_chattering": "Chattering (measured)",

@@ -11,18 +11,18 @@ from __future__ import annotations
 from typing import Any
 
 from designkit.families.vsc.checks import gain_shortfalls, shortfall_sentence
+from designkit.families.vsc.data import VscData
 from designkit.families.vsc.measure import hold_of
-from designkit.families.vsc.spec import KIND
 
 __all__ = ["diagnose"]
 
 
 def _gains(result: Any) -> tuple[str, str] | None:
-    info = result.design.extra[KIND]
+    info: VscData = result.design.data
     short = gain_shortfalls(result.design)
     if not short:
         return None
-    cause = "; ".join(shortfall_sentence(f, info["margin"]) for f in short)
+    cause = "; ".join(shortfall_sentence(f, info.margin) for f in short)
     fixes = []
     for f in short:
         rel, side = ("<=", "below") if f["relation"] == "<" else (">=", "above")
@@ -34,13 +34,13 @@ def _gains(result: Any) -> tuple[str, str] | None:
 
 
 def _relay(result: Any) -> tuple[str, str]:
-    info = result.design.extra[KIND]
-    r = info["bounds"]["cD/cB"]
-    need = info["d_bar"] * max(abs(r["lower"]), abs(r["upper"]))
-    return (f"delta = {info['delta']:.4g} is below the perturbation's share of sigma', sup|cD/cB| d_bar = "
+    info: VscData = result.design.data
+    r = info.bounds["cD/cB"]
+    need = info.d_bar * max(abs(r.lower), abs(r.upper))
+    return (f"delta = {info.delta:.4g} is below the perturbation's share of sigma', sup|cD/cB| d_bar = "
             f"{need:.4g}: the perturbation can push sigma off the surface.",
-            f"controller.relay_amplitude above {need:.4g} ({(1 + info['margin']) * need:.4g} with the "
-            f"{100 * info['margin']:g} % margin), or leave it out so the design sizes it.")
+            f"controller.relay_amplitude above {need:.4g} ({(1 + info.margin) * need:.4g} with the "
+            f"{100 * info.margin:g} % margin), or leave it out so the design sizes it.")
 
 
 def _band(result: Any) -> tuple[str, str] | None:
@@ -49,19 +49,19 @@ def _band(result: Any) -> tuple[str, str] | None:
         return _gains(result)
     if "vsc_relay" in failed:
         return _relay(result)
-    info = result.design.extra[KIND]
+    info: VscData = result.design.data
     hold = hold_of(result.simulation)
-    if hold > info["max_step"] * (1 + 1e-9):
+    if hold > info.max_step * (1 + 1e-9):
         return (f"The command is held for {hold:.4g} s (sampling period and delay), longer than the "
-                f"{info['max_step']:.4g} s step the design chose: one held step can move sigma beyond the band.",
-                f"A sampling period plus delay of at most {info['max_step']:.4g} s, or a wider "
+                f"{info.max_step:.4g} s step the design chose: one held step can move sigma beyond the band.",
+                f"A sampling period plus delay of at most {info.max_step:.4g} s, or a wider "
                 "controller.chattering_band.")
     return None
 
 
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     """``(cause, fix)`` for a failed check of a ``vsc`` run (module docstring), or None."""
-    if KIND not in result.design.extra or check.passed is not False:
+    if not isinstance(result.design.data, VscData) or check.passed is not False:
         return None
     name = check.name.split("[")[0]
     if name in ("vsc_gains", "vsc_gains_enclosed"):

@@ -12,8 +12,8 @@ import numpy as np
 from designkit.display.figure import EVENT_STYLE, Figure, plain_ticks
 from designkit.display.numbers import fmt_number
 from designkit.display.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
+from designkit.families.vsc.data import VscData
 from designkit.families.vsc.measure import VscRun, measure
-from designkit.families.vsc.spec import KIND
 
 __all__ = ["FIGURES"]
 
@@ -37,7 +37,7 @@ def _present(result: Any, names: Sequence[str]) -> tuple[str, ...]:
 
 
 def _ok(result: Any) -> bool:
-    return result.simulation is not None and KIND in result.design.extra
+    return result.simulation is not None and isinstance(result.design.data, VscData)
 
 
 def _draw_sigma(run: VscRun, unit: str) -> tuple[Any, dict[str, Any]]:
@@ -63,7 +63,7 @@ def sigma_figure(result: Any) -> Figure | None:
     if not _ok(result):
         return None
     run = measure(result.design, result.simulation)
-    k = result.design.extra[KIND]["drive_index"]
+    k = result.design.data.drive_index
     unit = result.design.plant.states[k].unit if k is not None else ""
     svg, keys, _ = render_tagged(_draw_sigma, run, unit)
     phrases = {"band": "the band one held step can move σ by (green)", "sigma": "the switching function σ (blue)",
@@ -137,18 +137,18 @@ def control_figure(result: Any) -> Figure | None:
         _present(result, ("vsc_equivalent_control", "vsc_chattering")))
 
 
-def _draw_l(info: dict) -> tuple[Any, dict[str, Any]]:
-    n = len(info["c"])
+def _draw_l(info: VscData) -> tuple[Any, dict[str, Any]]:
+    n = len(info.c)
     fig, axes = new_figure(6.8, 0.8 + 1.1 * n, rows=n, sharex=False, layout="constrained")
     axes = list(axes)
     for i, ax in enumerate(axes):
-        b = info["bounds"][f"l_{i + 1}"]
-        al, be = info["alpha"][i], info["beta"][i]
-        tag(fig, "range", *ax.barh([0], [b["upper"] - b["lower"]], left=[b["lower"]], height=0.5, color=BLUE,
+        b = info.bounds[f"l_{i + 1}"]
+        al, be = info.alpha[i], info.beta[i]
+        tag(fig, "range", *ax.barh([0], [b.upper - b.lower], left=[b.lower], height=0.5, color=BLUE,
                                   alpha=0.5, label="range of lᵢ over the box" if i == 0 else None))
         tag(fig, "alpha", ax.axvline(al, color=ORANGE, lw=2, label="αᵢ" if i == 0 else None))
         tag(fig, "beta", ax.axvline(be, color=GREEN, lw=2, label="βᵢ" if i == 0 else None))
-        lo, hi = min(al, b["lower"]), max(be, b["upper"])
+        lo, hi = min(al, b.lower), max(be, b.upper)
         pad = 0.1 * (hi - lo) if hi > lo else 1.0
         ax.set_xlim(lo - pad, hi + pad)
         ax.set_yticks([0])
@@ -160,14 +160,14 @@ def _draw_l(info: dict) -> tuple[Any, dict[str, Any]]:
 
 def gains_figure(result: Any) -> Figure | None:
     """The range of each ``l_i`` over the box against ``alpha_i`` and ``beta_i``."""
-    if KIND not in result.design.extra:
+    info = result.design.data
+    if not isinstance(info, VscData):
         return None
-    info = result.design.extra[KIND]
     svg, keys, _ = render_tagged(_draw_l, info)
     phrases = {"range": "the range of each equivalent-control gain lᵢ over the parameter box (blue bar)",
                "alpha": "αᵢ (orange)", "beta": "βᵢ (green)"}
     return Figure("Variable structure control: the gains against the equivalent-control gains", _caption(
-        f"Theorem 3 asks αᵢ < lᵢ < βᵢ for every plant of the box ({len(info['box'])} uncertain "
+        f"Theorem 3 asks αᵢ < lᵢ < βᵢ for every plant of the box ({len(info.box)} uncertain "
         "parameters); each row is one state.", phrases, keys), svg, "fig-vsc-gains.svg",
         _present(result, ("vsc_gains", "vsc_gains_enclosed")))
 

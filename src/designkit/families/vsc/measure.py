@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.vsc.spec import KIND
+from designkit.families.vsc.data import VscData
 
 __all__ = ["VscRun", "WINDOW", "measure", "static_offset"]
 
@@ -116,21 +116,21 @@ def _sign_changes(s: np.ndarray) -> int:
 
 def measure(design: Any, sim: Any) -> VscRun:
     """The measurements of ``sim``, a run of the ``design`` (module docstring)."""
-    info = design.extra[KIND]
-    c = np.asarray(info["c"], float)
-    al, be = np.asarray(info["alpha"], float), np.asarray(info["beta"], float)
-    delta = float(info["delta"])
+    info: VscData = design.data
+    c = np.asarray(info.c, float)
+    al, be = np.asarray(info.alpha, float), np.asarray(info.beta, float)
+    delta = float(info.delta)
     t = np.asarray(sim.time, float)
     xd = np.asarray(sim.reference[:, 0, 0], float)
-    rest = np.asarray(info["rest_direction"], float)
+    rest = np.asarray(info.rest_direction, float)
     xt = np.asarray(sim.state, float) - np.outer(xd, rest)
     sigma = np.asarray(sim.signals["sigma"], float)
     u = np.asarray(sim.u_command[:, 0], float)
     hold = hold_of(sim)
-    G = np.asarray(info["G"], float)
-    S = info["cB_max"] * (np.abs(xt) @ G + delta) + info["cD_max"] * info["d_bar"]
-    if info["boundary_layer"] is not None:
-        band = np.full_like(t, float(info["boundary_layer"]))
+    G = np.asarray(info.G, float)
+    S = info.cB_max * (np.abs(xt) @ G + delta) + info.cD_max * info.d_bar
+    if info.boundary_layer is not None:
+        band = np.full_like(t, float(info.boundary_layer))
     else:
         from numpy.lib.stride_tricks import sliding_window_view
 
@@ -154,7 +154,7 @@ def measure(design: Any, sim: Any) -> VscRun:
         if D.size else True
     d_final = float(d[-1]) if d.size else 0.0
     offset = static_offset(A, B, D, c, d_final) if D.size else np.zeros(len(c))
-    k_pos = int(info["position_index"])
+    k_pos = int(info.position_index)
     pred, final = float(offset[k_pos]), float(xt[-1, k_pos])
     # the residual sigma of the chattering (|sigma| <= band) moves the rest by at most |g_sigma| band
     g_sigma = float(static_offset(A, B, D if D.size else np.zeros((len(c), 1)), c, 0.0, 1.0)[k_pos])
@@ -184,7 +184,7 @@ def measure(design: Any, sim: Any) -> VscRun:
     out.update(u_plus=u_plus, u_minus=u_minus)
     # sliding poles: z = x~ without the driven state (its motion on sigma = 0 is the reduced system, u does not
     # enter it), z' = F z + g d by least squares on the sliding samples
-    k_drive = info["drive_index"]
+    k_drive = info.drive_index
     keep_cols = [i for i in range(len(c)) if i != k_drive]
     z = xt[:, keep_cols]
     scale = np.max(np.abs(z[k1:]), axis=0) if z[k1:].size else np.ones(len(keep_cols))
@@ -207,7 +207,7 @@ def measure(design: Any, sim: Any) -> VscRun:
     from designkit.families.vsc.surface import reduced_poles
 
     expected = tuple(complex(v) for v in reduced_poles(A, B, c))
-    nominal_ueq = -(xt @ np.asarray(info["cA_nominal"])) / info["cB_nominal"]
+    nominal_ueq = -(xt @ np.asarray(info.cA_nominal)) / info.cB_nominal
     return VscRun(
         hold=hold, reach=reach, reaching_time=float(t[reach] - t[0]), worst_ratio=float(after[j]),
         worst_at=float(t[reach + j]), poles=poles, fit_samples=int(keep.size), switches=switches,

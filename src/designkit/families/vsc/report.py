@@ -6,6 +6,7 @@ from typing import Any
 
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection, Table
+from designkit.families.vsc.data import VscData
 from designkit.families.vsc.measure import measure
 from designkit.families.vsc.spec import KIND
 
@@ -16,21 +17,22 @@ def json_summary(result: Any) -> dict[str, Any]:
     """Top-level ``alpha``, ``beta``, ``delta``, ``c`` (and ``c1`` ... ``c4`` on the elastic joint: ``sigma = c1 x1
     + c2 x2 + c3 x3 + c4 x4``, ``c2 = 1``), and a ``vsc`` object with the box's ``l_i`` ranges and the run's
     measurements."""
-    info = result.design.extra[KIND]
-    out: dict[str, Any] = {"alpha": list(info["alpha"]), "beta": list(info["beta"]), "delta": info["delta"],
-                           "c": list(info["c"])}
-    if info["plant_kind"] == "elastic_joint":
-        out.update({f"c{i + 1}": v for i, v in enumerate(info["c"])})
+    info: VscData = result.design.data
+    out: dict[str, Any] = {"alpha": list(info.alpha), "beta": list(info.beta), "delta": info.delta,
+                           "c": list(info.c)}
+    if info.plant_kind == "elastic_joint":
+        out.update({f"c{i + 1}": v for i, v in enumerate(info.c)})
     vsc: dict[str, Any] = {
-        "sigma": " + ".join(f"c{i + 1} x{i + 1}" for i in range(len(info["c"]))),
+        "sigma": " + ".join(f"c{i + 1} x{i + 1}" for i in range(len(info.c))),
         "sign_convention": "psi_i = alpha_i where x_i sigma > 0, beta_i where x_i sigma < 0; alpha_i < l_i < beta_i",
-        "sliding_poles": info["sliding_poles"], "margin": info["margin"], "box": info["box"],
-        "l_ranges": {k: [v["lower"], v["upper"]] for k, v in info["bounds"].items() if k.startswith("l_")},
-        "l_methods": {k: v["method"] for k, v in info["bounds"].items() if k.startswith("l_")},
-        "cD_over_cB": [info["bounds"]["cD/cB"]["lower"], info["bounds"]["cD/cB"]["upper"]],
-        "perturbation_bound": info["d_bar"], "band": info["band"], "max_step": info["max_step"],
-        "boundary_layer": info["boundary_layer"],
-        "sliding_poles_at_box_vertices": info["vertex_poles"],
+        "sliding_poles": [[p.real, p.imag] for p in result.design.poles], "margin": info.margin,
+        "box": {k: list(v) for k, v in info.box.items()},
+        "l_ranges": {k: [v.lower, v.upper] for k, v in info.bounds.items() if k.startswith("l_")},
+        "l_methods": {k: v.method for k, v in info.bounds.items() if k.startswith("l_")},
+        "cD_over_cB": [info.bounds["cD/cB"].lower, info.bounds["cD/cB"].upper],
+        "perturbation_bound": info.d_bar, "band": info.band, "max_step": info.max_step,
+        "boundary_layer": info.boundary_layer,
+        "sliding_poles_at_box_vertices": [v.to_json() for v in info.vertex_poles],
     }
     sim = result.simulation
     if sim is not None:
@@ -43,8 +45,8 @@ def json_summary(result: Any) -> dict[str, Any]:
             "u_eq_inside_fraction": run.ueq_fraction, "matched": run.matched,
             "predicted_offset": run.predicted_offset, "final_offset": run.final_offset,
             "sigma_to_position_gain": run.sigma_gain,
-            "boundary_layer_precision": (None if info["boundary_layer"] is None else
-                                         abs(run.sigma_gain) * info["boundary_layer"]),
+            "boundary_layer_precision": (None if info.boundary_layer is None else
+                                         abs(run.sigma_gain) * info.boundary_layer),
         })
     out[KIND] = vsc
     return out
@@ -56,24 +58,24 @@ def _num(v: float) -> str:
 
 def section(result: Any) -> ReportSection | None:
     """Theorems 1, 3 and 4 on this design and run, in words and numbers."""
-    if KIND not in result.design.extra:
+    info = result.design.data
+    if not isinstance(info, VscData):
         return None
-    info = result.design.extra[KIND]
-    n = len(info["c"])
-    rows = tuple((f"x{i + 1}", _num(info["c"][i]), _num(info["bounds"][f"l_{i + 1}"]["lower"]),
-                  _num(info["bounds"][f"l_{i + 1}"]["upper"]), _num(info["alpha"][i]), _num(info["beta"][i]),
-                  "exact at the box's corners" if info["bounds"][f"l_{i + 1}"]["method"] == "vertices"
+    n = len(info.c)
+    rows = tuple((f"x{i + 1}", _num(info.c[i]), _num(info.bounds[f"l_{i + 1}"].lower),
+                  _num(info.bounds[f"l_{i + 1}"].upper), _num(info.alpha[i]), _num(info.beta[i]),
+                  "exact at the box's corners" if info.bounds[f"l_{i + 1}"].method == "vertices"
                   else "proven enclosure") for i in range(n))
     table = Table("The switching surface and theorem 3's gains, per state", ("state", "c_i", "min l_i", "max l_i",
                                                                              "α_i", "β_i", "range"), rows)
     q3 = Question("Theorem 3: do the switching gains bracket the equivalent-control gains on the whole box?", (
-        f"The equivalent-control gains l_i = −(cA)_i/(cB) were computed over the box of {len(info['box'])} "
-        f"uncertain parameters; the gains clear them by {fmt_number(100 * info['margin'], 3)} % of each gain's "
-        f"size, and the relay amplitude is δ = {_num(info['delta'])}.",), (table,))
-    re_ = [p[0] for v in info["vertex_poles"] for p in v["poles"]]
-    im_ = [abs(p[1]) for v in info["vertex_poles"] for p in v["poles"]]
-    moved = max(abs(a - b) for v in info["vertex_poles"] for a, b in zip(
-        sorted(p[0] for p in v["poles"]), sorted(p[0] for p in info["sliding_poles"]), strict=True))
+        f"The equivalent-control gains l_i = −(cA)_i/(cB) were computed over the box of {len(info.box)} "
+        f"uncertain parameters; the gains clear them by {fmt_number(100 * info.margin, 3)} % of each gain's "
+        f"size, and the relay amplitude is δ = {_num(info.delta)}.",), (table,))
+    re_ = [p.real for v in info.vertex_poles for p in v.poles]
+    im_ = [abs(p.imag) for v in info.vertex_poles for p in v.poles]
+    moved = max(abs(a - b) for v in info.vertex_poles for a, b in zip(
+        sorted(p.real for p in v.poles), sorted(p.real for p in result.design.poles), strict=True))
     q3 = Question(q3.question, (*q3.sentences, (
         "c is placed at the nominal plant. The motion on σ = 0 does not depend on the parameters that enter only "
         "the driven state's equation, but it does on the others: at the box's corners its poles have real parts from "

@@ -1,0 +1,40 @@
+"""The state regulator's design data (:attr:`~designkit.synthesis.design.Design.data`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from designkit.synthesis.design import FamilyData
+
+__all__ = ["StateRegulatorData"]
+
+
+@dataclass(frozen=True)
+class StateRegulatorData(FamilyData):
+    """The feedback, the reference gain and what a constant load leaves, read by the law, ``--json`` and the
+    answers.
+
+    Attributes
+    ----------
+    K : tuple of float
+        The state feedback of ``u = -K x + N xD`` (input unit per state unit: N*m/rad, N*m*s/rad on the elastic
+        joint's and the link's states).
+    N : float
+        The reference gain giving the controlled position a unit static gain (input unit per position unit).
+    open_loop_poles : tuple of complex
+        The eigenvalues of the nominal plant's ``A`` (1/s).
+    position_index : int
+        The state of the controlled position.
+    load_offset_per_unit : float
+        ``-C (A - B K)^-1 D``: the controlled position's offset per unit of constant load (position unit per
+        disturbance unit, rad/(N*m)).
+    load_offset_unit : str
+        That unit in words (``"rad per N*m"``).
+    """
+
+    K: tuple[float, ...]
+    N: float
+    open_loop_poles: tuple[complex, ...]
+    position_index: int
+    load_offset_per_unit: float
+    load_offset_unit: str
