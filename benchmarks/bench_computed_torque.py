@@ -33,7 +33,7 @@ Timed (``time.perf_counter``; medians of interleaved rounds, all in the same run
     compiled with the system C compiler (``-O2``; and ``-O3 -march=native``), on 1,024 states and references
     taken along the simulated trajectory, cycled; the harness's outputs are compared with the Python law.
 
-Goals of the issue: (a) <= 100 ms, (b) >= 100x faster than ``solve_ivp``, (c) <= 1 us per evaluation; each
+Goals: (a) <= 100 ms, (b) >= 100x faster than ``solve_ivp``, (c) <= 1 us per evaluation; each
 reported as met or not.
 
 Run: ``python benchmarks/bench_computed_torque.py``; writes ``benchmarks/results/computed_torque.json``.

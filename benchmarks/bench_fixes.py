@@ -5,10 +5,10 @@ Run apart from the tests:  python benchmarks/bench_fixes.py [--repeat N] [--spec
 ``--spec`` measures only the named specs and replaces their entries in the results, keeping the others.
 
 Per spec, in one process and interleaved (median of N): the pipeline run (``designkit.run``), the diagnosis
-without re-simulation (``diagnose(result, resimulate=False)``: what the report cost before), the fix re-runs
-themselves (``check_fixes`` on the diagnosis' sentences: what the report pays now on top, timed directly, since
-the difference of two diagnoses drowns in the relay analysis' noise on a loaded machine), and the alternative a
-user would pick: each proposed remedy applied to the spec by hand and run with ``designkit.run`` (what
+without re-simulation (``diagnose(result, resimulate=False)``: the report's cost without the re-runs), the fix
+re-runs themselves (``check_fixes`` on the diagnosis' sentences: what the report pays for them on top, timed
+directly, since the difference of two diagnoses drowns in the relay analysis' noise on a loaded machine), and
+the alternative a user would pick: each proposed remedy applied to the spec by hand and run with ``designkit.run`` (what
 ``designkit synth fixed.yaml --no-report`` does after start-up).  The ratios are quoted: the extra against the
 pipeline run alone, and against doing it by hand.  Writes benchmarks/results/fixes.json.
 """

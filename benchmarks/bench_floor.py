@@ -1,4 +1,4 @@
-"""Benchmark: the simulation at its floor (issue 18) -- designkit's default runs against ``solve_ivp`` and against
+"""Benchmark: the simulation at its floor -- designkit's default runs against ``solve_ivp`` and against
 the cost of the evaluations an adaptive 5th-order method needs.
 
 Scenarios (both ``specs/``-like, run with designkit's defaults, ``numerics`` left out):
@@ -13,8 +13,8 @@ Scenarios (both ``specs/``-like, run with designkit's defaults, ``numerics`` lef
   measured against DOP853 at ``rtol = 2.5e-14``, ``atol = 1e-16`` (scipy's floor is ``100 eps``).
 
 "Matched accuracy": for each contender, the cheapest tolerance of a ladder (DOP853, ``rtol`` 1e-5 .. 1e-13,
-``atol = 1e-2 rtol``) whose position error does not exceed designkit's; also DOP853 at ``rtol = 1e-10``, the
-setting of the issue.  The **adaptive floor**: designkit's own number of right-hand-side evaluations (the
+``atol = 1e-2 rtol``) whose position error does not exceed designkit's; also DOP853 at ``rtol = 1e-10``.
+The **adaptive floor**: designkit's own number of right-hand-side evaluations (the
 Dormand--Prince pair's count) times the cost of one compiled evaluation of the closed loop's right-hand side
 (``dk_rhs`` compiled with the pair's flags, mapped over 256 states, called through CasADi's zero-copy buffer
 interface, timed).  Ratios are taken in one run,

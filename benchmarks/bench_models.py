@@ -21,8 +21,8 @@ Baselines measured in the same run:
     apart from the steady per-state cost of the calls after it.  *Warm cache*: the library built
     by the cold run is on disk; the first call of a new process (subprocess, import and build
     not counted) and the steady cost of a fresh robot.  Also: the interpreted fallback (no
-    compiler), and the previous implementation of the plain call (``casadi.DM`` conversions and
-    an interpreted ``Function.map``) re-created here as the before figure;
+    compiler), and the named ``casadi.Function`` called directly (``casadi.DM`` conversions and
+    an interpreted ``Function.map``, what ``arm.functions[name]`` gives);
 (d) the raw ``casadi.Function.map`` of inverse dynamics on pre-converted ``casadi.DM`` inputs, as
     generated C (``-O3 -march=native``) and interpreted: the floor without any NumPy handling.
 
@@ -233,7 +233,7 @@ def warm_first_call(name: str, count: int, inputs: int, cache: str) -> dict[str,
 
 def plain_calls(rows: dict[str, list[np.ndarray]], sizes: tuple[int, ...], pin: dict[str, object],
                 samples: int) -> dict[str, object]:
-    """(c): the plain NumPy calls, cold and warm cache, the fallback and the previous implementation."""
+    """(c): the plain NumPy calls, cold and warm cache, the fallback and the direct ``casadi.DM`` + ``map`` call."""
     results: dict[str, object] = {}
     saved = os.environ.get("DESIGNKIT_CACHE_DIR")
     roots = []
@@ -270,7 +270,7 @@ def plain_calls(rows: dict[str, list[np.ndarray]], sizes: tuple[int, ...], pin: 
                         "path": warm.evaluator(name).why, "compiled": warm.evaluator(name).compiled,
                         "us_per_state": per_state(lambda m=warm_method, a=args: m(*a), count, samples) * 1e6,
                     }
-                # interpreted fallback (no compiler) and the previous implementation
+                # interpreted fallback (no compiler) and the direct casadi.DM + map call
                 real_find = codegen.find_compiler
                 codegen.find_compiler = lambda: None
                 try:
@@ -287,15 +287,15 @@ def plain_calls(rows: dict[str, list[np.ndarray]], sizes: tuple[int, ...], pin: 
                 mapped = f.map(count)
                 shape = f.size_out(0)
 
-                def previous(a=args, mapped=mapped, shape=shape, count=count) -> np.ndarray:
+                def dm_map(a=args, mapped=mapped, shape=shape, count=count) -> np.ndarray:
                     out = mapped.call([casadi.DM(x.T) for x in a])
                     return np.array(out[0]).reshape(shape[0], count, shape[1]).transpose(1, 0, 2)
 
-                entry["previous_implementation_us_per_state"] = per_state(previous, count, samples) * 1e6
+                entry["dm_map_us_per_state"] = per_state(dm_map, count, samples) * 1e6
                 if name == "inverse_dynamics":
                     dm = [casadi.DM(x.T) for x in args]
                     out = mapped.call(dm)
-                    entry["previous_breakdown_us_per_state"] = {
+                    entry["dm_map_breakdown_us_per_state"] = {
                         "DM conversion of the inputs": per_state(lambda a=args: [casadi.DM(x.T) for x in a], count,
                                                                  samples) * 1e6,
                         "interpreted map call": per_state(lambda m=mapped, d=dm: m.call(d), count, samples) * 1e6,
@@ -450,11 +450,11 @@ def main() -> None:
             fallback_ratio = f"{fallback / pin_us:.2f}x" if pin_us else ""
             print(f"| {labels[name]} | {n:.0e} | no compiler (interpreted) | | {fallback:.3f} us | {pin_text} | "
                   f"{fallback_ratio} | |")
-            print(f"| {labels[name]} | {n:.0e} | previous implementation (DM + interpreted map) | | "
-                  f"{entry['previous_implementation_us_per_state']:.3f} us | {pin_text} | | |")
-    breakdown = plain["inverse_dynamics"][str(states)].get("previous_breakdown_us_per_state", {})
+            print(f"| {labels[name]} | {n:.0e} | casadi.DM + interpreted map | | "
+                  f"{entry['dm_map_us_per_state']:.3f} us | {pin_text} | | |")
+    breakdown = plain["inverse_dynamics"][str(states)].get("dm_map_breakdown_us_per_state", {})
     if breakdown:
-        print("\nWhere the previous plain call spent its time (inverse dynamics, per state): "
+        print("\nWhere the direct casadi.DM + map call spends its time (inverse dynamics, per state): "
               + "; ".join(f"{k} {v:.3f} us" for k, v in breakdown.items()))
     met = [entry.get("goal_met_warm") for entry in plain["inverse_dynamics"].values()]
     print(f"\nGoal (warm cache, inverse dynamics, N = {', '.join(plain['inverse_dynamics'])}): "

@@ -22,7 +22,7 @@ and the law's ``command``) at random points, and a NumPy fixed-step RK4 of it ag
 designkit trajectory (same scheme, same steps): the same thing is timed.  That fixed-step NumPy
 RK4 loop is also timed, as a second, same-scheme baseline.
 
-Goal of the issue: (a) <= 20 ms and >= 100x faster than the baseline, reported as met or not.
+Goals: (a) <= 20 ms and >= 100x faster than the baseline, reported as met or not.
 The ``profile`` section measures where the time goes (cost per step and per CasADi instruction,
 chunk size of ``run_steps``, instruction mix, what CSE or generated C of the same step would
 change -- diagnostics, not what the API does), and ``where_the_time_goes`` says it in words.

@@ -1,6 +1,6 @@
 """Benchmark: ``designkit sweep`` of the SIMNOG decentralized PID, 2 s per sample, the default integrator.
 
-Scenario: ``specs/simnog-decentralized-pid.yaml`` with ``simulation.duration: 2.0`` (the issue's "2 s each"),
+Scenario: ``specs/simnog-decentralized-pid.yaml`` with ``simulation.duration: 2.0`` (2 s each),
 ``m2`` uniform on [2, 4] kg, every requirement of the spec scored per sample.  Measured in one run, on this
 machine under whatever load it carries (stated in the output: the load average before and after):
 

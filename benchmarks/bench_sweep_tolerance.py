@@ -9,7 +9,7 @@ reported per tolerance: CPU per sample, right-hand-side evaluations and accepted
 difference of any requirement's margin from the default's; and the least-squares line CPU = fixed + slope x
 evaluations through the rows (the fixed part is what no tolerance removes).
 
-The question it answers: would a looser tolerance put 10^6 samples inside the issue's 5 minutes on two cores
+The question it answers: would a looser tolerance put 10^6 samples inside the goal of 5 minutes on two cores
 (about 0.6 ms of CPU a sample with the engine's overhead)?  The integration shrinks with the tolerance; the grid
 points, their dense output and the observer do not.
 

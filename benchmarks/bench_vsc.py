@@ -12,9 +12,9 @@ step is the one the switching needs (the invariant band check and the fitted sli
 
 Two steps are measured in the same run, alternating, so that their ratio holds under the machine's load: the
 simulator's **default** step (for a law held over each step, its own ``max_step`` 7.2e-05 s reduced only to put
-the load's onset at 1 s and the 10 s end on the grid: 7.2077e-05 s, 138,740 steps; before, the rule rounded it down
-to ``{1, 2, 2.5, 5} x 10^k``, 5e-05 s, 200,000 steps) and the **exact** step the switching needs given as
-``simulation.dt = 1/ceil(1 s/max_step)`` (the same step now: the two rows check that the default is it).  The
+the load's onset at 1 s and the 10 s end on the grid: 7.2077e-05 s, 138,740 steps) and the **exact** step the
+switching needs given as ``simulation.dt = 1/ceil(1 s/max_step)`` (the same step: the two rows check that the
+default is it).  The
 exact-step run is re-verified through the pipeline (its band check and fitted sliding poles are reported).
 
 Run: ``python benchmarks/bench_vsc.py [--out results.json]`` (prints the JSON; writes it only with ``--out``).
