@@ -1,4 +1,4 @@
-"""The Python API's exception family: every user mistake is a DesignkitError (issue 8, part 5), and the
+"""The Python API's exception family: every user mistake is a DesignkitError, and the
 CLI answers every DesignkitError with exit 2 and one line, anything else with exit 3."""
 
 from __future__ import annotations
@@ -214,7 +214,7 @@ def test_simulate_csv_into_a_folder_is_exit_2_naming_csv(tmp_path, capsys):
 
 
 def test_a_per_input_requirement_of_the_wrong_length_names_its_key(tmp_path, capsys):
-    # found by the fuzzer (issue 8): ten torque limits for a one-input link crashed the time-domain check
+    # a case from the fuzzer: too many torque limits for a one-input link, refused before the time-domain check
     from tests.cli_input import assert_bad_input
 
     text = ("name: lengths\nplant: {kind: link, Km: 2.0, tau: 0.5}\n"
@@ -223,7 +223,7 @@ def test_a_per_input_requirement_of_the_wrong_length_names_its_key(tmp_path, cap
     assert_bad_input(tmp_path, capsys, text, "requirements.max_control: needs one value per input (1), got 3")
 
 
-# ----------------------------------------------------------------------------- API misuse found by the issue-14 corpus
+# ----------------------------------------------------------------------------- API misuse from the fuzzed corpus
 
 
 LINK_SPEC = "name: a\nplant: {kind: link, Km: 2.0, tau: 0.5}\ncontroller: {kind: pid_servo, poles: [-4, -5, -20]}\n"

@@ -125,7 +125,7 @@ class ModelError(DesignkitError):
 class OutputError(DesignkitError, OSError):
     """An output location that cannot be written; nothing was written or overwritten.
 
-    Also an :class:`OSError`, as the file system errors it replaces were.
+    Also an :class:`OSError`, so code that catches file system errors (``except OSError``) catches it.
 
     Parameters
     ----------

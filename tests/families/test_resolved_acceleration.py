@@ -424,7 +424,7 @@ def test_bad_input_exits_2_with_the_key_path(tmp_path, capsys, text, message):
 
 def test_a_path_starting_at_a_singular_configuration_is_refused_naming_the_start(tmp_path, capsys):
     # q = (0, 0): the arm stretched, det J = l1 l2 sin(q2) = 0, the exact-inverse law is undefined there
-    # (found by the fuzzer as an internal error, issue 8); with damped least squares it is designed
+    # (a case from the fuzzer); with damped least squares it is designed
     text = ("name: rac-singular\nplant: {kind: robot, robot: planar2r}\n"
             "controller: {kind: resolved_acceleration, poles: [-10, -10]}\nnumerics: {compile: never}\n"
             f"simulation: {{duration: 1.0, initial_position: [0.0, 0.0], trajectory: {LINE}}}\n")

@@ -1,4 +1,4 @@
-"""A failing requirement's figure shows its band where a reviewer can see it (issue 14's relay and payload runs)."""
+"""A failing requirement's figure shows its band where a reviewer can see it (the relay and payload runs)."""
 
 from __future__ import annotations
 

@@ -129,7 +129,7 @@ def wide_html() -> str:
     return render_html(dataclasses.replace(model, sections=(lab,)))
 
 
-def test_the_wide_fixture_has_what_used_to_overflow(wide_html):
+def test_the_wide_fixture_holds_a_typeset_gain_and_a_twelve_column_certificate(wide_html):
     assert "K_4" in wide_html or "<mn>4</mn>" in wide_html
     assert "cert-table stack records" in wide_html  # 12 columns: written as records
     assert "peak |e| q6 (rad)" in wide_html

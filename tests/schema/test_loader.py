@@ -9,7 +9,7 @@ from designkit.schema.loader import load_spec, parse_spec
 from tests.problems import POSSPEED_YAML
 
 
-def test_posspeed_spec_as_written_in_the_issue():
+def test_the_posspeed_spec_loads_with_its_poles_and_zero():
     loaded = parse_spec(POSSPEED_YAML)
     assert loaded.spec.controller.poles == [-4, -5, -20]
     assert loaded.spec.controller.zero == -3

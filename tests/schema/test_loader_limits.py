@@ -1,5 +1,5 @@
 """Bounded work and strict types at load time: size, node and depth limits, JSON-only YAML, booleans
-are not numbers, numbers within the float range, quoted values cut short (issue 8, parts 3 and 4)."""
+are not numbers, numbers within the float range, quoted values cut short."""
 
 from __future__ import annotations
 
@@ -24,12 +24,12 @@ from tests.cli_input import assert_bad_input
 from tests.problems import POSSPEED_YAML
 
 TIME_BOUND = 1.0
-"""CPU seconds within which a hostile input must be refused (issue 8).  CPU time of this process, not wall time: the
+"""CPU seconds within which a hostile input must be refused.  CPU time of this process, not wall time: the
 bound is on the work done, which another process loading the machine does not change (a bomb that expanded would cost
 far more than a second either way)."""
 
 MEMORY_BOUND = 200e6
-"""Bytes of Python allocations (tracemalloc peak) a hostile input may cost (issue 8)."""
+"""Bytes of Python allocations (tracemalloc peak) a hostile input may cost."""
 
 BACKENDS = ["libyaml", "python"] if loader.yaml.__with_libyaml__ else ["python"]
 
@@ -69,7 +69,7 @@ def spec_with(replace: str, by: str) -> str:
 
 
 def anchor_bomb(levels: int = 9, fan: int = 9) -> str:
-    """The issue's bomb inside ``controller.poles``: each anchor a list of ``fan`` aliases of the previous."""
+    """An anchor bomb inside ``controller.poles``: each anchor a list of ``fan`` aliases of the previous."""
     items = ["&a0 [" + ",".join(["-1"] * fan) + "]"]
     items += [f"&a{i} [" + ",".join([f"*a{i - 1}"] * fan) + "]" for i in range(1, levels)]
     return spec_with("[-4, -5, -20]", "[" + ",".join(items) + "]")

@@ -1,4 +1,4 @@
-"""Stiff and extremely slow but stable designs are simulated and verified, not refused (issue 8, part 6).
+"""Stiff and extremely slow but stable designs are simulated and verified, not refused.
 
 The integrator, the output step and the default duration are chosen from the poles
 (:mod:`designkit.simulation.timing`): a loop whose RK4 grid would exceed the step bound because of
@@ -95,7 +95,7 @@ def test_a_user_dt_too_coarse_for_rk4_on_a_stiff_loop_runs_on_cvodes():
     assert "too coarse for RK4" in timing.settings["integrator_choice"]
 
 
-# ----------------------------------------------------------------------------- the issue's stiff example
+# ----------------------------------------------------------------------------- the stiff example (poles -1, -2, -1e6)
 
 
 def test_stiff_step_response_matches_the_closed_form_linear_response():

@@ -1,4 +1,4 @@
-"""Inputs inside the ranges that used to end in an internal error or exhaust memory: one line, exit 2, the key path."""
+"""Inputs inside the ranges the run cannot carry, refused before the work starts: one line, exit 2, the key path."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ SCARA = ("name: aw\nplant: {kind: robot, robot: scara}\ncontroller: {kind: decen
 
 
 @pytest.mark.parametrize("text, message", [
-    (LINK + "simulation: {delay: 1e3}\n", "simulation.delay: 1000 s is"),  # used to run out of memory
+    (LINK + "simulation: {delay: 1e3}\n", "simulation.delay: 1000 s is"),  # a delay line of 1e6 steps, over its bound
     (SCARA, "simulation.anti_windup.value: needs one value or one per joint (4), got 3"),
     ("name: u\nplant: {kind: robot, urdf: '" + "a" * 4090 + ".urdf'}\n"
      "controller: {kind: computed_torque, poles: [-20, -20]}\n", "plant.urdf: cannot be read"),

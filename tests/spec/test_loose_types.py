@@ -1,4 +1,4 @@
-"""Only JSON's types are read: text is not a number and a number is not a boolean (issue 14's fuzzed corpus)."""
+"""Only JSON's types are read: text is not a number and a number is not a boolean (cases from the fuzzed corpus)."""
 
 from __future__ import annotations
 

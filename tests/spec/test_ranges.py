@@ -1,7 +1,7 @@
-"""Ranges of the spec's numbers (issue 8, part 1): extreme but finite values are refused with the key path
+"""Ranges of the spec's numbers: extreme but finite values are refused with the key path
 and the range, or designed; never an internal error.
 
-* the issue's inputs through ``designkit synth`` (exit 2, one line naming the key path and the range);
+* extreme inputs outside the ranges through ``designkit synth`` (exit 2, one line naming the key path and the range);
 * every declared range (:func:`designkit.schema.ranges_table.declared_ranges`): a value inside is accepted, one just
   outside refused with the key path (hypothesis);
 * the poles' own rules (modulus, spread), uncertainty intervals, the README table and the JSON Schema;
@@ -62,10 +62,10 @@ simulation:
 """
 
 
-# ----------------------------------------------------------------------------- the issue's inputs
+# ----------------------------------------------------------------------------- extreme inputs outside the ranges
 
 
-ISSUE_INPUTS = [
+OUT_OF_RANGE_INPUTS = [
     # (base, replace, by, message: key path and range)
     (LINK, "Km: 2.0", "Km: 1.0e+308", "plant.Km: must be between 1e-6 and 1e6 (rad/s)/(N*m), got 1e+308"),
     (LINK, "Km: 2.0", "Km: 1.0e-308", "plant.Km: must be between 1e-6 and 1e6 (rad/s)/(N*m), got 1e-308"),
@@ -94,23 +94,23 @@ ISSUE_INPUTS = [
      "simulation.trajectory.duration: must be between 1e-3 and 1e9 s, got 1e-308"),
     (TRACKING, "Km: [1.6, 2.4]", "Km: [1.0, 1.0e+308]",
      "plant.uncertainty.Km: interval bounds must be between 1e-6 and 1e6 (rad/s)/(N*m)"),
-    # part 2: passed verify but crashed synth in the report figures; now outside the element's and the
-    # requirement's ranges (the figures draw any finite value: tests/report/test_extreme_values.py)
+    # outside the element's and the requirement's ranges (the report's figures draw any finite value:
+    # tests/report/test_extreme_values.py)
     (SATURATION, "limit: 20", "limit: 1.0e+308", "simulation.nonlinearity.limit: must be between 1e-6 and 1e6 N*m"),
     (SATURATION, "steady_state_error: 0.005", "steady_state_error: 1.0e+308",
      "requirements.steady_state_error: must be between 0 and 100 rad or m"),
 ]
 
 
-@pytest.mark.parametrize(("base", "replace", "by", "message"), ISSUE_INPUTS,
-                         ids=[f"{m.split(':')[0]}={b.split(': ')[-1][:12]}" for _, _, b, m in ISSUE_INPUTS])
-def test_issue_input_is_refused_with_the_key_path_and_the_range(tmp_path, capsys, base, replace, by, message):
+@pytest.mark.parametrize(("base", "replace", "by", "message"), OUT_OF_RANGE_INPUTS,
+                         ids=[f"{m.split(':')[0]}={b.split(': ')[-1][:12]}" for _, _, b, m in OUT_OF_RANGE_INPUTS])
+def test_an_out_of_range_input_is_refused_with_the_key_path_and_the_range(tmp_path, capsys, base, replace, by, message):
     text = base.replace(replace, by)
     assert text != base
     assert_bad_input(tmp_path, capsys, text, message)
 
 
-def test_issue_input_is_refused_the_same_way_by_verify(tmp_path, capsys):
+def test_an_out_of_range_input_is_refused_the_same_way_by_verify(tmp_path, capsys):
     spec = tmp_path / "spec.yaml"
     spec.write_text(LINK.replace("Km: 2.0", "Km: 1.0e+308"))
     assert main(["verify", str(spec), "--json"]) == 2
@@ -358,7 +358,7 @@ def _accepted(text: str, key: str) -> None:
     error = _parse(text)
     if "elastic_joint" in text:
         # a base whose controller does not take an elastic joint is refused there, after the plant (pid_servo takes
-        # it since issue 17: the link-position PID from the rigid approximation)
+        # it: the link-position PID from the rigid approximation)
         assert error is None or error.path == "controller.kind", error
         return
     assert error is None, f"{key}: {error}"
@@ -491,7 +491,7 @@ def test_range_messages():
 
 
 EXTREME_INSIDE = [
-    # the corners of the link's ranges with the issue's example poles
+    # the corners of the link's ranges with the posspeed-link poles
     (LINK.replace("Km: 2.0, tau: 0.5", "Km: 1.0e-6, tau: 1.0e+6")),
     (LINK.replace("Km: 2.0, tau: 0.5", "Km: 1.0e+6, tau: 1.0e-6")),
     # the fastest and the slowest poles the ranges allow
@@ -502,7 +502,7 @@ EXTREME_INSIDE = [
     (DERIVED.replace("overshoot: 5, settling_time: 1.5", "overshoot: 0, settling_time: 1.0e-6").replace(
         "third_pole_factor: 5", "third_pole_factor: 100, design_margin: 0.9").replace(
         "simulation: {duration: 4.0}\n", "")),
-    # the element and requirement levels of the issue's part 2, at the top of their ranges
+    # the saturation limit and the steady-state error requirement at the top of their ranges
     (SATURATION.replace("limit: 20", "limit: 1.0e+6").replace("steady_state_error: 0.005", "steady_state_error: 100")),
 ]
 

@@ -29,7 +29,7 @@ def test_memory_names_initial_values_units_and_update():
     assert float(law.command([0.7, 0.1], [], m_next, [1.0, 0, 0])) == pytest.approx(10 * 0.3 + 4.0)
 
 
-def test_a_law_without_memory_keeps_the_old_order():
+def test_a_law_without_memory_has_no_update_to_follow_and_no_sampling_period():
     law = dynamic_law("demo", PLANT, command=lambda s: -s.q[0])
     assert law.n_memory == 0 and not law.command_after_update and law.sampling_period is None
 

@@ -1,8 +1,8 @@
 """Chattering of commanded inputs (designkit.verification.chatter and the universal command_chatter check).
 
 Independent routes: synthetic commands whose chattering is known by construction (a square wave at every step,
-a random telegraph signal, a smooth sine, a reference step and a square-wave reference), and the runs where the
-notes and the issue say it happens (the PUMA's Coulomb compensation at rest, the sliding-mode law).
+a random telegraph signal, a smooth sine, a reference step and a square-wave reference), and the runs where it is
+expected to happen (the PUMA's Coulomb compensation at rest, the sliding-mode law).
 """
 
 from __future__ import annotations

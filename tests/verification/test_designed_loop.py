@@ -35,7 +35,7 @@ def test_the_designed_servo_passes_from_any_initial_position(servo):
 
 
 def test_an_integral_started_at_zero_off_the_origin_fails(servo):
-    """The seam of the issue: K3 K4 xD on the absolute reference, the integral at 0, the arm at q0 = 0.5."""
+    """The seam the check guards: K3 K4 xD on the absolute reference, the integral at 0, the arm at q0 = 0.5."""
     spec, design = servo
     at_zero = dataclasses.replace(design, law=dataclasses.replace(design.law, rest_start=()))
     check = designed_loop_check(spec, at_zero)

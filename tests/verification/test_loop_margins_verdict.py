@@ -31,8 +31,8 @@ def _check(spec_text_or_path, **requirements):
 
 
 def test_no_phase_crossover_in_closed_form_reads_infinite_gain_margin():
-    """posspeed-link and the SCARA's prismatic joint: tau K3 - K1 is zero (to rounding), where the roots used to put a
-    'crossover' at 1e-7 rad/s with a gain margin of 5.6e-17."""
+    """posspeed-link and the SCARA's prismatic joint: tau K3 - K1 is zero (to rounding), where the roots alone would put
+    a 'crossover' at 1e-7 rad/s with a gain margin of 5.6e-17."""
     for path, joint in (("specs/posspeed-link.yaml", 0), ("specs/scara-decentralized-pid.yaml", 2)):
         design, check = _check(path)
         loop = design.loops[joint] if design.loops else design

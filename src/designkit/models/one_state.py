@@ -19,12 +19,11 @@ Any other argument (a list, an int array, a batch, a wrong shape, a non-contiguo
 route) makes the call return ``None``, and the method takes the general path of
 :mod:`designkit.models.batch`, which converts, validates and names the argument in its errors.
 
-Where the time of the previous fast path went (PUMA inverse dynamics, one state; 16-21 us per call on
-the loaded development machine, 3.6-5.7x ``pinocchio.rnea``): CasADi's interpreted virtual machine 5-7 us
-(it never used a compiled library; the compiled function through the same buffer costs 0.35 us), and
-the Python around it the rest: the tuple of symbol names rebuilt per call, three ``isinstance``/dtype/
-shape checks (1.7 us), three NumPy slice assignments (0.5-0.9 us each), a thread-local lookup and an
-``import`` per call, the output copy (0.4 us).  ``buffer.ret()`` is not read on the buffer routes:
+Why compiled, and why one C call (PUMA inverse dynamics, one state, the loaded development machine): CasADi's
+interpreted virtual machine costs 5-7 us a call where the compiled function through the same buffer costs
+0.35 us, and the Python around a call adds its own: three ``isinstance``/dtype/shape checks 1.7 us, a NumPy
+slice assignment 0.5-0.9 us per argument, the output copy 0.4 us; the native binding does the checks, the
+argument pointers and the output in one C call.  ``buffer.ret()`` is not read on the buffer routes:
 it costs more than the compiled call, and the model functions are ``SX`` functions, whose evaluation
 has no failure to report (it is read for any other kind of function; the native binding reads the
 return code at no cost).

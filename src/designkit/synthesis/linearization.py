@@ -10,7 +10,7 @@ Two kinds of law break that:
   honestly say is how the loop behaves with the adaptation **frozen** at stated parameter values:
   the initial ones (the loop the run starts with) and the final ones (the loop it ends with);
 * a **switching** law (a sliding-mode ``sign``) has no derivative on its switching surface, where
-  it spends its life: its Jacobian there describes neither structure (the issue's example: a
+  it spends its life: its Jacobian there describes neither structure (it can show, e.g., a
   saddle for a loop that converges), so **no** linear check is offered at all.
 
 :class:`Linearization` states which of the three holds.  ``exact``: ``design.closed_loop`` is the

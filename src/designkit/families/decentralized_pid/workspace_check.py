@@ -58,7 +58,7 @@ What is proven and what is not.
 * The verdict for every configuration of the box is proven in the sense above (the rounding of the
   range is Arb's, of the conditions ``ROUTH_ZERO_REL``); the grid-and-local-search range of
   :func:`designkit.models.link.link_range` (``samples`` points per outboard joint, polished by
-  L-BFGS-B) is reported beside it as the sampled estimate it used to be.
+  L-BFGS-B) is reported beside it as a sampled (inner) estimate.
 * Frozen configurations: each ``q`` held fixed.  The time variation of ``tau_i`` as the arm moves,
   the intercoupling (off-diagonal inertia, Coriolis, centrifugal and uncompensated gravity
   torques, all in ``xi``) and the plant's parameter uncertainty are not covered here (the
