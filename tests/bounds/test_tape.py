@@ -14,7 +14,7 @@ import casadi as ca
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from designkit.bounds.tape import compile_tape, evaluate, lower_float, span_ball, upper_float
@@ -64,6 +64,17 @@ def _build(node, x, table_index: int):
     return BINARY[node[0]][table_index](_build(node[1], x, table_index), _build(node[2], x, table_index))
 
 
+def _folds_to_a_constant(node) -> bool:
+    """Whether CasADi simplifies a subexpression of ``node`` to a constant (``x0 - (x0 + 1)`` is ``-1``): it then
+    folds what follows into one float, the built function's exact value, which mpmath's real-number value is not."""
+    if isinstance(node, str):
+        return False
+    x = ca.SX.sym("x", 3)
+    if ca.SX(_build(node, [x[0], x[1], x[2]], 0)).is_constant():
+        return True
+    return any(_folds_to_a_constant(child) for child in node[1:] if not isinstance(child, float))
+
+
 boxes = st.lists(st.tuples(st.floats(-3, 3), st.floats(0, 2)), min_size=3, max_size=3).map(
     lambda sides: [(c, c + w) for c, w in sides])
 
@@ -71,6 +82,7 @@ boxes = st.lists(st.tuples(st.floats(-3, 3), st.floats(0, 2)), min_size=3, max_s
 @settings(max_examples=60, deadline=None)
 @given(node=_tree(4), box=boxes, seed=st.integers(0, 2**31))
 def test_natural_extension_contains_every_exact_value_of_random_expressions(node, box, seed):
+    assume(not _folds_to_a_constant(node))
     x = ca.SX.sym("x", 3)
     f = ca.Function("f", [x], [ca.SX(_build(node, [x[0], x[1], x[2]], 0))], ["x"], ["y"])
     tape = compile_tape(f)
@@ -144,3 +156,10 @@ def test_an_operation_without_an_enclosure_is_named():
     x = ca.SX.sym("x", 2)
     with pytest.raises(SpecError, match="fmod"):
         compile_tape(ca.Function("f", [x], [ca.fmod(x[0], x[1])]))
+
+
+def test_the_oracle_sets_aside_expressions_casadi_folds_to_a_float():
+    # atan(x0 - (x0 + 1)) is built as the float nearest -pi/4, above -pi/4: no enclosure of the built function holds
+    # the real value, so the random-expression test draws no such expression
+    assert _folds_to_a_constant(("atan", ("sub", "x0", ("add", "x0", 1.0))))
+    assert not _folds_to_a_constant(("atan", ("sub", "x0", ("add", "x1", 1.0))))
