@@ -244,14 +244,15 @@ def cmd_model(args: argparse.Namespace) -> int:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    """Design the spec's controller and write its control law (with its model terms) as C code."""
+    """Check the spec as ``verify`` does (budget, design, the simulation's bounds), then write its control law (with
+    its model terms) as C code; a refused spec writes nothing."""
     from designkit.pipeline import codegen
     from designkit.schema.loader import load_spec
 
     options = {"out_dir": "--out", "name": "--name"}
     loaded = load_spec(args.spec)
     try:
-        code = codegen(loaded, Path(args.out), name=args.name)
+        code = codegen(loaded, Path(args.out), name=args.name, budget=args.budget)
     except SpecError as exc:
         if exc.path in options:
             raise SpecError(options[exc.path], exc.message) from None
@@ -443,6 +444,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "to OUT/<spec name>/<NAME>.c and <NAME>.h")
     p.add_argument("--name", help="C prefix of the generated symbols and base name of the files (default: "
                    "the spec name with - and . replaced by _)")
+    _budget_option(p)
     p.set_defaults(func=cmd_codegen)
 
     p = sub.add_parser("sweep", help="Monte Carlo of the nonlinear closed loop over the spec's uncertainty, "
