@@ -26,6 +26,8 @@ __all__ = ["CONNECT_TIMEOUT", "PROTOCOLS", "Endpoint", "endpoint", "probe"]
 
 CONNECT_TIMEOUT = 5.0
 """Seconds within which a scheduler given by address must complete Dask's handshake (``--scheduler``)."""
+CONNECT_SHARE = 0.8
+"""Share of the deadline Dask's connection attempts (retried while refused) may take; the handshake has the rest."""
 PROTOCOLS = ("tcp", "tls")
 """The protocols a sweep connects over."""
 _TLS_KEYS = ("distributed.comm.tls.ca-file", "distributed.comm.tls.client.cert")
@@ -108,7 +110,9 @@ def _handshake(ep: Endpoint, timeout: float) -> tuple[dict | None, BaseException
     args = ep.security.get_connection_args("client") if ep.security is not None else {}
 
     async def talk() -> dict:
-        comm = await connect(ep.address, timeout=timeout, **args)
+        # the connection's own retries end first (OSError "Timed out trying to connect": nothing listening), the
+        # deadline over the handshake after (TimeoutError: connected, then silent)
+        comm = await connect(ep.address, timeout=CONNECT_SHARE * timeout, **args)
         try:
             return dict(comm.remote_info)
         finally:
