@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any, NoReturn
 
 from designkit import __version__
 from designkit.errors import DesignkitError, OutputError, SpecError
@@ -242,14 +244,15 @@ def cmd_model(args: argparse.Namespace) -> int:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    """Design the spec's controller and write its control law (with its model terms) as C code."""
+    """Check the spec as ``verify`` does (budget, design, the simulation's bounds), then write its control law (with
+    its model terms) as C code; a refused spec writes nothing."""
     from designkit.pipeline import codegen
     from designkit.schema.loader import load_spec
 
     options = {"out_dir": "--out", "name": "--name"}
     loaded = load_spec(args.spec)
     try:
-        code = codegen(loaded, Path(args.out), name=args.name)
+        code = codegen(loaded, Path(args.out), name=args.name, budget=args.budget)
     except SpecError as exc:
         if exc.path in options:
             raise SpecError(options[exc.path], exc.message) from None
@@ -350,9 +353,51 @@ def _jobs_option(p: argparse.ArgumentParser) -> None:
                    "1 runs everything in this process")
 
 
+_ARGUMENT = re.compile(r"^argument ([^:]+): (.*)$", re.DOTALL)
+
+
+def usage_error(message: str, prog: str = "designkit") -> str:
+    """argparse's error ``message`` as ``<argument>: <reason>``, the argument first as in every bad-input line.
+
+    ``argument --samples: must be an integer, got 'x'`` -> ``--samples: must be an integer, got 'x'``;
+    ``the following arguments are required: spec, --samples`` -> ``spec: required (missing: spec, --samples)``;
+    ``unrecognized arguments: --foo 3`` -> ``--foo: unrecognized argument (got: --foo 3)``.
+    """
+    m = _ARGUMENT.match(message)
+    if m:
+        names, reason = m.group(1), m.group(2)
+        return f"{names.split('/')[-1]}: {reason}"
+    required = "the following arguments are required: "
+    if message.startswith(required):
+        missing = message.removeprefix(required)
+        return f"{missing.split(', ')[0]}: required (missing: {missing})"
+    unknown = "unrecognized arguments: "
+    if message.startswith(unknown):
+        given = message.removeprefix(unknown)
+        first = given.split(" ")[0] or "argument"
+        return f"{first}: unrecognized argument (got: {given}); see {prog} --help"
+    m = re.match(r"^ambiguous option: (\S+) (.*)$", message)
+    if m:
+        return f"{m.group(1)}: ambiguous option ({m.group(2)})"
+    return f"arguments: {message}"
+
+
+class _Parser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose errors are one line, ``designkit: error: <argument>: <reason>``, exit 2 (no usage
+    block: ``--help`` prints it).  The subcommands' parsers are of this class too (argparse's default).  Options
+    are not abbreviated (``--sa`` is refused, not read as ``--samples``)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:  # noqa: D102 - argparse's hook
+        self.exit(EXIT_BAD_INPUT, f"designkit: error: {_one_line(usage_error(message, self.prog))}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (exposed for documentation and tests)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="designkit",
         description="Design and verify robot manipulator controllers from a YAML spec.",
         epilog="Exit codes: 0 designed and verified; 1 designed but a check failed or is undecided; "
@@ -399,6 +444,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "to OUT/<spec name>/<NAME>.c and <NAME>.h")
     p.add_argument("--name", help="C prefix of the generated symbols and base name of the files (default: "
                    "the spec name with - and . replaced by _)")
+    _budget_option(p)
     p.set_defaults(func=cmd_codegen)
 
     p = sub.add_parser("sweep", help="Monte Carlo of the nonlinear closed loop over the spec's uncertainty, "

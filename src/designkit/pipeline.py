@@ -434,8 +434,15 @@ def run_comparison(loaded: LoadedSpec, *, simulate: bool = True, budget: float |
                             unchanged=unchanged)
 
 
-def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str | None = None) -> Any:
+def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str | None = None,
+            budget: float | None = None) -> Any:
     """Design the controller of a spec and write its C code (the body of ``designkit codegen``).
+
+    The spec is checked as :func:`run` checks it before anything is written: the work budget
+    (:func:`designkit.schema.budget.check_budget`), the studies section, the per-input lists, the design, and the
+    simulation the verification would run (:func:`designkit.simulation.run.build`: the step against the poles and
+    the law's largest step, the step bound, the reference), so a spec ``verify`` refuses is refused here with the
+    same line, and the code written is that of a loop ``verify`` can check.
 
     Parameters
     ----------
@@ -445,6 +452,8 @@ def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str |
         Root folder; the code goes to ``out_dir/<spec name>/``.
     name : str, optional
         C prefix; default the spec name made a C identifier (:func:`designkit.synthesis.codegen.c_identifier`).
+    budget : float, optional
+        Seconds of estimated work the spec may ask for, as in :func:`run` (default 60 s).
 
     Returns
     -------
@@ -454,16 +463,26 @@ def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str |
     Raises
     ------
     SpecError
-        Bad spec (its key path), bad ``name`` or unwritable ``out_dir``; nothing is written.
+        Bad spec (its key path, as :func:`run` names it), bad ``name`` or unwritable ``out_dir``; nothing is
+        written.
     """
     from designkit.families import family
+    from designkit.schema.budget import check_budget
     from designkit.schema.loader import load_spec
+    from designkit.simulation.run import build
     from designkit.synthesis.codegen import check_name, generate_law_code
 
     if name is not None:
         check_name(name)
     loaded = loaded if isinstance(loaded, LoadedSpec) else load_spec(loaded)
     single(loaded, "codegen")
-    dsn = design(loaded)
-    return generate_law_code(dsn, dsn.law, out_dir, name=name, spec_name=loaded.spec.name, spec_sha256=loaded.sha256,
+    spec = loaded.spec
+    check_budget(spec, base_dir(loaded), budget)
+    check_studies(spec, base_dir(loaded))
+    true_plant = plant(loaded)
+    _check_per_input(spec, true_plant)
+    dsn = design(loaded, true_plant)
+    learning = dsn.learning
+    build(spec, dsn, plant=true_plant, expected_runs=learning.trials if learning else 1)
+    return generate_law_code(dsn, dsn.law, out_dir, name=name, spec_name=spec.name, spec_sha256=loaded.sha256,
                              law_lines=family(dsn.kind).display.law)

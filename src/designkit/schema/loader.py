@@ -549,3 +549,15 @@ def load_spec(path: str | os.PathLike[str]) -> LoadedSpec:
         raise SpecError("", f"cannot read spec file {shown}: not UTF-8 ({exc.reason} at byte {exc.start})") from None
     text = text.replace("\r\n", "\n").replace("\r", "\n")  # as text mode reads it
     return parse_spec(text, path=str(p))
+
+
+def load_yaml(text: str) -> object:
+    """YAML text as the spec format reads it, without validating it as a spec: JSON's types only, numbers as JSON
+    writes them (``1e7`` and ``2.6e0`` are floats), within the node, depth and range limits (module docstring).
+
+    Raises
+    ------
+    SpecError
+        Malformed YAML or beyond its limits, with the key path where it can be named.
+    """
+    return _load_yaml(text)

@@ -32,7 +32,10 @@ The sampling period is ``simulation.sampling_period`` or the one the control law
 period and the delay into whole numbers of steps and satisfy ``dt * rate <= MAX_DT_RATE``, else
 :class:`SpecError` on ``simulation.dt``.  Any run longer than :data:`MAX_STEPS` steps is refused
 (a resource bound) naming the field to change: ``simulation.dt`` when the user set it,
-``numerics.integrator`` when an explicit ``rk4`` meets a stiff loop, else ``simulation.duration``.
+``numerics.integrator`` when an explicit ``rk4`` meets a stiff loop; when the control law's largest step
+sets the step, the controller field the family declares as setting it (``step_fields`` on its spec
+class, :func:`step_field`: a boundary layer, a band, a relay amplitude) with the value the run needs, or
+``controller``; else ``simulation.duration``.
 """
 
 from __future__ import annotations
@@ -265,10 +268,47 @@ def _choose_integrator(spec: Any, rates: Rates, stiff: tuple[float, ...], durati
                       f"(|p| <= {rates.resolved():.4g} 1/s)")
 
 
+def step_field(controller: Any) -> tuple[str, float, int] | None:
+    """``(name, value, power)``: the first field of ``controller`` the user set among those its family declares as
+    setting the law's largest step (``step_fields``, name -> ``+1`` when the step grows with the value, at most in
+    proportion, ``-1`` when it shrinks as it grows, at most inversely), or None."""
+    declared = getattr(type(controller), "step_fields", None) or {}
+    given = getattr(controller, "model_fields_set", set())
+    for name, power in declared.items():
+        value = getattr(controller, name, None)
+        if name in given and isinstance(value, int | float) and not isinstance(value, bool) and value > 0:
+            return name, float(value), int(power)
+    return None
+
+
+def _law_step_error(spec: Any, duration: float, dt: float, steps: float, law_step: tuple[float, str]) -> SpecError:
+    """The resource-bound refusal when the step is the control law's largest step: naming the controller field that
+    sets it (:func:`step_field`) and the value the run's step count needs, else the controller."""
+    max_dt, reason = law_step
+    need = duration / MAX_STEPS
+    what = (f"sets the integration step: the control law is simulated with steps of at most {max_dt:.3g} s, so "
+            f"{duration:.4g} s needs {_count(steps)} steps, more than {MAX_STEPS} (resource bound)")
+    found = step_field(spec.controller)
+    if found is None:
+        declared = list(getattr(type(spec.controller), "step_fields", None) or {})
+        hint = (f"; set what sets the step ({', '.join('controller.' + d for d in declared)})" if declared else "")
+        return SpecError("controller", f"the design {what}: {reason}{hint}; the step needs to be at least {need:.3g} "
+                         "s (or shorten simulation.duration)")
+    name, value, power = found
+    fit = value * (need / max_dt) ** (1.0 / power)
+    bound = "at least" if power > 0 else "at most"
+    grows = "grows at most in proportion to it" if power > 0 else "shrinks at least inversely as it grows"
+    return SpecError(f"controller.{name}", f"{value:g} {what}; the step {grows}, so a run of {duration:.4g} s (steps "
+                     f"of at least {need:.3g} s) needs controller.{name} {bound} {fit:.3g}")
+
+
 def _bound_error(spec: Any, duration: float, dt: float, steps: float, *, integrator: str, stiff_hint: bool,
-                 held: bool) -> SpecError:
-    """The resource-bound refusal, naming the field to change."""
+                 held: bool, law_step: tuple[float, str] | None = None) -> SpecError:
+    """The resource-bound refusal, naming the field to change: the controller's field when the control law's
+    largest step ``law_step`` (s, and why) sets the step, else ``simulation.dt`` or ``simulation.duration``."""
     sim = spec.simulation
+    if law_step is not None and sim.dt is None:
+        return _law_step_error(spec, duration, dt, steps, law_step)
     what = f"{duration:.4g} s at dt = {dt:.3g} s needs {_count(steps)} steps, more than {MAX_STEPS} (resource bound)"
     if stiff_hint and integrator == "rk4" and "integrator" in spec.numerics.model_fields_set:
         return SpecError("numerics.integrator", f"rk4: {what}: the loop is stiff; use numerics.integrator: cvodes "
@@ -352,6 +392,7 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
                         f"can be simulated with ({max_dt_reason or 'its own bound'}); leave dt out or set at most "
                         f"{max_dt:.3g} s")
     law_rate = DT_FACTOR / max_dt if max_dt is not None else 0.0
+    law_sets_step = bool(law_rate) and law_rate > fast
     fast = max(fast, law_rate)
     rk4_dt = _default_dt(fast, duration, g) if default_dt else float(sim.dt)
     integrator, integrator_source = _choose_integrator(spec, rates, stiff, duration, rk4_dt)
@@ -407,7 +448,7 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     steps = duration / dt
     if not steps <= MAX_STEPS:
         raise _bound_error(spec, duration, dt, steps, integrator=integrator, stiff_hint=bool(rates.stiff()),
-                           held=held_per_step)
+                           held=held_per_step, law_step=(max_dt, max_dt_reason) if law_sets_step and max_dt else None)
     if dt >= duration:
         raise SpecError("simulation.dt", f"{dt:g} s must be smaller than the duration {duration:g} s")
     n_samples = round(steps) + 1

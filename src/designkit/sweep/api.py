@@ -73,7 +73,8 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     client : dask.distributed.Client, optional
         Run on this client (left open).
     scheduler : str, optional
-        Address of a Dask scheduler (``tcp://host:8786``) to connect to.
+        Address of a Dask scheduler to connect to: ``tcp://host:8786`` (or ``host:8786``), or ``tls://host:8786``
+        with the Dask TLS configuration (:mod:`designkit.sweep.scheduler`).
     workers : int, optional
         Workers of the LocalCluster started otherwise (default one per core).
     out : path-like, optional
@@ -93,7 +94,9 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     Raises
     ------
     SpecError
-        ``--samples`` out of range, ``--seed``, ``--chunk``, ``--scheduler`` (unreachable), the spec's own key paths.
+        ``--samples`` out of range, ``--seed``, ``--chunk``, ``--scheduler`` (not a tcp:// or tls:// address, or no
+        Dask scheduler completing the handshake there within 5 s: :mod:`designkit.sweep.scheduler`), the spec's own
+        key paths.
     """
     from designkit.sweep import engine as eng
 
@@ -105,6 +108,12 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
         raise SpecError("--chunk", f"must be 1 to 1,000,000 samples, got {chunk!r}")
     if engine not in ("dask", "process"):
         raise SpecError("engine", f"must be 'dask' or 'process', got {engine!r}")
+    probed = False
+    if scheduler is not None and engine == "dask" and client is None:
+        from designkit.sweep.scheduler import endpoint, probe
+
+        probe(endpoint(scheduler))  # a scheduler answering Dask's handshake within 5 s, before the spec is designed
+        probed = True
     sw = _sweep_of(spec)
     name = sw.loaded.spec.name
     chunk = int(chunk or default_chunk(samples))
@@ -118,7 +127,7 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     own = engine == "dask" and client is None
     cluster = None
     if own:  # connect before anything is written: an unreachable scheduler leaves no folder behind
-        client, cluster = eng.connect(scheduler, workers)
+        client, cluster = eng.connect(scheduler, workers, probed=probed)
     try:
         folder = None
         if out is not None:

@@ -110,11 +110,11 @@ def base(text: str, path: str) -> Prepared:
     keep_large_arrays_on_the_heap()
     sw = parse_sweep(text, path=path)
     true_plant = plant(sw.loaded)
+    space = sample_space(sw, true_plant)  # the sampled box checked before anything is designed
     dsn = design(sw.loaded, true_plant)
     if dsn.learning is not None:
         raise SpecError("controller.kind", f"a sweep runs each sample once; the {dsn.kind} design learns over "
                         "trials, which a sweep does not run")
-    space = sample_space(sw, true_plant)
     if not _names_of(sw.loaded.spec.requirements):
         raise SpecError("requirements", "a sweep scores every sample against the time-domain requirements "
                         "(overshoot, settling_time, rise_time, steady_state_error, tracking_error, max_control); "

@@ -19,34 +19,37 @@ from typing import Any
 
 from designkit.errors import SpecError
 from designkit.sweep.chunk import ChunkResult, Job, read_chunk, run_chunk
+from designkit.sweep.scheduler import CONNECT_TIMEOUT, endpoint, probe
 
 __all__ = ["CONNECT_TIMEOUT", "RETRIES", "connect", "execute", "in_process"]
 
-CONNECT_TIMEOUT = 5.0
-"""Seconds to wait for a scheduler given by address before the sweep is refused (``--scheduler``)."""
 RETRIES = 3
 """Times a chunk is re-run after its worker was lost or it raised."""
 
 
-def connect(scheduler: str | None = None, workers: int | None = None) -> tuple[Any, Any]:
+def connect(scheduler: str | None = None, workers: int | None = None, *, probed: bool = False) -> tuple[Any, Any]:
     """``(client, cluster)``: a client of the scheduler at ``scheduler``, or of a new LocalCluster of ``workers``
     single-threaded processes (default one per core); ``cluster`` is None for an address (not ours to close).
+    ``probed``: the scheduler has just answered :func:`~designkit.sweep.scheduler.probe` (not asked again).
 
     Raises
     ------
     SpecError
-        ``--scheduler`` unreachable within :data:`CONNECT_TIMEOUT` s or not an address; ``--workers`` not positive.
+        ``--scheduler``: not an address of a supported protocol, or no Dask scheduler answering there within
+        :data:`~designkit.sweep.scheduler.CONNECT_TIMEOUT` s (:mod:`designkit.sweep.scheduler`); ``--workers`` not
+        positive.
     """
     from dask.distributed import Client, LocalCluster
 
     if scheduler is not None:
-        if "://" not in scheduler and ":" not in scheduler:
-            raise SpecError("--scheduler", f"expected an address such as tcp://host:8786, got {scheduler!r}")
+        ep = endpoint(scheduler)
+        if not probed:
+            probe(ep, CONNECT_TIMEOUT)  # the handshake within the deadline: Dask's own has none
         try:
-            return Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SpecError("--scheduler", f"cannot reach the Dask scheduler at {scheduler} within "
-                            f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__})") from None
+            return Client(ep.address, security=ep.security, timeout=f"{CONNECT_TIMEOUT}s", set_as_default=False), None
+        except Exception as exc:  # noqa: BLE001 - it answered the handshake, then failed: still this address
+            raise SpecError("--scheduler", f"{scheduler}: the Dask scheduler answered but the client could not "
+                            f"register within {CONNECT_TIMEOUT:g} s ({type(exc).__name__})") from None
     n = workers if workers is not None else (os.cpu_count() or 1)
     if n < 1:
         raise SpecError("--workers", f"must be at least 1, got {n}")

@@ -104,6 +104,42 @@ class SampleSpace:
         return lo + u * (hi - lo)
 
 
+def check_box(spec: Any, plant: Any, parameters: dict[str, Any], path: str = "sweep.parameters",
+              ) -> dict[str, tuple[float, float]]:
+    """Check the intervals ``parameters`` exactly as ``plant.uncertainty``'s are checked: the spec format's
+    :class:`~designkit.spec.plants.Uncertainty` (finite, ordered, within the range of the plant section's field of
+    that name), then the model's own rule for each end (:func:`~designkit.spec.plant_builder.check_uncertainty`:
+    a time constant or gain above zero, a mass not negative...), one source of truth for both.
+
+    Returns
+    -------
+    dict
+        Name -> ``(low, high)``, in the parameter's SI unit.
+
+    Raises
+    ------
+    SpecError
+        ``<path>.<name>`` with the message ``plant.uncertainty.<name>`` would get.
+    """
+    from pydantic import ValidationError
+
+    from designkit.spec.plant_builder import check_uncertainty
+    from designkit.spec.plants import Uncertainty
+
+    try:
+        box = Uncertainty.model_validate(dict(parameters))
+        box.check_ranges(type(spec.plant))
+    except (ValidationError, ValueError) as exc:
+        text = exc.errors()[0]["msg"].removeprefix("Value error, ") if isinstance(exc, ValidationError) else str(exc)
+        name, _, reason = text.partition(": ")
+        name = name.removeprefix("uncertainty.")
+        if name not in parameters or not reason:
+            raise SpecError(path, text) from None
+        raise SpecError(f"{path}.{name}", reason) from None
+    check_uncertainty(plant, box, path)
+    return box.intervals
+
+
 def sample_space(loaded_sweep: Any, plant: Any) -> SampleSpace:
     """The :class:`SampleSpace` of a spec and its sweep section on its (nominal) plant.
 
@@ -125,11 +161,13 @@ def sample_space(loaded_sweep: Any, plant: Any) -> SampleSpace:
             raise SpecError(f"plant.uncertainty.{name}", f"the plant has no parameter {name!r} (it has "
                             f"{', '.join(names)})")
         intervals[name] = (lo, hi, f"plant.uncertainty.{name}")
-    for name, (lo, hi) in section.parameters.items():
+    for name in section.parameters:
         if name not in names:
             raise SpecError(f"sweep.parameters.{name}", f"the plant has no parameter {name!r} (it has "
                             f"{', '.join(names) or 'none'})")
-        intervals[name] = (float(lo), float(hi), f"sweep.parameters.{name}")
+    if section.parameters:
+        for name, (lo, hi) in check_box(spec, plant, section.parameters).items():
+            intervals[name] = (lo, hi, f"sweep.parameters.{name}")
     if spec.simulation.plant_change is not None:
         raise SpecError("simulation.plant_change", "a sweep sets the true plant's parameters from the start of each "
                         "run (that is how its worst cases are written); remove simulation.plant_change")

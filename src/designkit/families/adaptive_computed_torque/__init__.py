@@ -26,7 +26,7 @@ run, and parameter convergence judged against the excitation indicator (:mod:`.e
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field, field_validator, model_validator
@@ -66,6 +66,10 @@ class AdaptiveComputedTorqueSpec(Section):
     hysteresis, in each parameter's unit); ``acceleration``: ``ideal`` or ``filtered`` (with ``bandwidth``,
     rad/s, 1e-3 to 1e6).
     """
+
+    step_fields: ClassVar[dict[str, int]] = {"bandwidth": -1}
+    """Fields that set the law's largest step (name -> +1: the step grows with it, -1: shrinks), first given
+    first: the step-bound refusal names it (:func:`designkit.simulation.timing.step_field`)."""
 
     kind: Literal[KIND]
     poles: list[Any] | None = Field(default=None, description="Two error poles (1/s) for every joint, or a pair "

@@ -28,7 +28,7 @@ Fields (every number with its unit and range, refused with its key path otherwis
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -52,6 +52,10 @@ TRACKING_REFERENCES = ("quintic", "sine", "trapezoidal", "via_points")
 class PidSlidingModeSpec(Section):
     """PID/sliding-mode link controller ``u = u0 - M sign(slm)``, ``slm = a1 x1 + a2 x2 + x3`` (module docstring
     for the fields)."""
+
+    step_fields: ClassVar[dict[str, int]] = {"epsilon": 1, "switching_band": 1, "M": -1}
+    """Fields that set the law's largest step (name -> +1: the step grows with it, -1: shrinks), first given
+    first: the step-bound refusal names it (:func:`designkit.simulation.timing.step_field`)."""
 
     kind: Literal[KIND]
     poles: list[Pole] = Field(description="Three closed-loop poles (1/s) of the PID part; the zero goes on the "

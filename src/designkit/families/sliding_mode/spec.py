@@ -27,7 +27,7 @@ Fields (every number with its unit and range, refused with its key path otherwis
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -43,6 +43,10 @@ __all__ = ["SlidingModeSpec", "reference_amplitude", "perturbation_level", "vali
 class SlidingModeSpec(Section):
     """Sliding-mode position servo ``u = -psi e - M sign(s)``, ``s = x2 + c e``, ``psi`` switching between
     ``alpha`` (``e s > 0``) and ``beta`` (module docstring for the fields)."""
+
+    step_fields: ClassVar[dict[str, int]] = {"boundary_layer": 1, "chattering_band": 1, "M": -1}
+    """Fields that set the law's largest step (name -> +1: the step grows with it, -1: shrinks), first given
+    first: the step-bound refusal names it (:func:`designkit.simulation.timing.step_field`)."""
 
     kind: Literal[KIND]
     sliding_poles: list[Pole] = Field(

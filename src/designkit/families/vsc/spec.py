@@ -21,7 +21,7 @@ Fields (every number with its unit and range, refused with its key path otherwis
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -40,6 +40,10 @@ STATES = {"link": 2, "elastic_joint": 4}
 class VscSpec(Section):
     """Variable structure regulator ``u = sum_i psi_i x_i - delta sign(sigma)``, ``sigma = c x`` (notes section
     5.2, theorem 3; ROBEL figure 5.3); fields in the module docstring."""
+
+    step_fields: ClassVar[dict[str, int]] = {"boundary_layer": 1, "chattering_band": 1, "relay_amplitude": -1}
+    """Fields that set the law's largest step (name -> +1: the step grows with it, -1: shrinks), first given
+    first: the step-bound refusal names it (:func:`designkit.simulation.timing.step_field`)."""
 
     kind: Literal[KIND]
     sliding_poles: list[Pole] = Field(description="The n - 1 poles (1/s) of the sliding motion on sigma = c x = 0.")
