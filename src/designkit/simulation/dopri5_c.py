@@ -99,6 +99,13 @@ static void dk_record(dk_ctx *c, long k, const double *s, double *out) {{
   dk_rec(arg, res, c->iw, c->w, 0);
 }}
 
+/* y(t_k) of the continuous extension of the step [t, t + h] (coefficients r1..r5, Hairer's contd5): the one
+   expression every grid point is written with. */
+static inline double dk_dense(double r1, double r2, double r3, double r4, double r5, double th) {{
+  const double th1 = 1.0 - th;
+  return r1 + th * (r2 + th1 * (r3 + th * (r4 + th1 * r5)));
+}}
+
 static int dk_bad(const double *y) {{
   double m = 0.0;
   for (int j = 0; j < NS; ++j) m += fabs(y[j]);
@@ -187,6 +194,21 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
       if (err <= 1.0) {{
         ++nacc;
         double tn = last ? tend : t + h;
+#ifdef DK_STEP_OBSERVER  /* the step's grid points handed over at once: the emitter picks the ones it reads */
+        if (next * dt <= tn + 1e-9 * dt) {{
+          static const int dense_s[] = {{DK_DENSE_ROWS}};
+          for (size_t i = 0; i < sizeof dense_s / sizeof dense_s[0]; ++i) {{
+            const int j = dense_s[i];
+            double yd = y1[j] - y[j], bs = h * k1[j] - yd;
+            r1[j] = y[j]; r2[j] = yd; r3[j] = bs; r4[j] = yd - h * k7[j] - bs;
+            r5[j] = h * (d1 * k1[j] + d3 * k3[j] + d4 * k4[j] + d5 * k5[j] + d6 * k6[j] + d7 * k7[j]);
+          }}
+          const long first = next;
+          while (next <= kend && ((double)next * dt <= tn + 1e-9 * dt)) ++next;
+          const double *coef[6] = {{r1, r2, r3, r4, r5, y1}};
+          dk_step(user, first, next - 1, t, h, dt, last && next - 1 == kend, coef);
+        }}
+#else
         if (next * dt <= tn + 1e-9 * dt) {{
           for (int j = 0; j < NS; ++j) {{
             double yd = y1[j] - y[j], bs = h * k1[j] - yd;
@@ -212,6 +234,7 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
             ++next;
           }}
         }}
+#endif
         memcpy(y, y1, sizeof y); memcpy(k1, k7, sizeof k1);
         double fac = fac11 / pow(facold, beta);
         fac = fmax(facc2, fmin(facc1, fac / safe));

@@ -62,6 +62,31 @@ static void dk_emit_observe(void *user, long k, const double *s) {{
   dk_obs_point(u->o, k, u->y, u->c.W + (size_t)k * NW);
 }}
 
+#ifdef DK_STEP_OBSERVER
+/* One accepted step's grid points first..lastk: the observer's plan says which it reads (all, or the first and
+   the last, or the last); each is written exactly as the driver writes a grid point. */
+static void dk_step(void *user, long first, long lastk, double t, double h, double dt, int exact_end,
+                    const double *const *coef) {{
+  dk_obs_user *u = (dk_obs_user *)user;
+  static const int rows[NOBS + 1] = {{OBS_ROWS}};
+  double s[NS];
+  const int plan = dk_obs_plan(u->o, first, lastk, t, h, dt, coef);
+  for (long k = first; k <= lastk; ++k) {{
+    if (!(plan & DK_PLAN_ALL) && k != lastk && !(k == first && (plan & DK_PLAN_FIRST))) continue;
+    if (k == lastk && exact_end)
+      for (int i = 0; i < NOBS; ++i) s[rows[i]] = coef[5][rows[i]];
+    else {{
+      const double th = ((double)k * dt - t) / h;
+      for (int i = 0; i < NOBS; ++i) {{
+        const int r = rows[i];
+        s[r] = dk_dense(coef[0][r], coef[1][r], coef[2][r], coef[3][r], coef[4][r], th);
+      }}
+    }}
+    dk_emit_observe(user, k, s);
+  }}
+}}
+#endif
+
 int dk_dopri5_observe(const double *S0, const double *P, long np, long B, const double *W, const double *brk,
                       long N, double dt, double rtol, double atol, long max_steps, const double *prm, double *OUT,
                       double *STATS) {{
@@ -164,8 +189,8 @@ def _prepared(pair: Dopri5, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return W, brk
 
 
-def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int, n_params: int
-             ) -> Observed | str:
+def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int, n_params: int,
+             steps: bool = False) -> Observed | str:
     """The batch runner of ``pair`` whose observer reads the record rows ``rows`` at every grid point.
 
     Parameters
@@ -181,6 +206,14 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
         Numbers the observer writes per run.
     n_params : int
         The plant's parameter count (the last held inputs), replaced per run when ``run`` is given them.
+    steps : bool
+        The observer also defines ``int dk_obs_plan(dk_obs *o, long first, long last, double t, double h,
+        double dt, const double *const *coef)``, called once per accepted step with the step's grid points
+        ``first..last`` and its continuous extension (``coef[0..4]``: Hairer's ``r1..r5`` of every state row read,
+        ``coef[5]`` the step's end state; ``y(t + theta h) = r1 + theta (r2 + (1 - theta) (r3 + theta (r4 +
+        (1 - theta) r5)))``); it returns which of them ``dk_obs_point`` is given: ``DK_PLAN_ALL``, or the last
+        and with ``DK_PLAN_FIRST`` the first.  The grid points left out are never evaluated (only when every row
+        read is a state of the plant; otherwise every point is).
 
     Returns
     -------
@@ -201,8 +234,12 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
     head = "\n".join(f"#define {k} {v}" for k, v in (
         ("OUT_ARG", out.sz_arg()), ("OUT_RES", out.sz_res()), ("OUT_IW", out.sz_iw()), ("OUT_W", out.sz_w()),
         ("NOBS", len(rows)), ("NOUT", int(n_out)), ("OBS_FROM_STATE", int(from_state)),
-        ("OBS_ROWS", ", ".join(str(int(r)) for r in rows) or "0")))
+        ("OBS_ROWS", ", ".join(str(int(r)) for r in rows) or "0"), ("DK_PLAN_FIRST", 1), ("DK_PLAN_ALL", 4)))
     dense = f"#define DK_DENSE_ROWS {', '.join(str(int(r)) for r in rows)}\n" if from_state and rows else ""
+    if dense and steps:
+        dense += ("#define DK_STEP_OBSERVER\n"
+                  "static void dk_step(void *user, long first, long lastk, double t, double h, double dt, "
+                  "int exact_end, const double *const *coef);\n")
     text = dense + "\n".join([source(pair.rhs, rec, pair.nw, pair.n_ref, extra=(out,)), head, observer_source,
                       ENTRY.format()])
     built = _library(text, cc, FLAGS)
