@@ -51,6 +51,9 @@ DRIVER = r"""
 #define DIVERGED 1e150
 
 #define NQ (NW - 3 * NA)
+#ifndef DK_WSTRIDE
+#define DK_WSTRIDE NW  /* numbers from one grid step's inputs to the next (0: one column for every step) */
+#endif
 
 typedef void (*dk_emit)(void *user, long k, const double *s);
 
@@ -64,7 +67,7 @@ typedef struct {{
 /* The held inputs of grid step k (noise, disturbance, flag, feedforward, parameters): W's own, or a copy with its
    last np entries (the true plant's parameters) replaced by P (one sample of a batch). */
 static const double *dk_held(dk_ctx *c, long k) {{
-  const double *h = c->W + (size_t)k * NW + 3 * NA;
+  const double *h = c->W + (size_t)k * DK_WSTRIDE + 3 * NA;
   if (!c->P) return h;
   memcpy(c->q, h, sizeof(double) * NQ);
   memcpy(c->q + NQ - c->np, c->P, sizeof(double) * c->np);
@@ -77,7 +80,7 @@ static void dk_ref(dk_ctx *c, double t, double *a) {{
   if (i > c->k1 - 1) i = c->k1 - 1;
   double tau = (t - (double)i * c->dt) / c->dt;
   double l0 = 2.0 * (tau - 0.5) * (tau - 1.0), lm = -4.0 * tau * (tau - 1.0), l1 = 2.0 * tau * (tau - 0.5);
-  const double *w = c->W + (size_t)i * NW;
+  const double *w = c->W + (size_t)i * DK_WSTRIDE;
   for (int j = 0; j < NA; ++j) a[j] = l0 * w[j] + lm * w[NA + j] + l1 * w[2 * NA + j];
 }}
 
@@ -94,7 +97,7 @@ static void dk_f(dk_ctx *c, double t, const double *s, double *out) {{
 static void dk_record(dk_ctx *c, long k, const double *s, double *out) {{
   const casadi_real *arg[REC_ARG + 3] = {{0}};
   casadi_real *res[REC_RES + 1] = {{0}};
-  arg[0] = s; arg[1] = c->W + (size_t)k * NW; arg[2] = c->W + (size_t)k * NW + 3 * NA;
+  arg[0] = s; arg[1] = c->W + (size_t)k * DK_WSTRIDE; arg[2] = c->W + (size_t)k * DK_WSTRIDE + 3 * NA;
   res[0] = out;
   dk_rec(arg, res, c->iw, c->w, 0);
 }}

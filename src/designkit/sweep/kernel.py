@@ -47,11 +47,11 @@ static void dk_obs_begin(dk_obs *o, const double *s0, const double *W, long N, c
   o->lv[0] = {rise_lo}; o->lv[1] = {rise_hi}; o->uok = 1;
   for (int j = 0; j < NJ; ++j) {{
     const double x0 = W[j];
-    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * NW + j]; o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY;
+    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * DK_WSTRIDE + j]; o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY;
     o->last[j] = -1;
     if (o->traj)
       for (long k = 0; k < N; ++k) {{
-        double xd = W[(size_t)k * NW + j], e = fabs(xd - x0), a = fabs(xd);
+        double xd = W[(size_t)k * DK_WSTRIDE + j], e = fabs(xd - x0), a = fabs(xd);
         if (e > o->amps[j] || e != e) o->amps[j] = e;
         if (a > o->xdmax[j] || a != a) o->xdmax[j] = a;
       }}
@@ -267,7 +267,9 @@ def kernel_for(simulator: Any, requirements: Any) -> Kernel | str:
     n = len(plant.positions)
     source = OBSERVER.format(nj=n, nu=nu, per_joint=PER_JOINT, rest_tol=repr(REST_TOL),
                              rise_lo=repr(RISE_LIMITS[0]), rise_hi=repr(RISE_LIMITS[1]))
-    runner = observed(pair, rows, source, PER_JOINT * n + 2 * nu, L.np_, steps=True)
+    w = np.asarray(simulator.inputs, dtype=float)
+    runner = observed(pair, rows, source, PER_JOINT * n + 2 * nu, L.np_, steps=True,
+                      constant=bool(np.all(w == w[:, :1])))
     if isinstance(runner, str):
         return runner
     t = np.asarray(simulator.time, dtype=float)
