@@ -38,7 +38,7 @@ from designkit.simulation.dopri5 import MAX_STEPS_PER_SAMPLE, Dopri5, _compiler,
 
 __all__ = ["FLAGS", "Observed", "observed"]
 
-FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
+FLAGS = ("-O2", "-ffp-contract=off", "-fno-semantic-interposition", "-fPIC", "-shared")
 """The batch library runs many samples, so it is built at ``-O2`` (the pair's ``-O1`` is chosen for one run's
 compile time); without fused multiply-add or reassociation either way, a run's numbers are the single run's."""
 
