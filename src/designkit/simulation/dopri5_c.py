@@ -104,6 +104,23 @@ static void dk_record(dk_ctx *c, long k, const double *s, double *out) {{
 
 /* y(t_k) of the continuous extension of the step [t, t + h] (coefficients r1..r5, Hairer's contd5): the one
    expression every grid point is written with. */
+#ifdef DK_PROJECT
+/* The law's projection of the state at a grid instant, in place; 1 when it moved any entry. */
+static int dk_project(double *s) {{
+  const casadi_real *arg[PROJ_ARG + 1] = {{0}};
+  casadi_real *res[PROJ_RES + 1] = {{0}};
+  casadi_int iw[PROJ_IW + 1];
+  casadi_real w[PROJ_W + 1];
+  double out[NS];
+  int moved = 0;
+  arg[0] = s; res[0] = out;
+  dk_proj(arg, res, iw, w, 0);
+  for (int j = 0; j < NS; ++j)
+    if (out[j] != s[j]) {{ moved = 1; s[j] = out[j]; }}
+  return moved;
+}}
+#endif
+
 static inline double dk_dense(double r1, double r2, double r3, double r4, double r5, double th) {{
   const double th1 = 1.0 - th;
   return r1 + th * (r2 + th1 * (r3 + th * (r4 + th1 * r5)));
@@ -149,6 +166,7 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
     c.k0 = k; c.k1 = kend; c.held = dk_held(&c, k);
     double t = (double)k * dt, tend = (double)kend * dt, facold = 1e-4;
     int rejected = 0;
+    long reset = -1;  /* the grid point where the projection moved the state (DK_PROJECT) */
     dk_f(&c, t, y, k1);
     if (h <= 0.0) {{  /* Hairer's starting step (II.4) */
       double dnf = 0.0, dny = 0.0, der2 = 0.0;
@@ -233,6 +251,9 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
               for (int j = 0; j < NS; ++j) ys[j] = r1[j] + th * (r2[j] + th1 * (r3[j] + th * (r4[j] + th1 * r5[j])));
 #endif
             }}
+#ifdef DK_PROJECT
+            if (dk_project(ys)) {{ emit(user, next, ys); reset = next; ++next; break; }}
+#endif
             emit(user, next, ys);
             ++next;
           }}
@@ -247,13 +268,16 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
         rejected = 0;
         t = tn;
         h = hnew;
+#ifdef DK_PROJECT
+        if (reset >= 0) {{ memcpy(y, ys, sizeof y); break; }}  /* start again from the projected state there */
+#endif
       }} else {{
         ++nrej;
         rejected = 1;
         h = h / fmin(facc1, (err == err ? fac11 : 1e3) / safe);
       }}
     }}
-    k = kend;
+    k = reset >= 0 ? reset : kend;
   }}
   stats[0] = (double)c.nfev; stats[1] = (double)nacc; stats[2] = (double)nrej; stats[3] = (double)stop;
   return status;

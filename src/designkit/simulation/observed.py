@@ -236,6 +236,8 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
     """
     if pair.library is None:
         return "the pair runs interpreted"
+    if pair.proj is not None:
+        return "the law's projection restarts the integration at grid instants (the records path applies it)"
     cc = _compiler()
     if cc is None:
         return "no C compiler on PATH"
