@@ -193,7 +193,7 @@ def _prepared(pair: Dopri5, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     if kept is not None and kept[0] is inputs:
         return kept[1], kept[2], kept[3]
     W, brk = np.ascontiguousarray(inputs.T, dtype=float), breakpoints(inputs, pair.n_ref)
-    one = np.ascontiguousarray(W[:1]) if np.all(W == W[:1]) else None
+    one = np.ascontiguousarray(W[:1]) if np.all(W[:1] == W) else None
     pair._prepared["observed"] = (inputs, W, brk, one)
     return W, brk, one
 

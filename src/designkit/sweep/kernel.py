@@ -40,15 +40,17 @@ typedef struct {{
   long cnt[NJ];
 }} dk_obs;
 
-/* prm: [0 a step to a constant reference, 1 a trajectory, 2 another step; settling band, k of the steady-state window's start, then the N instants] */
+/* prm: [0 a step to a constant reference, 1 a trajectory, 2 another step; settling band, k of the steady-state
+   window's start, then the N instants] */
 static void dk_obs_begin(dk_obs *o, const double *s0, const double *W, long N, const double *prm) {{
   memset(o, 0, sizeof *o);
-  o->W = W; o->N = N; o->traj = prm[0] == 1.0; o->fixed = prm[0] == 0.0; o->sb = prm[1]; o->kwin = (long)prm[2]; o->T = prm + 3;
+  o->W = W; o->N = N; o->traj = prm[0] == 1.0; o->fixed = prm[0] == 0.0;
+  o->sb = prm[1]; o->kwin = (long)prm[2]; o->T = prm + 3;
   o->lv[0] = {rise_lo}; o->lv[1] = {rise_hi}; o->uok = 1;
   for (int j = 0; j < NJ; ++j) {{
     const double x0 = W[j];
-    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * DK_WSTRIDE + j]; o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY;
-    o->last[j] = -1;
+    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * DK_WSTRIDE + j];
+    o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY; o->last[j] = -1;
     if (o->traj)
       for (long k = 0; k < N; ++k) {{
         double xd = W[(size_t)k * DK_WSTRIDE + j], e = fabs(xd - x0), a = fabs(xd);
