@@ -9,8 +9,8 @@
    from Pinocchio's CRBA and non-linear effects, friction by hand, the m1 and m2 regressor columns as unit point
    masses at the origins of DH frames 1 and 2), checked against designkit's closed loop at random points first,
    sampled on the same grid (``t_eval``).  Matched accuracy: every trajectory is compared with DOP853 at
-   ``rtol = 2.5e-14``; of a ladder of tolerances (rtol 1e-3 to 1e-13 in half decades, atol rtol/100) the cheapest whose errors (positions,
-   estimates) do not exceed designkit's is timed.  The NumPy loop leaves the projection out, and the benchmark
+   ``rtol = 2.5e-14``; of a ladder of tolerances (rtol 1e-3 to 1e-13 in half decades, atol rtol/100) the
+   cheapest whose errors (positions, estimates) do not exceed designkit's is timed.  The NumPy loop leaves the projection out, and the benchmark
    checks designkit's run never applied it.  Goal: ``solve_ivp`` / designkit >= 10 against both methods.
 2. PUMA 560 (``--puma``): ``specs/adaptive-ct-puma560.yaml`` without the projection, shortened: the PUMA 560 with
    joint friction and rotor inertias, adapting m2, Ia1, Ia2, Ia3 from 22 kg, 1.2, 3.0, 0.9 kg*m^2 with the gain 20;
