@@ -2,16 +2,16 @@
 
 1. SIMNOG (``specs/adaptive-ct-simnog.yaml``, measured by default): the planar two-link arm under Craig's adaptive
    computed torque, m1 and m2 adapted from 7 and 4.5 kg (gain 5), an ideal accelerometer, the projection with
-   hysteresis on the box; a sine of 1 and 1.2 rad at 0.5 Hz on both joints; 20 s on the 0.25 ms output grid
-   (80,001 points, 6 states).  The loop is smooth and its projection a reset (``Law.project_resets``), so the
-   compiled Dormand--Prince pair integrates it, the projection applied at every grid instant.  The baseline is
+   hysteresis on the box; a sine of 1 and 1.2 rad at 0.5 Hz on both joints; 20 s on the 0.25 ms output grid (80,001
+   points, 6 states). The loop is smooth and its projection a reset (``Law.project_resets``), so the compiled
+   Dormand--Prince pair integrates it, the projection applied at every grid instant. The baseline is
    ``scipy.integrate.solve_ivp`` (RK45 and DOP853) on a NumPy right-hand side of the same loop (the arm's dynamics
    from Pinocchio's CRBA and non-linear effects, friction by hand, the m1 and m2 regressor columns as unit point
    masses at the origins of DH frames 1 and 2), checked against designkit's closed loop at random points first,
-   sampled on the same grid (``t_eval``).  Matched accuracy: every trajectory is compared with DOP853 at
-   ``rtol = 2.5e-14``; of a ladder of tolerances (rtol 1e-3 to 1e-13 in half decades, atol rtol/100) the
-   cheapest whose errors (positions, estimates) do not exceed designkit's is timed.  The NumPy loop leaves the projection out, and the benchmark
-   checks designkit's run never applied it.  Goal: ``solve_ivp`` / designkit >= 10 against both methods.
+   sampled on the same grid (``t_eval``). Matched accuracy: every trajectory is compared with DOP853 at ``rtol =
+   2.5e-14``; of a ladder of tolerances (rtol 1e-3 to 1e-13 in half decades, atol rtol/100) the cheapest whose errors
+   (positions, estimates) do not exceed designkit's is timed. The NumPy loop leaves the projection out, and the
+   benchmark checks designkit's run never applied it. Goal: ``solve_ivp`` / designkit >= 10 against both methods.
 2. PUMA 560 (``--puma``): ``specs/adaptive-ct-puma560.yaml`` without the projection, shortened: the PUMA 560 with
    joint friction and rotor inertias, adapting m2, Ia1, Ia2, Ia3 from 22 kg, 1.2, 3.0, 0.9 kg*m^2 with the gain 20;
    every joint follows a 0.5 Hz sine; 10 s at ``dt = 1 ms``, ``numerics: {compile: always}``; against RK45 on a
