@@ -351,12 +351,13 @@ def puma() -> dict[str, Any]:
     run_s = timings["designkit_run_warm"]["median_s"]
     base_s = timings["solve_ivp_rk45_matched"]["median_s"]
     out = {
+        "integrator": str(result.settings["integrator"]),
         "scenario": {"spec": SPEC, "steps": int(t.size - 1), "dt_s": float(result.settings["dt"]),
                      "states": int(ours.shape[1])},
         "compiled": dict(sim.compiled),
         "first_build_s": first_build,
         "checks": {"numpy_rhs_vs_designkit_max_rel_diff": rhs_diff},
-        "accuracy_vs_dop853_1e-10": {"designkit_rk4": dk_err, "solve_ivp_chosen": chosen,
+        "accuracy_vs_dop853_1e-10": {"designkit": dk_err, "solve_ivp_chosen": chosen,
                                      "matched": bool(ok), "ladder": ladder, "reference_nfev": ref_nfev},
         "timings": timings,
         "goal": {"run_s": GOAL_RUN_S, "met": bool(run_s <= GOAL_RUN_S)},
