@@ -20,7 +20,10 @@ The observer's source defines ``NOUT`` (numbers it writes per run), a ``dk_obs``
     void dk_obs_end(dk_obs *o, int status, long stop, double *out);           /* stop: first point not seen */
 
 ``W`` is the per-step input block (``NW`` numbers a step: the reference's three stages, then the held
-inputs), ``prm`` the caller's constants.  The library is cached by the hash of its source, like the pair's.
+inputs; grid point ``k``'s inputs start at ``W + k * DK_WSTRIDE``, ``DK_WSTRIDE`` being ``NW``, or 0 for a runner
+built for inputs that do not change over the grid), ``prm`` the caller's constants.  An observer may also plan,
+step by step, which grid points it reads (``observed(steps=True)``).  The library is cached by the hash of its
+source, like the pair's.
 """
 
 from __future__ import annotations

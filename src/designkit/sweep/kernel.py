@@ -12,6 +12,14 @@ of operations (tested against it), except the steady-state error's mean, summed 
 sums pairwise: the two agree to about 1e-12 relative (2e-13 measured on SIMNOG), not to the last bit.  A sample's
 numbers do not depend on its batch, so a sweep's results are still identical however it is split.
 
+Which grid points are read: on a step to a constant reference without ``max_control``, the pair hands each
+accepted step's continuous extension to the observer's plan (``dk_obs_plan`` below), which bounds each position
+over the step and lets only the points that can change a metric be evaluated -- the last of every step, the first
+where a maximum may sit or the band's last outside point was just before, every point of a step that may cross a
+rise level or the settling band and of the steady-state window.  The points read go through the same
+``dk_obs_point`` in grid order, so the metrics are those of every point.  Inputs that do not change over the grid
+are passed as one column (``DK_WSTRIDE`` 0).
+
 Memory per run: nothing of the size of the run (the per-step inputs are the simulator's, shared).
 """
 
