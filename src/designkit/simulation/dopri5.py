@@ -224,7 +224,7 @@ def _library(text: str, cc: str, flags: tuple[str, ...] = FLAGS) -> tuple[Path, 
     digest = hashlib.sha256("\0".join([text, cc, *flags, ca.__version__]).encode()).hexdigest()[:16]
     folder = cache_dir("codegen")
     library = folder / f"dk_dopri5_{digest}.so"
-    if library.exists():
+    if library.exists() and _hold(library):
         return library, False
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -239,7 +239,30 @@ def _library(text: str, cc: str, flags: tuple[str, ...] = FLAGS) -> tuple[Path, 
         os.replace(tmp, library)  # atomic: safe with concurrent builders
     except OSError as exc:
         return f"cannot write to the cache directory {folder}: {exc}"
+    if not _hold(library):
+        return f"the library built in {folder} was removed before it could be loaded"
     return library, True
+
+
+_HELD: dict[str, ctypes.CDLL] = {}
+"""Every library handed out, loaded in this process and kept loaded: the cache folder is shared, and another
+process pruning it (``designkit.models.codegen`` removes the oldest libraries by modification time) must not
+take a library between the moment it is found and the moment a run loads it (``ctypes`` finds a loaded library
+by its path)."""
+
+
+def _hold(library: Path) -> bool:
+    """Load ``library`` and keep it loaded (:data:`_HELD`), its modification time renewed so that a pruning of
+    the cache takes older ones first; False when it cannot be loaded (removed meanwhile)."""
+    key = str(library)
+    if key in _HELD:
+        return True
+    try:
+        os.utime(library)
+        _HELD[key] = ctypes.CDLL(key)
+    except OSError:
+        return False
+    return True
 
 
 def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL,
