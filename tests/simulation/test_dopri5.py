@@ -179,3 +179,19 @@ def test_a_diverging_loop_is_integrated_again_by_rk4_and_says_so():
     assert "the Dormand-Prince pair stopped at t =" in sim.settings["integrator"]
     assert sim.settings["integrator"].startswith("rk4")
     assert not np.all(np.isfinite(sim.state)) or "integrator_failure" in sim.settings or np.abs(sim.state).max() > 1e3
+
+
+@needs_cc
+def test_a_library_removed_from_the_cache_after_the_build_still_runs(tmp_path, monkeypatch):
+    """The cache folder is shared with other processes, whose pruning removes the oldest libraries: a simulator
+    built on a library keeps it loaded, so removing the file afterwards changes nothing."""
+    monkeypatch.setenv("DESIGNKIT_CACHE_DIR", str(tmp_path))
+    spec = make_spec(duration=1.0)
+    sim = build(spec, design_of(spec))
+    assert sim.dopri5 is not None and sim.dopri5.library is not None
+    assert sim.dopri5.library.parent == tmp_path / "codegen"
+    for so in (tmp_path / "codegen").glob("*.so"):
+        so.unlink()
+    assert not sim.dopri5.library.exists()
+    ran = sim.run()
+    assert np.all(np.isfinite(ran.position)) and ran.position[-1] != 0.0

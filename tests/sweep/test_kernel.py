@@ -5,6 +5,7 @@ metrics of the records path (sweep/margins.py) on the same runs."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,8 @@ from designkit.verification.time_domain import time_domain_checks
 from tests.sweep.specs import SIMNOG, link
 from tests.sweep.test_margins import TRAJECTORY
 
+SPECS = Path(__file__).resolve().parents[2] / "specs"
+
 pytestmark = pytest.mark.skipif(find_compiler() is None, reason="the kernel runs compiled only")
 
 RK4 = "numerics: {integrator: rk4}\n"
@@ -26,6 +29,18 @@ DEFAULT = {  # the same scenarios with the default integrator (the compiled Dorm
         "requirements: {overshoot: 30, settling_time: 2.5, rise_time: 0.5, steady_state_error: 0.01, "
         "tracking_error: 1.2, max_control: 60}"),
     "trajectory": TRAJECTORY.replace(RK4, ""),
+    # no command observed: the kernel reads only the grid points its plan picks step by step (a sample of the
+    # points skipped could change a maximum, a crossing or the band's last exit only if a bound were wrong)
+    "simnog_no_control": SIMNOG.replace(RK4, "").replace(", max_control: 300", ""),
+    "simnog_spec": (SPECS / "simnog-decentralized-pid.yaml").read_text(),
+    "simnog_one_joint_at_rest": SIMNOG.replace(RK4, "").replace(", max_control: 300", "").replace(
+        "step: [1.0, -0.5]", "step: [0.0, -0.5]"),
+    "simnog_not_settled_at_the_end": SIMNOG.replace(RK4, "").replace(", max_control: 300", "").replace(
+        "duration: 2.0", "duration: 0.6"),
+    "link_no_control": link(km=(1.2, 3.0), tau=(0.3, 0.8), duration=8.0).replace(RK4, "").replace(
+        "requirements: {steady_state_error: 0.5}",
+        "requirements: {overshoot: 30, settling_time: 2.5, rise_time: 0.5, steady_state_error: 0.01, "
+        "tracking_error: 1.2}").replace("simulation: {duration: 8.0}", "simulation: {duration: 8.0, step: -0.7}"),
 }
 FIELDS = ("finite", "overshoot", "rise", "settle", "moving", "max_err", "amps", "u_peak", "u_ok")
 

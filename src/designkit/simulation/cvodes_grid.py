@@ -484,7 +484,7 @@ def cvodes_for(numerics: Any, timing: Any, regime: Any, rates: Any, plant: Any, 
     chosen by ``timing``), else None: its method chosen from ``numerics.cvodes_method`` and the loop's ``rates``
     (:class:`designkit.simulation.timing.Rates`), its tolerances ``numerics.rtol`` and ``numerics.atol``, compiled
     unless ``numerics.compile: never``."""
-    if timing.integrator != "cvodes" or not regime.smooth:
+    if timing.integrator != "cvodes" or not regime.smooth or getattr(regime, "resets", False):
         return None
     method = choose_method(numerics.cvodes_method, rates.fast, rates.median)
     source = ("numerics.rtol and numerics.atol" if {"rtol", "atol"} & numerics.model_fields_set

@@ -69,6 +69,10 @@ class Dopri5:
         Tolerances.
     compiled_now : bool
         True when this build ran the compiler (False: the library was cached).
+    proj : casadi.Function or None
+        ``dk_proj(s) -> s``: the law's projection of the controller states (``Law.project_resets``), applied at
+        every grid instant; where it moves the state, the run starts again from the projected state there (a
+        fresh derivative, as at a breakpoint).  None: no projection.
     """
 
     library: Path | None
@@ -82,6 +86,7 @@ class Dopri5:
     rtol: float
     atol: float
     compiled_now: bool = False
+    proj: ca.Function | None = None
     stats: dict[str, float] = field(default_factory=dict)
     _lib: list = field(default_factory=list, repr=False)
     _prepared: dict = field(default_factory=dict, repr=False)
@@ -119,7 +124,8 @@ class Dopri5:
         if self.library is None:
             from designkit.simulation.dopri5_py import run_interpreted
 
-            R, count, stop = run_interpreted(self.rhs, self.rec, s0, W, brk, self.dt, self.rtol, self.atol, budget)
+            R, count, stop = run_interpreted(self.rhs, self.rec, s0, W, brk, self.dt, self.rtol, self.atol, budget,
+                                             proj=self.proj)
             self.stats.update(count)
             status = int(stop < n)
         else:
@@ -151,6 +157,15 @@ def breakpoints(inputs: np.ndarray, n_ref: int) -> np.ndarray:
     return brk
 
 
+def projection_function(ns: int, law: Any) -> ca.Function:
+    """``dk_proj(s) -> s``: the integrated state ``s = (x, xc)`` with the law's projection of ``xc`` (``x``
+    unchanged)."""
+    s = ca.SX.sym("s", ns)
+    nc = law.project.size1_in(0)
+    x, xc = s[:ns - nc], s[ns - nc:]
+    return ca.Function("dk_proj", [s], [ca.vertcat(x, law.project(xc))], ["s"], ["s_projected"])
+
+
 def loop_functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.Function, int, int]:
     """``(rhs, rec, nw, n_ref)``: ``dk_rhs(s, a, q) -> s_dot`` and ``dk_rec(s, a, q) -> record`` of the loop."""
     L = layout(plant, law, element, 0)
@@ -175,17 +190,22 @@ def loop_functions(plant: Any, law: Any, element: Any) -> tuple[ca.Function, ca.
     return rhs, rec, n_ref + n_ref + n_ref + nq, n_ref
 
 
-def source(rhs: ca.Function, rec: ca.Function, nw: int, n_ref: int, extra: tuple[ca.Function, ...] = ()) -> str:
-    """The C source of the library: CasADi's code of ``rhs``, ``rec`` (and of the ``extra`` functions, in the same
-    generated unit), then the driver."""
+def source(rhs: ca.Function, rec: ca.Function, nw: int, n_ref: int, extra: tuple[ca.Function, ...] = (),
+           proj: ca.Function | None = None) -> str:
+    """The C source of the library: CasADi's code of ``rhs``, ``rec`` (and of the ``extra`` functions, and of
+    the projection ``proj``, in the same generated unit), then the driver."""
     gen = ca.CodeGenerator("dk_loop.c", {"with_header": False, "verbose": False})
-    for f in (rhs, rec, *extra):
+    for f in (rhs, rec, *extra, *((proj,) if proj is not None else ())):
         gen.add(f)
     sizes = {"ns": rhs.size1_in(0), "na": n_ref, "nw": nw, "nrec": rec.size1_out(0)}
     for tag, f in (("rhs", rhs), ("rec", rec)):
         sizes.update({f"{tag}_arg": f.sz_arg(), f"{tag}_res": f.sz_res(), f"{tag}_iw": f.sz_iw(),
                       f"{tag}_w": f.sz_w()})
-    return gen.dump() + DRIVER.format(**sizes)
+    head = ""
+    if proj is not None:
+        head = (f"#define DK_PROJECT\n#define PROJ_ARG {proj.sz_arg()}\n#define PROJ_RES {proj.sz_res()}\n"
+                f"#define PROJ_IW {proj.sz_iw()}\n#define PROJ_W {proj.sz_w()}\n")
+    return gen.dump() + head + DRIVER.format(**sizes)
 
 
 def _compiler() -> str | None:
@@ -204,7 +224,7 @@ def _library(text: str, cc: str, flags: tuple[str, ...] = FLAGS) -> tuple[Path, 
     digest = hashlib.sha256("\0".join([text, cc, *flags, ca.__version__]).encode()).hexdigest()[:16]
     folder = cache_dir("codegen")
     library = folder / f"dk_dopri5_{digest}.so"
-    if library.exists():
+    if library.exists() and _hold(library):
         return library, False
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -219,11 +239,34 @@ def _library(text: str, cc: str, flags: tuple[str, ...] = FLAGS) -> tuple[Path, 
         os.replace(tmp, library)  # atomic: safe with concurrent builders
     except OSError as exc:
         return f"cannot write to the cache directory {folder}: {exc}"
+    if not _hold(library):
+        return f"the library built in {folder} was removed before it could be loaded"
     return library, True
 
 
+_HELD: dict[str, ctypes.CDLL] = {}
+"""Every library handed out, loaded in this process and kept loaded: the cache folder is shared, and another
+process pruning it (``designkit.models.codegen`` removes the oldest libraries by modification time) must not
+take a library between the moment it is found and the moment a run loads it (``ctypes`` finds a loaded library
+by its path)."""
+
+
+def _hold(library: Path) -> bool:
+    """Load ``library`` and keep it loaded (:data:`_HELD`), its modification time renewed so that a pruning of
+    the cache takes older ones first; False when it cannot be loaded (removed meanwhile)."""
+    key = str(library)
+    if key in _HELD:
+        return True
+    try:
+        os.utime(library)
+        _HELD[key] = ctypes.CDLL(key)
+    except OSError:
+        return False
+    return True
+
+
 def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL,
-                 compile: bool = True) -> tuple[Dopri5, str]:
+                 compile: bool = True, resets: bool = False) -> tuple[Dopri5, str]:
     """The :class:`Dopri5` of the smooth loop ``plant`` under ``law`` with ``element``, compiled when it can be.
 
     Parameters
@@ -236,6 +279,8 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
         Tolerances of the error control (atol in state units).
     compile : bool
         Build (or load) the C library; False: the interpreted driver.
+    resets : bool
+        Apply the law's projection at every grid instant (``Dopri5.proj``; ``Law.project_resets``).
 
     Returns
     -------
@@ -244,13 +289,14 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
         (``numerics.compile: never``, no C compiler, compilation failed).
     """
     rhs, rec, nw, n_ref = loop_functions(plant, law, element)
+    proj = projection_function(rhs.size1_in(0), law) if resets else None
     sizes = {"ns": rhs.size1_in(0), "nw": nw, "nrec": rec.size1_out(0), "n_ref": n_ref, "dt": float(dt),
              "rtol": float(rtol), "atol": float(atol)}
     cc = _compiler()
     why = "numerics.compile: never" if not compile else "no C compiler on PATH" if cc is None else ""
-    built = _library(source(rhs, rec, nw, n_ref), cc) if not why and cc is not None else why
+    built = _library(source(rhs, rec, nw, n_ref, proj=proj), cc) if not why and cc is not None else why
     if isinstance(built, str):
-        return Dopri5(library=None, rhs=rhs, rec=rec, **sizes), built
+        return Dopri5(library=None, rhs=rhs, rec=rec, proj=proj, **sizes), built
     library, now = built
-    return (Dopri5(library=library, rhs=rhs, rec=rec, compiled_now=now, **sizes),
+    return (Dopri5(library=library, rhs=rhs, rec=rec, compiled_now=now, proj=proj, **sizes),
             "compiled now" if now else "cached library")

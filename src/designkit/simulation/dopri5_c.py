@@ -51,6 +51,9 @@ DRIVER = r"""
 #define DIVERGED 1e150
 
 #define NQ (NW - 3 * NA)
+#ifndef DK_WSTRIDE
+#define DK_WSTRIDE NW  /* numbers from one grid step's inputs to the next (0: one column for every step) */
+#endif
 
 typedef void (*dk_emit)(void *user, long k, const double *s);
 
@@ -64,7 +67,7 @@ typedef struct {{
 /* The held inputs of grid step k (noise, disturbance, flag, feedforward, parameters): W's own, or a copy with its
    last np entries (the true plant's parameters) replaced by P (one sample of a batch). */
 static const double *dk_held(dk_ctx *c, long k) {{
-  const double *h = c->W + (size_t)k * NW + 3 * NA;
+  const double *h = c->W + (size_t)k * DK_WSTRIDE + 3 * NA;
   if (!c->P) return h;
   memcpy(c->q, h, sizeof(double) * NQ);
   memcpy(c->q + NQ - c->np, c->P, sizeof(double) * c->np);
@@ -77,7 +80,7 @@ static void dk_ref(dk_ctx *c, double t, double *a) {{
   if (i > c->k1 - 1) i = c->k1 - 1;
   double tau = (t - (double)i * c->dt) / c->dt;
   double l0 = 2.0 * (tau - 0.5) * (tau - 1.0), lm = -4.0 * tau * (tau - 1.0), l1 = 2.0 * tau * (tau - 0.5);
-  const double *w = c->W + (size_t)i * NW;
+  const double *w = c->W + (size_t)i * DK_WSTRIDE;
   for (int j = 0; j < NA; ++j) a[j] = l0 * w[j] + lm * w[NA + j] + l1 * w[2 * NA + j];
 }}
 
@@ -94,9 +97,33 @@ static void dk_f(dk_ctx *c, double t, const double *s, double *out) {{
 static void dk_record(dk_ctx *c, long k, const double *s, double *out) {{
   const casadi_real *arg[REC_ARG + 3] = {{0}};
   casadi_real *res[REC_RES + 1] = {{0}};
-  arg[0] = s; arg[1] = c->W + (size_t)k * NW; arg[2] = c->W + (size_t)k * NW + 3 * NA;
+  arg[0] = s; arg[1] = c->W + (size_t)k * DK_WSTRIDE; arg[2] = c->W + (size_t)k * DK_WSTRIDE + 3 * NA;
   res[0] = out;
   dk_rec(arg, res, c->iw, c->w, 0);
+}}
+
+/* y(t_k) of the continuous extension of the step [t, t + h] (coefficients r1..r5, Hairer's contd5): the one
+   expression every grid point is written with. */
+#ifdef DK_PROJECT
+/* The law's projection of the state at a grid instant, in place; 1 when it moved any entry. */
+static int dk_project(double *s) {{
+  const casadi_real *arg[PROJ_ARG + 1] = {{0}};
+  casadi_real *res[PROJ_RES + 1] = {{0}};
+  casadi_int iw[PROJ_IW + 1];
+  casadi_real w[PROJ_W + 1];
+  double out[NS];
+  int moved = 0;
+  arg[0] = s; res[0] = out;
+  dk_proj(arg, res, iw, w, 0);
+  for (int j = 0; j < NS; ++j)
+    if (out[j] != s[j]) {{ moved = 1; s[j] = out[j]; }}
+  return moved;
+}}
+#endif
+
+static inline double dk_dense(double r1, double r2, double r3, double r4, double r5, double th) {{
+  const double th1 = 1.0 - th;
+  return r1 + th * (r2 + th1 * (r3 + th * (r4 + th1 * r5)));
 }}
 
 static int dk_bad(const double *y) {{
@@ -139,6 +166,7 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
     c.k0 = k; c.k1 = kend; c.held = dk_held(&c, k);
     double t = (double)k * dt, tend = (double)kend * dt, facold = 1e-4;
     int rejected = 0;
+    long reset = -1;  /* the grid point where the projection moved the state (DK_PROJECT) */
     dk_f(&c, t, y, k1);
     if (h <= 0.0) {{  /* Hairer's starting step (II.4) */
       double dnf = 0.0, dny = 0.0, der2 = 0.0;
@@ -187,6 +215,21 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
       if (err <= 1.0) {{
         ++nacc;
         double tn = last ? tend : t + h;
+#ifdef DK_STEP_OBSERVER  /* the step's grid points handed over at once: the emitter picks the ones it reads */
+        if (next * dt <= tn + 1e-9 * dt) {{
+          static const int dense_s[] = {{DK_DENSE_ROWS}};
+          for (size_t i = 0; i < sizeof dense_s / sizeof dense_s[0]; ++i) {{
+            const int j = dense_s[i];
+            double yd = y1[j] - y[j], bs = h * k1[j] - yd;
+            r1[j] = y[j]; r2[j] = yd; r3[j] = bs; r4[j] = yd - h * k7[j] - bs;
+            r5[j] = h * (d1 * k1[j] + d3 * k3[j] + d4 * k4[j] + d5 * k5[j] + d6 * k6[j] + d7 * k7[j]);
+          }}
+          const long first = next;
+          while (next <= kend && ((double)next * dt <= tn + 1e-9 * dt)) ++next;
+          const double *coef[6] = {{r1, r2, r3, r4, r5, y1}};
+          dk_step(user, first, next - 1, t, h, dt, last && next - 1 == kend, coef);
+        }}
+#else
         if (next * dt <= tn + 1e-9 * dt) {{
           for (int j = 0; j < NS; ++j) {{
             double yd = y1[j] - y[j], bs = h * k1[j] - yd;
@@ -208,10 +251,14 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
               for (int j = 0; j < NS; ++j) ys[j] = r1[j] + th * (r2[j] + th1 * (r3[j] + th * (r4[j] + th1 * r5[j])));
 #endif
             }}
+#ifdef DK_PROJECT
+            if (dk_project(ys)) {{ emit(user, next, ys); reset = next; ++next; break; }}
+#endif
             emit(user, next, ys);
             ++next;
           }}
         }}
+#endif
         memcpy(y, y1, sizeof y); memcpy(k1, k7, sizeof k1);
         double fac = fac11 / pow(facold, beta);
         fac = fmax(facc2, fmin(facc1, fac / safe));
@@ -221,13 +268,16 @@ static int dk_integrate(dk_ctx *c0, const double *s0, const double *brk, long N,
         rejected = 0;
         t = tn;
         h = hnew;
+#ifdef DK_PROJECT
+        if (reset >= 0) {{ memcpy(y, ys, sizeof y); break; }}  /* start again from the projected state there */
+#endif
       }} else {{
         ++nrej;
         rejected = 1;
         h = h / fmin(facc1, (err == err ? fac11 : 1e3) / safe);
       }}
     }}
-    k = kend;
+    k = reset >= 0 ? reset : kend;
   }}
   stats[0] = (double)c.nfev; stats[1] = (double)nacc; stats[2] = (double)nrej; stats[3] = (double)stop;
   return status;

@@ -48,9 +48,11 @@ def _buffered(f: Any) -> Any:
 
 
 def run_interpreted(rhs: Any, rec: Any, s0: np.ndarray, W: np.ndarray, brk: np.ndarray, dt: float, rtol: float,
-                    atol: float, max_steps: int) -> tuple[np.ndarray, dict[str, int], int]:
+                    atol: float, max_steps: int, proj: Any = None) -> tuple[np.ndarray, dict[str, int], int]:
     """``(records (N, nrec), stats, stop)``: the pair over the grid; ``stop`` the first grid index not reached
-    (``N`` when the run went through).  ``W`` is ``(N, nw)``, one per-step input column per row."""
+    (``N`` when the run went through).  ``W`` is ``(N, nw)``, one per-step input column per row.  ``proj`` (the
+    law's projection, ``Dopri5.proj``) is applied at every grid instant; where it moves the state the run starts
+    again from there."""
     n, na = W.shape[0], rhs.size1_in(1)
     states = np.full((n, rhs.size1_in(0)), np.nan)
     count = {"evaluations": 0, "accepted": 0, "rejected": 0}
@@ -78,7 +80,7 @@ def run_interpreted(rhs: Any, rec: Any, s0: np.ndarray, W: np.ndarray, brk: np.n
             count["evaluations"] += 1
             return rhs_call(s, ref(t, k0, k1), q)
 
-        t, tend, facold, rejected, nxt = k * dt, kend * dt, 1e-4, False, k + 1
+        t, tend, facold, rejected, nxt, reset = k * dt, kend * dt, 1e-4, False, k + 1, -1
         k1 = f(t, y)
         if h <= 0.0:
             sk = atol + rtol * np.abs(y)
@@ -117,18 +119,35 @@ def run_interpreted(rhs: Any, rec: Any, s0: np.ndarray, W: np.ndarray, brk: np.n
                     states[nxt:top + 1] = y + th * (yd + (1 - th) * (bs + th * (yd - h * k7 - bs + (1 - th) * r5)))
                     if last:
                         states[kend] = y1
-                    nxt = top + 1
+                    if proj is not None:
+                        reset = _first_moved(proj, states, nxt, top)
+                    nxt = top + 1 if reset < 0 else reset + 1
                 y, k1 = y1, k7.copy()
                 fac = max(FACC2, min(FACC1, fac11 / facold ** BETA / SAFE))
                 hnew = h / fac
                 if rejected:
                     hnew = min(hnew, h)
                 facold, rejected, t, h = max(err, 1e-4), False, tn, hnew
+                if reset >= 0:
+                    y = states[reset].copy()
+                    break
             else:
                 count["rejected"] += 1
                 rejected = True
                 h = h / min(FACC1, fac11 / SAFE)
-        k = kend
+        k = reset if reset >= 0 else kend
     states[stop:] = np.nan
     records = rec.map(n)(states.T, W[:, :na].T, W[:, 3 * na:].T)
     return np.asarray(records).T, count, stop
+
+
+def _first_moved(proj: Any, states: np.ndarray, lo: int, hi: int) -> int:
+    """The first grid point of ``lo..hi`` whose state the projection moves (written projected), or -1."""
+    block = states[lo:hi + 1]
+    out = np.asarray(proj.map(block.shape[0])(block.T), dtype=float).T
+    moved = np.flatnonzero(np.any(out != block, axis=1))
+    if moved.size == 0:
+        return -1
+    i = lo + int(moved[0])
+    states[i] = out[i - lo]
+    return i

@@ -20,7 +20,10 @@ The observer's source defines ``NOUT`` (numbers it writes per run), a ``dk_obs``
     void dk_obs_end(dk_obs *o, int status, long stop, double *out);           /* stop: first point not seen */
 
 ``W`` is the per-step input block (``NW`` numbers a step: the reference's three stages, then the held
-inputs), ``prm`` the caller's constants.  The library is cached by the hash of its source, like the pair's.
+inputs; grid point ``k``'s inputs start at ``W + k * DK_WSTRIDE``, ``DK_WSTRIDE`` being ``NW``, or 0 for a runner
+built for inputs that do not change over the grid), ``prm`` the caller's constants.  An observer may also plan,
+step by step, which grid points it reads (``observed(steps=True)``).  The library is cached by the hash of its
+source, like the pair's.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from designkit.simulation.dopri5 import MAX_STEPS_PER_SAMPLE, Dopri5, _compiler,
 
 __all__ = ["FLAGS", "Observed", "observed"]
 
-FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
+FLAGS = ("-O2", "-ffp-contract=off", "-fno-semantic-interposition", "-fPIC", "-shared")
 """The batch library runs many samples, so it is built at ``-O2`` (the pair's ``-O1`` is chosen for one run's
 compile time); without fused multiply-add or reassociation either way, a run's numbers are the single run's."""
 
@@ -51,16 +54,41 @@ static void dk_emit_observe(void *user, long k, const double *s) {{
 #if OBS_FROM_STATE
   static const int rows[NOBS + 1] = {{OBS_ROWS}};
   for (int i = 0; i < NOBS; ++i) u->y[i] = s[rows[i]];
-  dk_obs_point(u->o, k, u->y, u->c.W + (size_t)k * NW);
+  dk_obs_point(u->o, k, u->y, u->c.W + (size_t)k * DK_WSTRIDE);
   return;
 #endif
   const casadi_real *arg[OUT_ARG + 3] = {{0}};
   casadi_real *res[OUT_RES + 1] = {{0}};
-  arg[0] = s; arg[1] = u->c.W + (size_t)k * NW; arg[2] = dk_held(&u->c, k);
+  arg[0] = s; arg[1] = u->c.W + (size_t)k * DK_WSTRIDE; arg[2] = dk_held(&u->c, k);
   res[0] = u->y;
   dk_out(arg, res, u->iw, u->w, 0);
-  dk_obs_point(u->o, k, u->y, u->c.W + (size_t)k * NW);
+  dk_obs_point(u->o, k, u->y, u->c.W + (size_t)k * DK_WSTRIDE);
 }}
+
+#ifdef DK_STEP_OBSERVER
+/* One accepted step's grid points first..lastk: the observer's plan says which it reads (all, or the first and
+   the last, or the last); each is written exactly as the driver writes a grid point. */
+static void dk_step(void *user, long first, long lastk, double t, double h, double dt, int exact_end,
+                    const double *const *coef) {{
+  dk_obs_user *u = (dk_obs_user *)user;
+  static const int rows[NOBS + 1] = {{OBS_ROWS}};
+  double s[NS];
+  const int plan = dk_obs_plan(u->o, first, lastk, t, h, dt, coef);
+  for (long k = first; k <= lastk; ++k) {{
+    if (!(plan & DK_PLAN_ALL) && k != lastk && !(k == first && (plan & DK_PLAN_FIRST))) continue;
+    if (k == lastk && exact_end)
+      for (int i = 0; i < NOBS; ++i) s[rows[i]] = coef[5][rows[i]];
+    else {{
+      const double th = ((double)k * dt - t) / h;
+      for (int i = 0; i < NOBS; ++i) {{
+        const int r = rows[i];
+        s[r] = dk_dense(coef[0][r], coef[1][r], coef[2][r], coef[3][r], coef[4][r], th);
+      }}
+    }}
+    dk_emit_observe(user, k, s);
+  }}
+}}
+#endif
 
 int dk_dopri5_observe(const double *S0, const double *P, long np, long B, const double *W, const double *brk,
                       long N, double dt, double rtol, double atol, long max_steps, const double *prm, double *OUT,
@@ -100,12 +128,15 @@ class Observed:
         Numbers the observer writes per run.
     n_params : int
         Parameters replaced per run (the last held inputs).
+    constant : bool
+        Built for inputs whose columns are all equal (one column is passed).
     """
 
     library: Path
     pair: Dopri5
     n_out: int
     n_params: int
+    constant: bool = False
     _lib: list = field(default_factory=list, repr=False)
 
     def _entry(self) -> Any:
@@ -138,8 +169,12 @@ class Observed:
         pair = self.pair
         S0 = np.ascontiguousarray(np.atleast_2d(np.asarray(z0, dtype=float))[:, :pair.ns])
         B = S0.shape[0]
-        W, brk = _prepared(pair, inputs)
+        W, brk, one = _prepared(pair, inputs)
         n = W.shape[0]
+        if self.constant:
+            if one is None:
+                raise ValueError("this runner was built for inputs that do not change over the grid")
+            W = one
         P = None
         if parameters is not None and self.n_params:
             P = np.ascontiguousarray(np.asarray(parameters, dtype=float).reshape(B, self.n_params))
@@ -154,18 +189,20 @@ class Observed:
         return out, stats
 
 
-def _prepared(pair: Dopri5, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The inputs' transpose and breakpoints, kept for the same array object (the simulator's own inputs)."""
+def _prepared(pair: Dopri5, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The inputs' transpose, breakpoints and (when every column is the same) that one column, kept for the same
+    array object (the simulator's own inputs)."""
     kept = pair._prepared.get("observed")
     if kept is not None and kept[0] is inputs:
-        return kept[1], kept[2]
+        return kept[1], kept[2], kept[3]
     W, brk = np.ascontiguousarray(inputs.T, dtype=float), breakpoints(inputs, pair.n_ref)
-    pair._prepared["observed"] = (inputs, W, brk)
-    return W, brk
+    one = np.ascontiguousarray(W[:1]) if np.all(W[:1] == W) else None
+    pair._prepared["observed"] = (inputs, W, brk, one)
+    return W, brk, one
 
 
-def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int, n_params: int
-             ) -> Observed | str:
+def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int, n_params: int,
+             steps: bool = False, constant: bool = False) -> Observed | str:
     """The batch runner of ``pair`` whose observer reads the record rows ``rows`` at every grid point.
 
     Parameters
@@ -181,6 +218,19 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
         Numbers the observer writes per run.
     n_params : int
         The plant's parameter count (the last held inputs), replaced per run when ``run`` is given them.
+    steps : bool
+        The observer also defines ``int dk_obs_plan(dk_obs *o, long first, long last, double t, double h,
+        double dt, const double *const *coef)``, called once per accepted step with the step's grid points
+        ``first..last`` and its continuous extension (``coef[0..4]``: Hairer's ``r1..r5`` of every state row read,
+        ``coef[5]`` the step's end state; ``y(t + theta h) = r1 + theta (r2 + (1 - theta) (r3 + theta (r4 +
+        (1 - theta) r5)))``); it returns which of them ``dk_obs_point`` is given: ``DK_PLAN_ALL``, or the last
+        and with ``DK_PLAN_FIRST`` the first.  The grid points left out are never evaluated (only when every row
+        read is a state of the plant; otherwise every point is).
+    constant : bool
+        The runner is given inputs whose columns are all the same (``run`` checks): ``W`` is that one column
+        (``DK_WSTRIDE`` 0: the grid point ``k``'s inputs are ``W + k * DK_WSTRIDE``; observers index ``W`` so).  A
+        run then reads ``NW`` numbers instead of streaming through ``N NW`` (14 MB for 50,001 points of 36 inputs,
+        read again by every run of the batch and beyond the caches: most of an evaluation's time on SIMNOG).
 
     Returns
     -------
@@ -189,6 +239,8 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
     """
     if pair.library is None:
         return "the pair runs interpreted"
+    if pair.proj is not None:
+        return "the law's projection restarts the integration at grid instants (the records path applies it)"
     cc = _compiler()
     if cc is None:
         return "no C compiler on PATH"
@@ -201,14 +253,20 @@ def observed(pair: Dopri5, rows: Sequence[int], observer_source: str, n_out: int
     head = "\n".join(f"#define {k} {v}" for k, v in (
         ("OUT_ARG", out.sz_arg()), ("OUT_RES", out.sz_res()), ("OUT_IW", out.sz_iw()), ("OUT_W", out.sz_w()),
         ("NOBS", len(rows)), ("NOUT", int(n_out)), ("OBS_FROM_STATE", int(from_state)),
-        ("OBS_ROWS", ", ".join(str(int(r)) for r in rows) or "0")))
+        ("OBS_ROWS", ", ".join(str(int(r)) for r in rows) or "0"), ("DK_PLAN_FIRST", 1), ("DK_PLAN_ALL", 4)))
     dense = f"#define DK_DENSE_ROWS {', '.join(str(int(r)) for r in rows)}\n" if from_state and rows else ""
+    if dense and steps:
+        dense += ("#define DK_STEP_OBSERVER\n"
+                  "static void dk_step(void *user, long first, long lastk, double t, double h, double dt, "
+                  "int exact_end, const double *const *coef);\n")
+    if constant:
+        dense = "#define DK_WSTRIDE 0\n" + dense
     text = dense + "\n".join([source(pair.rhs, rec, pair.nw, pair.n_ref, extra=(out,)), head, observer_source,
                       ENTRY.format()])
     built = _library(text, cc, FLAGS)
     if isinstance(built, str):
         return built
-    return Observed(library=built[0], pair=pair, n_out=int(n_out), n_params=int(n_params))
+    return Observed(library=built[0], pair=pair, n_out=int(n_out), n_params=int(n_params), constant=constant)
 
 
 def _plant_states(pair: Dopri5) -> int:

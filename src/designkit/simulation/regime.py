@@ -46,12 +46,16 @@ class Regime:
         The right-hand side is smooth between breakpoints: an adaptive integrator may cross grid points.
     why : str
         Why the loop is not smooth, in words (empty when it is).
+    resets : bool
+        A smooth loop whose law's ``project`` resets states now and then (``Law.project_resets``): the adaptive
+        pair applies it at the grid instants; the integrators without that (CVODES over the grid) do not run it.
     """
 
     held_law: bool
     per_step: bool
     smooth: bool
     why: str = ""
+    resets: bool = False
 
 
 def _constant_gate(law: Any) -> bool:
@@ -104,7 +108,9 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
         reasons.append(f"the {element.kind.replace('_', ' ')} element is evaluated once per step")
     if law.n_memory or element.n_memory:
         reasons.append("the loop has discrete memory updated at every step")
-    if not _constant_gate(law) or not _identity_projection(law):
+    identity = _identity_projection(law)
+    resets = not identity and bool(getattr(law, "project_resets", False))
+    if not _constant_gate(law) or not (identity or resets):
         reasons.append("the anti-windup switches or clamps the integrals at each step")
     if noisy:
         reasons.append("the measurement noise changes at every step")
@@ -116,7 +122,8 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
         rough = ()
     if rough:
         reasons.append(f"the plant is not smooth ({'; '.join(rough)}) and the law does not cancel it")
-    return Regime(held_law=held_law, per_step=per_step, smooth=not reasons, why="; ".join(reasons))
+    return Regime(held_law=held_law, per_step=per_step, smooth=not reasons, why="; ".join(reasons),
+                  resets=resets and not reasons)
 
 
 PROBE = 1e-12

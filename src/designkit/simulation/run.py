@@ -414,12 +414,15 @@ def _pair(spec: Any, timing: Any, regime: Any, plant: Any, law: Law, element: An
     rtol = float(numerics.rtol) if "rtol" in given else DOPRI5_RTOL
     atol = float(numerics.atol) if "atol" in given else DOPRI5_ATOL
     runner, how = build_dopri5(plant, law, element, timing.dt, rtol=rtol, atol=atol,
-                               compile=numerics.compile != "never")
+                               compile=numerics.compile != "never", resets=bool(getattr(regime, "resets", False)))
     source = "numerics.rtol and numerics.atol" if {"rtol", "atol"} & given else "defaults"
     ran = "compiled C" if runner.library is not None else f"interpreted: {how}"
     words = (f"dopri5 (Dormand-Prince 5(4), adaptive step with error control: rtol {rtol:g}, atol {atol:g}, "
              f"{source}; PI step-size control; the output grid written from its 4th-order continuous extension; "
              f"{ran})")
+    if runner.proj is not None:
+        words += ("; the law's projection applied at every grid instant, the integration started again from the "
+                  "projected state where it moved it")
     why = "numerics.integrator" if explicit else ("default for a smooth continuous loop (no sampling, switching, "
                                                   "delay, memory, anti-windup or noise)")
     if plant.nonsmooth():

@@ -12,6 +12,14 @@ of operations (tested against it), except the steady-state error's mean, summed 
 sums pairwise: the two agree to about 1e-12 relative (2e-13 measured on SIMNOG), not to the last bit.  A sample's
 numbers do not depend on its batch, so a sweep's results are still identical however it is split.
 
+Which grid points are read: on a step to a constant reference without ``max_control``, the pair hands each
+accepted step's continuous extension to the observer's plan (``dk_obs_plan`` below), which bounds each position
+over the step and lets only the points that can change a metric be evaluated -- the last of every step, the first
+where a maximum may sit or the band's last outside point was just before, every point of a step that may cross a
+rise level or the settling band and of the steady-state window.  The points read go through the same
+``dk_obs_point`` in grid order, so the metrics are those of every point.  Inputs that do not change over the grid
+are passed as one column (``DK_WSTRIDE`` 0).
+
 Memory per run: nothing of the size of the run (the per-step inputs are the simulator's, shared).
 """
 
@@ -34,24 +42,26 @@ OBSERVER = r"""
 #define NJ {nj}
 #define NU {nu}
 typedef struct {{
-  const double *W, *T; long N, kwin, seen, last[NJ]; int traj, finite[NJ], zero[NJ], found[NJ][2], uok;
+  const double *W, *T; long N, kwin, seen, last[NJ]; int traj, fixed, finite[NJ], zero[NJ], found[NJ][2], uok;
   double sb, lv[2], y0[NJ], r[NJ], amp[NJ], amps[NJ], xdmax[NJ], denom[NJ], band[NJ], bandx[NJ], max_err[NJ],
     sum[NJ], max_yn[NJ], prev_yn[NJ], cross[NJ][2], d0[NJ], d1[NJ], peak[NU + 1];
   long cnt[NJ];
 }} dk_obs;
 
-/* prm: [trajectory?, settling band, k of the steady-state window's start, then the N instants] */
+/* prm: [0 a step to a constant reference, 1 a trajectory, 2 another step; settling band, k of the steady-state
+   window's start, then the N instants] */
 static void dk_obs_begin(dk_obs *o, const double *s0, const double *W, long N, const double *prm) {{
   memset(o, 0, sizeof *o);
-  o->W = W; o->N = N; o->traj = prm[0] != 0.0; o->sb = prm[1]; o->kwin = (long)prm[2]; o->T = prm + 3;
+  o->W = W; o->N = N; o->traj = prm[0] == 1.0; o->fixed = prm[0] == 0.0;
+  o->sb = prm[1]; o->kwin = (long)prm[2]; o->T = prm + 3;
   o->lv[0] = {rise_lo}; o->lv[1] = {rise_hi}; o->uok = 1;
   for (int j = 0; j < NJ; ++j) {{
     const double x0 = W[j];
-    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * NW + j]; o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY;
-    o->last[j] = -1;
+    o->finite[j] = 1; o->r[j] = W[(size_t)(N - 1) * DK_WSTRIDE + j];
+    o->max_yn[j] = -INFINITY; o->max_err[j] = -INFINITY; o->last[j] = -1;
     if (o->traj)
       for (long k = 0; k < N; ++k) {{
-        double xd = W[(size_t)k * NW + j], e = fabs(xd - x0), a = fabs(xd);
+        double xd = W[(size_t)k * DK_WSTRIDE + j], e = fabs(xd - x0), a = fabs(xd);
         if (e > o->amps[j] || e != e) o->amps[j] = e;
         if (a > o->xdmax[j] || a != a) o->xdmax[j] = a;
       }}
@@ -153,9 +163,61 @@ static void dk_obs_end(dk_obs *o, int status, long stop, double *out) {{
     out[{per_joint} * NJ + 2 * i + 1] = through && o->uok;
   }}
 }}
+
+/* Which grid points first..last of an accepted step [t, t + h] can change what dk_obs_point keeps (a step run
+   to a constant reference, before the steady-state window, no command observed; otherwise all of them).  Each
+   position is the step's quartic p(theta), theta in [0, 1]: p = a0 + a1 theta + ... + a4 theta^4 from Hairer's
+   r1..r5, within M = |a2|/4 + 0.385 |a3| + 0.473 |a4| of its chord (max |theta^k - theta| on [0, 1]), and
+   monotone when |a1| exceeds 2 |a2| + 3 |a3| + 4 |a4| (a bound of the other terms of p'); the bounds are widened
+   by EPS = 1e-12 of the coefficients' size, far above the rounding of a grid point's value.  A point is read
+   when its value could move a maximum (then, the step being monotone, only its first or last point can), cross
+   a rise level, or cross the settling band (then every point is: the crossing's grid points and interpolation
+   are the grid's); the last point of a step is always read (the next crossing's previous value, the count of
+   points seen). */
+static int dk_obs_plan(dk_obs *o, long first, long lastk, double t, double h, double dt, const double *const *coef) {{
+  static const int rows[NOBS + 1] = {{OBS_ROWS}};
+  if (o->traj || !o->fixed || NU > 0 || lastk >= o->kwin || first < 1) return DK_PLAN_ALL;
+  int plan = 0;
+  const double gap = dt / h;
+  (void)t;
+  for (int j = 0; j < NJ; ++j) {{
+    const int i = rows[j];
+    const double A = coef[0][i], B = coef[1][i], C = coef[2][i], D = coef[3][i], E = coef[4][i];
+    if (!(isfinite(A) && isfinite(B) && isfinite(C) && isfinite(D) && isfinite(E))) return DK_PLAN_ALL;
+    const double a1 = B + C, a2 = D + E - C, a3 = -(D + 2.0 * E), a4 = E;
+    const double eps = 1e-12 * (1.0 + fabs(A) + fabs(B) + fabs(C) + fabs(D) + fabs(E));
+    const double M = 0.25 * fabs(a2) + 0.385 * fabs(a3) + 0.473 * fabs(a4);
+    const double p1 = A + B, lo = fmin(A, p1) - M - eps, hi = fmax(A, p1) + M + eps;
+    const double bend = 2.0 * fabs(a2) + 3.0 * fabs(a3) + 4.0 * fabs(a4);
+    const int up = (a1 - bend) * gap > 2.0 * eps, down = (-a1 - bend) * gap > 2.0 * eps;
+    if (!o->zero[j]) {{
+      const double ya = (lo - o->y0[j]) / o->denom[j], yb = (hi - o->y0[j]) / o->denom[j], ynhi = fmax(ya, yb);
+      for (int l = 0; l < 2; ++l)
+        if (!o->found[j][l] && !(ynhi < o->lv[l])) return DK_PLAN_ALL;
+      if (!(ynhi < o->max_yn[j])) {{
+        const int rising = o->denom[j] > 0 ? up : down, falling = o->denom[j] > 0 ? down : up;
+        if (falling) plan |= DK_PLAN_FIRST;
+        else if (!rising) return DK_PLAN_ALL;
+      }}
+    }}
+    const double r = o->r[j];
+    const double dhi = fmax(fabs(lo - r), fabs(hi - r));
+    const double dlo = (lo <= r && r <= hi) ? 0.0 : fmin(fabs(lo - r), fabs(hi - r));
+    if (dhi <= o->bandx[j]) {{
+      if (o->last[j] == first - 1) plan |= DK_PLAN_FIRST;  /* the point after the last one outside */
+    }} else if (!(dlo > o->bandx[j])) return DK_PLAN_ALL;
+    if (!(dhi <= o->max_err[j])) {{
+      if (lo > r) {{ if (down) plan |= DK_PLAN_FIRST; else if (!up) return DK_PLAN_ALL; }}
+      else if (hi < r) {{ if (up) plan |= DK_PLAN_FIRST; else if (!down) return DK_PLAN_ALL; }}
+      else return DK_PLAN_ALL;
+    }}
+  }}
+  return plan;
+}}
 """
 """The observer (C, formatted with the joint and input counts and the tolerances): the formulas of
-:func:`designkit.sweep.margins.joint_metrics`, one grid point at a time."""
+:func:`designkit.sweep.margins.joint_metrics`, one grid point at a time, and the plan that picks, step by step,
+the grid points that can change them (the others are not evaluated)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,15 +277,24 @@ def kernel_for(simulator: Any, requirements: Any) -> Kernel | str:
     n = len(plant.positions)
     source = OBSERVER.format(nj=n, nu=nu, per_joint=PER_JOINT, rest_tol=repr(REST_TOL),
                              rise_lo=repr(RISE_LIMITS[0]), rise_hi=repr(RISE_LIMITS[1]))
-    runner = observed(pair, rows, source, PER_JOINT * n + 2 * nu, L.np_)
+    w = np.asarray(simulator.inputs, dtype=float)
+    runner = observed(pair, rows, source, PER_JOINT * n + 2 * nu, L.np_, steps=True,
+                      constant=bool(np.all(w == w[:, :1])))
     if isinstance(runner, str):
         return runner
     t = np.asarray(simulator.time, dtype=float)
     window = np.flatnonzero(t >= t[-1] - STEADY_STATE_WINDOW * float(t[-1] - t[0]))
     sb = requirements.settling_band if requirements is not None else 0.02
-    kind = 1.0 if simulator.kind == "trajectory" else 0.0
+    kind = 1.0 if simulator.kind == "trajectory" else (0.0 if _constant_reference(simulator, n) else 2.0)
     constants = np.concatenate([[kind, float(sb), float(window[0])], t])
     return Kernel(observed=runner, n=n, nu=nu, constants=constants)
+
+
+def _constant_reference(simulator: Any, n: int) -> bool:
+    """True when every tracked joint's desired position is its final value at every grid point (a step held from
+    ``t = 0``): the observer's plan bounds the tracking error with it."""
+    xd = np.asarray(simulator.inputs, dtype=float)[:n]
+    return bool(np.all(xd == xd[:, -1:]))
 
 
 class _NoElement:

@@ -112,6 +112,11 @@ class Law:
         The command switches: held over each integration step.
     max_step : float or None
         Largest integration step (s) the law can be simulated with, and ``max_step_reason`` why.
+    project_resets : bool
+        ``project`` is a reset that acts only now and then (a state put back into a box once it has left it by a
+        hysteresis), not a clamp that holds a state at a bound: a smooth loop's adaptive integrator applies it at
+        the grid instants and starts again from there (:mod:`designkit.simulation.dopri5`) instead of the loop
+        being stepped per grid step.
     signals : casadi.Function or None
         ``(y, xc, m, r) -> s``, the recorded signals named by ``signal_names`` (units in ``signal_units``).
     feedforward : casadi.Function or None
@@ -143,6 +148,7 @@ class Law:
     discontinuous: bool = False
     max_step: float | None = None
     max_step_reason: str = ""
+    project_resets: bool = False
     signals: ca.Function | None = None
     signal_names: tuple[str, ...] = ()
     signal_units: tuple[str, ...] = ()

@@ -245,7 +245,7 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
                       signals=signals, signal_units=("", "1/s", *("rad",) * n), **kw)
     if a.bounds is None:
         return law
-    return dataclasses.replace(law, project=_projection(law, a))
+    return dataclasses.replace(law, project=_projection(law, a), project_resets=True)
 
 
 def _projection(law: Law, a: Adaptation) -> ca.Function:
