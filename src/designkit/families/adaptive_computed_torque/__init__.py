@@ -310,6 +310,7 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=AdaptiveComputedTorqueSpec, plants=("robot",), reference="trajectory",
+        uses=("plant.uncertainty", "plant.uncertainty.samples"),
         synthesize=synthesize, law=law,
         checks=("lyapunov", "frozen_final", "time_domain", "torque_limits", *checks.RULES),
         display=Display(

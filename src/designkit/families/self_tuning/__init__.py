@@ -226,6 +226,7 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=SelfTuningSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
+        uses=("plant.uncertainty", "plant.uncertainty.samples"),
         checks=("time_domain", *checks.RULES),
         display=Display(
             label="Self-tuning regulator (RLS and certainty-equivalence design)",
