@@ -187,6 +187,12 @@ class Family:
     plant_fields : tuple of PlantField
         Its ``controller`` fields that it reads on some plant kinds only; given on another plant kind, one is
         refused when the spec is read.
+    box_design : str
+        How its run is repeated at a plant of ``plant.uncertainty`` (the ``box_runs`` check): ``"nominal"`` (the
+        design for the spec's plant, run on the other plant, which the controller is not told of) or ``"each"``
+        (its synthesis for that plant: for a family whose design takes what it reads of the plant as known -- the
+        adaptive computed torque's non-adapted parameters and ideal accelerometer -- and which refuses a box
+        that moves anything it does not estimate).
     """
 
     kind: str
@@ -214,10 +220,13 @@ class Family:
     variants: tuple[Variant, ...] = ()
     uses: tuple[str, ...] = ()
     plant_fields: tuple[PlantField, ...] = ()
+    box_design: str = "nominal"
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):
             raise ValueError(f"family {self.kind!r}: reference must be 'step' or 'trajectory'")
+        if self.box_design not in ("nominal", "each"):
+            raise ValueError(f"family {self.kind!r}: box_design must be 'nominal' or 'each'")
         if not self.references:
             default = STEP_REFERENCES if self.reference == "step" else TRAJECTORY_REFERENCES
             object.__setattr__(self, "references", default)
