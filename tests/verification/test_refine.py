@@ -100,8 +100,8 @@ def _ilc_spec(tmp_path: Path, interval: str, grid: int = 2) -> Path:
     plant = "plant: {kind: robot, robot: planar2r}"
     assert plant in text
     path = tmp_path / "ilc-box.yaml"
-    path.write_text(text.replace(plant, "plant: {kind: robot, robot: planar2r, uncertainty: {m2: %s, grid: %d}}"
-                                 % (interval, grid)))
+    path.write_text(text.replace(plant, f"plant: {{kind: robot, robot: planar2r, uncertainty: {{m2: {interval}, "
+                                        f"grid: {grid}}}}}"))
     return path
 
 
