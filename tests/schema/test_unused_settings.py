@@ -131,3 +131,45 @@ def test_a_default_value_written_out_is_not_refused():
     loaded = parse_spec(case_yaml("sliding_mode", "link"))
     again = parse_spec(LoadedSpec.from_spec(loaded.spec).text)
     assert again.spec == loaded.spec
+
+
+# requirements: each is judged by a check that reads it (CheckRule.reads), or refused
+REQUIREMENT_VALUES = {"overshoot": "5", "settling_time": "2.0", "rise_time": "1.0", "steady_state_error": "0.01",
+                      "tracking_error": "0.1", "max_control": "100", "settling_band": "0.05", "gain_margin": "6",
+                      "phase_margin": "40", "modulus_margin": "0.5"}
+
+
+def _reads(kind: str) -> set[str]:
+    from designkit.verification.suite import resolve
+
+    return {key for rule in resolve(FAMILIES[kind].checks) for key in rule.reads}
+
+
+def test_every_requirement_is_read_by_some_generic_check():
+    from designkit.spec.sections import Requirements
+    from designkit.verification.suite import generic
+
+    read = {key for rule in generic().values() for key in rule.reads}
+    assert read == {f"requirements.{k}" for k in Requirements.model_fields} == {
+        f"requirements.{k}" for k in REQUIREMENT_VALUES}
+
+
+@pytest.mark.parametrize("kind", sorted(FIRST))
+def test_a_requirement_no_check_of_the_family_reads_is_refused(kind):
+    base = case_yaml(kind, FIRST[kind])
+    line = next(x for x in base.splitlines() if x.startswith("requirements: "))
+    for name, value in REQUIREMENT_VALUES.items():
+        text = base.replace(line, f"requirements: {{{name}: {value}}}")
+        if f"requirements.{name}" in _reads(kind):
+            assert parse_spec(text).spec.requirements is not None
+        else:
+            with pytest.raises(SpecError, match=rf"^requirements\.{name}: no check of the {kind} controller measures"):
+                parse_spec(text)
+
+
+def test_margins_on_a_sliding_mode_law_are_refused():
+    """The sliding-mode law has no linear loop to break: its margins cannot be measured."""
+    text = case_yaml("sliding_mode", "link")
+    line = next(x for x in text.splitlines() if x.startswith("requirements: "))
+    with pytest.raises(SpecError, match=r"^requirements\.gain_margin: "):
+        parse_spec(text.replace(line, "requirements: {gain_margin: 6}"))

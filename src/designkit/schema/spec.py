@@ -106,12 +106,21 @@ def _differs(section: Any, name: str) -> bool:
 
 
 def _refuse_unused(spec: Spec, fam: Any) -> None:
-    """A setting the family does not use (:attr:`Family.uses`), or a ``controller`` field it reads on other plant
-    kinds only (:attr:`Family.plant_fields`), is refused naming its key path: nothing given is silently ignored (a
+    """A setting the family does not use (:attr:`Family.uses`), a requirement no check it offers reads
+    (:attr:`~designkit.verification.suite.CheckRule.reads`), or a ``controller`` field it reads on other plant kinds
+    only (:attr:`Family.plant_fields`), is refused naming its key path: nothing given is silently ignored (a
     value equal to the field's default changes nothing and is let through)."""
     for key in given_settings(spec):
         if key not in fam.uses:
             raise ValueError(f"{key}: the {fam.kind} controller does not use it: {SETTINGS[key]}")
+    if spec.requirements is not None:
+        from designkit.verification.suite import resolve
+
+        read = {key for rule in resolve(fam.checks) for key in rule.reads}
+        for name in type(spec.requirements).model_fields:
+            key = f"requirements.{name}"
+            if _differs(spec.requirements, name) and key not in read:
+                raise ValueError(f"{key}: no check of the {fam.kind} controller measures it")
     for pf in fam.plant_fields:
         if _differs(spec.controller, pf.name) and spec.plant.kind not in pf.plants:
             raise ValueError(f"controller.{pf.name}: the {fam.kind} controller reads it on a "

@@ -125,6 +125,9 @@ class CheckRule:
     universal : bool
         Offered for every family, whether or not its ``checks`` name it (a property of any simulated loop,
         such as a chattering command); ``applies`` still decides.
+    reads : tuple of str
+        The ``requirements`` keys it judges (``"requirements.overshoot"``): a spec giving a requirement that no
+        check its family offers reads is refused when it is read (:class:`~designkit.schema.spec.Spec`).
     """
 
     name: str
@@ -138,6 +141,7 @@ class CheckRule:
     figures: tuple[Callable[[Any, Any], Any], ...] = ()
     diagnose: Callable[[Any, Any], Any] | None = None
     universal: bool = False
+    reads: tuple[str, ...] = ()
 
     def offered_for(self, design: Any, ctx: Context) -> bool:
         """True when the check runs for ``design``: its linearization (if it needs one) and what ``applies`` asks."""

@@ -145,7 +145,7 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=SmidSpec, plants=("link", "robot"), reference="step", synthesize=synthesize, law=law,
-        uses=("plant.uncertainty", "plant.uncertainty.samples"), checks=(*checks.RULES, "box_runs"),
+        uses=("plant.uncertainty", "plant.uncertainty.samples"), checks=(*checks.RULES, "time_domain", "box_runs"),
         validate=validate, references=tuple(dict.fromkeys(LINK_REFERENCES + ROBOT_REFERENCES)),
         display=Display(
             label="Sliding-mode parameter identification",
