@@ -99,6 +99,21 @@ CASES.update(discovered("CONFORMANCE"))
 REQUIREMENTS = "{overshoot: 50, settling_time: 10.0, steady_state_error: 0.05}"
 
 
+def for_family(kind: str, plant_text: str) -> str:
+    """A canonical plant's flow mapping without the settings of its parameter box the family does not use (a spec
+    giving them is refused: ``Family.uses``)."""
+    import re
+
+    from designkit.families import FAMILIES
+
+    uses = FAMILIES[kind].uses
+    if "plant.uncertainty" not in uses:
+        return re.sub(r", uncertainty: \{[^}]*\}", "", plant_text)
+    if "plant.uncertainty.grid" not in uses:
+        return re.sub(r", grid: \d+", "", plant_text)
+    return plant_text
+
+
 def case_yaml(kind: str, plant: str) -> str:
     """The spec of one conformance case.
 
@@ -108,6 +123,6 @@ def case_yaml(kind: str, plant: str) -> str:
     """
     controller, simulation, *rest = CASES[kind][plant]
     requirements = rest[0] if rest and rest[0] is not None else REQUIREMENTS
-    plant_text = rest[1] if len(rest) > 1 else PLANTS[plant]
+    plant_text = rest[1] if len(rest) > 1 else for_family(kind, PLANTS[plant])
     return (f"name: conformance-{kind}-{plant}\nplant: {plant_text}\ncontroller: {controller}\n"
             f"requirements: {requirements}\nsimulation: {simulation}\n")

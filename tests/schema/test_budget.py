@@ -253,3 +253,30 @@ def test_a_wrong_per_joint_list_is_refused_before_the_model_is_built(tmp_path, c
     doc = _chain(3)
     doc["controller"]["damping"] = [1.0, 1.0]
     assert_bad_input(tmp_path, capsys, _text(doc), "controller.damping: needs one value per joint (3), got 2")
+
+
+def test_the_box_runs_and_the_refinement_are_counted():
+    """A family judging the box by its own run counts its whole run (trials included) at up to 16 corners and 16
+    samples; every lattice counts the plants its refinement may add."""
+    from designkit.schema.loader import parse_spec as parse
+    from designkit.verification.checks.box_runs import MAX_CORNERS, MAX_SAMPLES
+    from designkit.verification.refine import MAX_REFINED_PLANTS
+
+    assert (budget.BOX_CORNERS, budget.BOX_SAMPLES, budget.REFINED_CAP) == (MAX_CORNERS, MAX_SAMPLES,
+                                                                            MAX_REFINED_PLANTS)
+    text = ("name: b\nplant: {kind: link, Km: 2.0, tau: 0.5%s}\n"
+            "controller: {kind: self_tuning, sampling_period: 0.01, "
+            "poles: [-4, -5], nominal: {Km: 1.0, tau: 1.0}}\n"
+            "simulation: {duration: 8, trajectory: {kind: square, amplitude: 0.5, period: 2}}\n")
+    bare = parse(text % "").spec
+    boxed = parse(text % ", uncertainty: {Km: [1.5, 2.5], tau: [0.4, 0.6], samples: 3}").spec
+    fam = budget._family(bare)
+    runs_bare = budget._runs(bare, fam)[0]
+    runs_boxed = budget._runs(boxed, fam)[0]
+    # own count: 4 corners (also counted once for the arm's answers) and 3 samples, each the nominal run and the
+    # small-signal run
+    assert runs_boxed - runs_bare == 4 + (4 + 3) * 2
+    lattice = parse("name: l\nplant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.5, 2.5], grid: 3}}\n"
+                    "controller: {kind: pid_servo, poles: [-4, -5, -20], zero: -3}\n").spec
+    term = next(t for t in budget.estimate(lattice, joints=1).terms if t.what == "lattice")
+    assert term.evaluations == (3 + MAX_REFINED_PLANTS) * budget.LINEARIZATION * budget.size(1)

@@ -119,7 +119,12 @@ def test_tracking_spec_box_passes_all_three():
     checks = robustness_checks(design, _box(Km=(1.6, 2.4), tau=(0.4, 0.6)))
     assert [c.name for c in checks] == ["robust_vertices", "robust_grid", "common_lyapunov"]
     assert all(c.passed is True for c in checks), [c.detail for c in checks]
-    assert checks[1].certificate["plants"] == 21 * 21
+    cert = checks[1].certificate
+    assert cert["lattice_plants"] == 21 * 21
+    # every pair of lattice neighbours is bisected at least once: 2 axes x 21 lines x 20 pairs
+    assert cert["refined_plants"] >= 2 * 21 * 20
+    assert cert["plants"] == 21 * 21 + cert["refined_plants"]
+    assert f"{cert['plants']} sampled plants stable" in checks[1].detail and "sampled" in checks[1].target
     assert checks[1].certificate["grid"]["axes"][0]["name"] == "Km"
     assert all(c.margin > 0 for c in checks)
     assert checks[2].certificate["covers_box"].startswith("yes")
@@ -144,7 +149,8 @@ def test_one_parameter_box_varies_only_that_parameter():
     assert box.names == ("tau",)
     np.testing.assert_array_equal(box.vertices, [[0.4], [0.6]])
     g = grid_check(design, box)
-    assert g.certificate["plants"] == 5 and len(g.certificate["grid"]["axes"]) == 1
+    assert g.certificate["lattice_plants"] == 5 and len(g.certificate["grid"]["axes"]) == 1
+    assert g.certificate["plants"] == 5 + g.certificate["refined_plants"] and g.certificate["refined_plants"] >= 4
 
 
 def test_random_samples_are_seeded_and_added():
@@ -152,7 +158,8 @@ def test_random_samples_are_seeded_and_added():
     u = Uncertainty(Km=[1.5, 2.5], tau=[0.4, 0.6], grid=3, samples=50, seed=4)
     g1 = robustness_checks(design, u)[1]
     g2 = robustness_checks(design, u)[1]
-    assert g1.certificate["plants"] == 9 + 50
+    cert = g1.certificate
+    assert cert["plants"] == 9 + 50 + cert["refined_plants"] and cert["random_samples"] == 50
     assert g1.certificate["worst_abscissa"] == g2.certificate["worst_abscissa"]
 
 

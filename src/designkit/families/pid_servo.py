@@ -205,6 +205,7 @@ FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
     plants=("link", "elastic_joint"),
+    uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,
     law=law,

@@ -87,6 +87,7 @@ FAMILY = Family(
     kind=KIND,
     spec=PidTrackingSpec,
     plants=("link",),
+    uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,

@@ -238,6 +238,7 @@ FAMILY = Family(
     kind=KIND,
     spec=ResolvedAccelerationSpec,
     plants=("robot",),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,

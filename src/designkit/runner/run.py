@@ -62,7 +62,7 @@ def base_dir(loaded: Any) -> Path | None:
 
 
 def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | None = None,
-             simulate: bool = True, actual: Any = None, design: Any = None) -> Run:
+             simulate: bool = True, actual: Any = None, design: Any = None, box: bool = True) -> Run:
     """Run a one-controller spec as :func:`designkit.pipeline.run` does.
 
     Parameters
@@ -82,12 +82,15 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     design : Design, optional
         The design to run instead of the family's synthesis of ``loaded`` (a scenario variant: the controller as
         designed for another spec, run in this one's scenario).
+    box : bool
+        Let the checks re-run this run at points of ``plant.uncertainty`` (the ``box_runs`` check: the same design,
+        the true plant with other parameter values, ``box=False`` inside, so runs do not nest).
 
     Returns
     -------
     Run
     """
-    from designkit.families import check_rules, synthesize
+    from designkit.families import check_rules, family, synthesize
     from designkit.simulation.run import build
     from designkit.simulation.trials import run_trials
     from designkit.spec.plant_builder import plant_from_spec
@@ -109,5 +112,15 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
             sim = trials.results[-1]
         else:
             sim = simulator.run()
-    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials)
+    rerun = None
+    if simulate and box and getattr(spec.plant, "uncertainty", None) is not None:
+        true_plant, base, each = plant, design, family(design.kind).box_design == "each"
+
+        def rerun(values: Any) -> tuple[Any, ...]:
+            other = true_plant.with_params(**values)
+            if each:  # the family's synthesis for that plant (Family.box_design)
+                return run_spec(loaded, plant=other, adjust=adjust, box=False).checks
+            return run_spec(loaded, plant=true_plant, design=base, actual=other, box=False).checks
+
+    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials, rerun=rerun)
     return Run(loaded, plant, design, sim, trials, tuple(checks), time.perf_counter() - start)

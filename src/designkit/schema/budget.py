@@ -25,14 +25,16 @@ The terms (each a :class:`Term` with the key path that drives it):
   ``x (1e-8 / rtol)^(1/6)`` (a BDF of order 5 shrinks its step as the tolerance's sixth root); for any
   other (adaptive) integrator, conservatively :data:`ADAPTIVE_STEP` (seven stages, rejected steps).
   Runs: the nominal run, the small-signal run of ``designed_loop``, the trials of a learning law, the
-  corners (``2^k`` for ``k`` uncertain parameters) and samples of ``tracking_bounds``, and the corners the
+  corners (``2^k`` for ``k`` uncertain parameters) and samples of ``tracking_bounds``, the family's whole run
+  (trials included) at up to 16 corners and 16 samples for a family offering ``box_runs``, and the corners the
   arm's answers re-simulate (the studies of ``synth`` are bounded by their own budget, ``studies.budget``,
   :mod:`designkit.studies`, and not counted here);
 * **task path** -- a line or circle of the end effector is solved by inverse kinematics at 401 instants
   (:data:`IK_EVALUATIONS` each);
 * **lattice** -- the robustness checks linearize the loop at every plant of the uncertainty lattice
-  (``grid^k`` capped at 100,000, plus the samples): :data:`LINEARIZATION` ``x size(n)`` each; and the common
-  Lyapunov matrix of a linear family is one LMI per corner of the box: :data:`LMI_VERTEX` ``x 2^k x (3n)^3``.
+  (``grid^k`` capped at 100,000, plus the samples, plus at most 2,000 added by its refinement):
+  :data:`LINEARIZATION` ``x size(n)`` each; and the common Lyapunov matrix of a linear family is one LMI per corner
+  of the box: :data:`LMI_VERTEX` ``x 2^k x (3n)^3``.
 
 Which field is named: the largest term's driver.  For the simulations, the factor that is furthest
 above an ordinary run: the samples or the corners when the runs dominate, else what sets the step count
@@ -77,6 +79,10 @@ LMI_VERTEX = 136.0
 15 s of CPU time for 512 corners of a SCARA's 12-state loop)."""
 LATTICE_CAP = 100_000
 """Most lattice plants (:data:`designkit.spec.plants.MAX_GRID_POINTS`)."""
+REFINED_CAP = 2000
+"""Most plants the refinement of the lattice adds (:data:`designkit.verification.refine.MAX_REFINED_PLANTS`)."""
+BOX_CORNERS, BOX_SAMPLES = 16, 16
+"""Most corners and samples the ``box_runs`` check runs (:mod:`designkit.verification.checks.box_runs`)."""
 PATH_SAMPLES, IK_EVALUATIONS = 401, 100.0
 """A task-space path is solved by inverse kinematics at 401 instants
 (:data:`designkit.families.resolved_acceleration.PATH_SAMPLES`), a few Newton iterations with the Jacobian
@@ -334,12 +340,18 @@ def _runs(spec: Any, family: Any) -> tuple[float, str, str]:
     checks = tuple(getattr(family, "checks", ()) or ())
     corners = 2 ** k if k else 0
     box_runs = corners + samples if "tracking_bounds" in checks else min(corners, 16)
-    runs = float(trials + 1 + box_runs)
+    own = 0
+    if corners and "box_runs" in checks:  # the family's whole run (its trials too) at each point of the box
+        own = (min(corners, BOX_CORNERS) + min(samples, BOX_SAMPLES)) * (trials + 1)
+    runs = float(trials + 1 + box_runs + own)
     parts = [f"{trials} trial{'s' if trials > 1 else ''}" if trials > 1 else "the nominal run",
              "the small-signal run"]
     if box_runs:
         parts.append(f"{corners} corners of {k} uncertain parameter{'s' if k > 1 else ''}"
                      + (f" and {samples} samples" if samples and "tracking_bounds" in checks else ""))
+    if own:
+        parts.append(f"the family's own run repeated at {min(corners, BOX_CORNERS) + min(samples, BOX_SAMPLES)} "
+                     "plants of the box (box_runs)")
     if samples and "tracking_bounds" in checks and samples >= corners:
         key = "plant.uncertainty.samples"
     elif corners > 8:
@@ -397,10 +409,11 @@ def estimate(spec: Any, base_dir: Path | None = None, *, joints: int | None = No
                           f"the joint path solved by inverse kinematics at {PATH_SAMPLES} instants"))
     k, samples, lattice = _uncertainty(spec)
     if lattice:
-        plants = min(lattice, LATTICE_CAP) + samples
+        plants = min(lattice, LATTICE_CAP) + samples + REFINED_CAP
         terms.append(Term("lattice", plants * LINEARIZATION * size(n),
                           "plant.uncertainty.samples" if samples > lattice else "plant.uncertainty.grid",
-                          f"{plants:,} plants of the uncertainty lattice linearized and checked"))
+                          f"{plants:,} plants of the uncertainty lattice linearized and checked (at most "
+                          f"{REFINED_CAP:,} of them added by the refinement)"))
         family = _family(spec)
         if "robustness" in tuple(getattr(family, "checks", ()) or ()):
             states = 3 * (n or 1)

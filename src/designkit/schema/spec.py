@@ -9,7 +9,7 @@ checks its cross-section rules (e.g. poles or requirements) and which plant kind
 
 from __future__ import annotations
 
-from typing import Annotated, Union
+from typing import Annotated, Any, Union
 
 from pydantic import Field, model_validator
 
@@ -35,12 +35,14 @@ from designkit.spec.sections import (
     TrapezoidalTrajectory,
     ViaPointsTrajectory,
 )
+from designkit.synthesis.family import SETTINGS
 
 __all__ = [
     "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "LinkPlantSpec", "Noise", "Numerics",
     "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory", "Relay",
     "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Studies", "Trajectory",
     "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "check_conjugates", "controller_models",
+    "given_settings",
 ]
 
 
@@ -76,6 +78,50 @@ class Spec(Section):
             follows = ", ".join(k if k != "step" else "step (simulation.step)" for k in fam.references)
             raise ValueError(f"simulation.trajectory.kind: the {fam.kind} controller follows {follows}, not "
                              f"{traj.kind!r}")
+        _refuse_unused(self, fam)
         if fam.validate is not None:
             fam.validate(self)
         return self
+
+
+def given_settings(spec: Spec) -> tuple[str, ...]:
+    """The optional settings of :data:`designkit.synthesis.family.SETTINGS` that ``spec`` gives (a sub-key of
+    ``plant.uncertainty`` counts when it differs from its default)."""
+    keys = []
+    if spec.simulation.anti_windup is not None:
+        keys.append("simulation.anti_windup")
+    unc = getattr(spec.plant, "uncertainty", None)
+    if unc is not None:
+        keys.append("plant.uncertainty")
+        keys.extend(f"plant.uncertainty.{k}" for k in ("grid", "samples") if _differs(unc, k))
+    return tuple(keys)
+
+
+def _differs(section: Any, name: str) -> bool:
+    """``section.name`` differs from the field's default (a canonical dump, which writes every default, gives
+    nothing)."""
+    field = type(section).model_fields[name]
+    default = None if field.default_factory is not None else field.default
+    return getattr(section, name) != default
+
+
+def _refuse_unused(spec: Spec, fam: Any) -> None:
+    """A setting the family does not use (:attr:`Family.uses`), a requirement no check it offers reads
+    (:attr:`~designkit.verification.suite.CheckRule.reads`), or a ``controller`` field it reads on other plant kinds
+    only (:attr:`Family.plant_fields`), is refused naming its key path: nothing given is silently ignored (a
+    value equal to the field's default changes nothing and is let through)."""
+    for key in given_settings(spec):
+        if key not in fam.uses:
+            raise ValueError(f"{key}: the {fam.kind} controller does not use it: {SETTINGS[key]}")
+    if spec.requirements is not None:
+        from designkit.verification.suite import resolve
+
+        read = {key for rule in resolve(fam.checks) for key in rule.reads}
+        for name in type(spec.requirements).model_fields:
+            key = f"requirements.{name}"
+            if _differs(spec.requirements, name) and key not in read:
+                raise ValueError(f"{key}: no check of the {fam.kind} controller measures it")
+    for pf in fam.plant_fields:
+        if _differs(spec.controller, pf.name) and spec.plant.kind not in pf.plants:
+            raise ValueError(f"controller.{pf.name}: the {fam.kind} controller reads it on a "
+                             f"{' or '.join(pf.plants)} plant only ({pf.what}), not on the {spec.plant.kind} plant")

@@ -23,7 +23,7 @@ from designkit.synthesis.design import Design
 from designkit.synthesis.knobs import Knob, Metric, Variant
 from designkit.synthesis.law import Law
 
-__all__ = ["ANSWER_TOPICS", "Display", "Family", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
+__all__ = ["ANSWER_TOPICS", "Display", "Family", "PlantField", "SETTINGS", "STEP_REFERENCES", "TRAJECTORY_REFERENCES"]
 
 STEP_REFERENCES = ("step", "square", "prbs")
 """References a servo (a ``"step"`` design) follows by default: ``simulation.step``, a square wave, a PRBS."""
@@ -36,6 +36,38 @@ ANSWER_TOPICS = {
                 "settings, and which algorithms its design needs, with the design's numbers",
 }
 """The topics a family may answer (:attr:`Family.answers`) when a study asks it about one of its runs."""
+
+SETTINGS = {
+    "simulation.anti_windup": "an anti-windup limits the integral state of a PID law, and this law has none it may "
+                              "limit",
+    "plant.uncertainty": "none of its checks judges the design over a box of plant parameters",
+    "plant.uncertainty.grid": "the lattice of the box is read by the lattice check (robust_grid), which it does "
+                              "not offer",
+    "plant.uncertainty.samples": "the box's random samples are read by the robust_grid, tracking_bounds and box_runs "
+                                 "checks, none of which it offers",
+}
+"""The optional settings outside ``controller`` that only some families honour, and why a family that does not
+(:attr:`Family.uses`) refuses them: a spec giving one its family does not use is refused when it is read, naming
+the key path, so no setting is silently ignored."""
+
+
+@dataclass(frozen=True)
+class PlantField:
+    """A ``controller`` field a family reads on some plant kinds only (:attr:`Family.plant_fields`).
+
+    Parameters
+    ----------
+    name : str
+        The field (``"workspace"``).
+    plants : tuple of str
+        The plant kinds on which the family reads it.
+    what : str
+        What it is for, in words (the refusal on another plant kind says it).
+    """
+
+    name: str
+    plants: tuple[str, ...]
+    what: str
 
 
 @dataclass(frozen=True)
@@ -148,6 +180,19 @@ class Family:
     variants : tuple of Variant
         Named changes of the spec a study may run (:class:`~designkit.synthesis.knobs.Variant`): another form of
         the law, such as an adaptive rule's ad hoc modifications.
+    uses : tuple of str
+        The optional settings of :data:`SETTINGS` it honours (``"simulation.anti_windup"``, ``"plant.uncertainty"``,
+        ``"plant.uncertainty.grid"``, ``"plant.uncertainty.samples"``); a spec giving another is refused when it is
+        read (:class:`~designkit.schema.spec.Spec`), with the reason from :data:`SETTINGS`.
+    plant_fields : tuple of PlantField
+        Its ``controller`` fields that it reads on some plant kinds only; given on another plant kind, one is
+        refused when the spec is read.
+    box_design : str
+        How its run is repeated at a plant of ``plant.uncertainty`` (the ``box_runs`` check): ``"nominal"`` (the
+        design for the spec's plant, run on the other plant, which the controller is not told of) or ``"each"``
+        (its synthesis for that plant: for a family whose design takes what it reads of the plant as known -- the
+        adaptive computed torque's non-adapted parameters and ideal accelerometer -- and which refuses a box
+        that moves anything it does not estimate).
     """
 
     kind: str
@@ -173,17 +218,25 @@ class Family:
     answers: tuple[tuple[str, Callable[[Any], tuple[str, ...]]], ...] = ()
     predictions: tuple[Metric, ...] = ()
     variants: tuple[Variant, ...] = ()
+    uses: tuple[str, ...] = ()
+    plant_fields: tuple[PlantField, ...] = ()
+    box_design: str = "nominal"
 
     def __post_init__(self) -> None:
         if self.reference not in ("step", "trajectory"):
             raise ValueError(f"family {self.kind!r}: reference must be 'step' or 'trajectory'")
+        if self.box_design not in ("nominal", "each"):
+            raise ValueError(f"family {self.kind!r}: box_design must be 'nominal' or 'each'")
         if not self.references:
             default = STEP_REFERENCES if self.reference == "step" else TRAJECTORY_REFERENCES
             object.__setattr__(self, "references", default)
         for name in ("checks", "references", "figures", "sections", "diagnoses", "knobs", "metrics", "answers",
-                     "predictions", "variants"):
+                     "predictions", "variants", "uses", "plant_fields"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         object.__setattr__(self, "traits", frozenset(self.traits))
+        unknown = [u for u in self.uses if u not in SETTINGS]
+        if unknown:
+            raise ValueError(f"family {self.kind!r}: uses settings {unknown} not in {tuple(SETTINGS)}")
         keys = [k.key for k in self.knobs]
         if len(set(keys)) != len(keys):
             raise ValueError(f"family {self.kind!r}: two knobs share a name ({keys})")

@@ -13,9 +13,12 @@ only within rounding of the stability boundary) is undecided.
     Stable at every corner of the box?
 ``robust_grid``
     Stable on the lattice of the box (``grid`` points per parameter, capped at
-    :data:`~designkit.spec.plants.MAX_GRID_POINTS` plants) and at ``samples`` seeded random
+    :data:`~designkit.spec.plants.MAX_GRID_POINTS` plants), refined by bisection between neighbours until the
+    stability margin is resolved between them (:mod:`designkit.verification.refine`, at most
+    :data:`~designkit.verification.refine.MAX_REFINED_PLANTS` plants added), and at ``samples`` seeded random
     interior points?  Reports the worst (largest) spectral abscissa and where it occurs; the
-    margin is minus that abscissa, the decay rate (1/s) of the slowest mode.
+    margin is minus that abscissa, the decay rate (1/s) of the slowest mode.  Sampling, not proof: the
+    verdict says how many plants it rests on.
 ``common_lyapunov`` (informational)
     One quadratic Lyapunov function for the corner closed loops: quadratic stability of their
     convex hull, even under arbitrarily fast variation inside it.  It covers every plant of the
@@ -38,6 +41,7 @@ from designkit.spec.plants import MAX_GRID_POINTS
 from designkit.synthesis.closed_loop import equilibria, loop_functions, state_matrices
 from designkit.verification.check import Check
 from designkit.verification.lyapunov import common_lyapunov
+from designkit.verification.refine import MAX_REFINED_PLANTS, MIN_WIDTH_FRACTION, RESOLVED_FRACTION, refine
 from designkit.verification.routh import MARGINAL, STABLE, UNSTABLE, routh_batch
 from designkit.verification.tolerances import LMI_EPS
 
@@ -307,12 +311,32 @@ MAX_MIGRATION_PLANTS = 5000
 """Up to this many plants of the lattice, their closed-loop poles are kept for the pole-migration figure."""
 
 
-def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
-    """Check ``"robust_grid"``: the lattice of the box plus seeded random samples."""
+def _merge(results: list[SweepResult]) -> SweepResult:
+    """One :class:`SweepResult` of several batches (in order)."""
+    if len(results) == 1:
+        return results[0]
+    return SweepResult(*(np.concatenate([getattr(r, f) for r in results])
+                         for f in ("theta", "status", "abscissa", "routh_margin", "A")))
+
+
+def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None, *,
+               cap: int = MAX_REFINED_PLANTS) -> Check:
+    """Check ``"robust_grid"``: the lattice of the box refined between neighbours until the stability margin is
+    resolved (:func:`designkit.verification.refine.refine`, at most ``cap`` plants added), plus seeded random
+    samples.  Sampling, not proof: the verdict says how many plants it rests on."""
     sweeper = sweeper or Sweeper(design, box.names)
     lattice = box.lattice
     theta = np.vstack([lattice, box.random]) if box.samples else lattice
-    res = sweeper.sweep(theta)
+    batches = [sweeper.sweep(theta)]
+
+    def evaluate(points: np.ndarray) -> np.ndarray:
+        batches.append(sweeper.sweep(points))
+        return -batches[-1].abscissa
+
+    shape = tuple(len(a) for a in box.axes)
+    span = np.asarray(box.hi, dtype=float) - np.asarray(box.lo, dtype=float)
+    refined = refine(lattice, -batches[0].abscissa[: len(lattice)], shape, span, evaluate, cap=cap)
+    res = _merge(batches)
     n_unstable = int(np.count_nonzero(res.status == UNSTABLE))
     n_undecided = int(np.count_nonzero(res.status == MARGINAL))
     total = len(res.status)
@@ -323,22 +347,32 @@ def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
               for i in bad[:MAX_LISTED_POINTS]]
     passed = _verdict(res.status)
     where = _where(box, res.theta[worst])
+    sampled = (f"{len(lattice)} lattice plants ({box.points_per_axis} per axis)"
+               + (f", {refined.plants} added by bisection between neighbours in {refined.rounds} rounds"
+                  if refined.plants else ", no bisection needed (the margin is resolved between neighbours)")
+               + (f", {box.samples} seeded samples" if box.samples else ""))
+    left = (f"; {refined.unresolved} neighbour pairs still unresolved at the cap of {cap} added plants"
+            if refined.unresolved else "")
     if passed:
-        detail = f"{total} plants stable; slowest pole Re = {res.abscissa[worst]:.4g} 1/s at {where}"
+        detail = (f"{total} sampled plants stable ({sampled}){left}; slowest pole Re = {res.abscissa[worst]:.4g} "
+                  f"1/s at {where}; sampled, not proven for the continuum of the box")
     else:
-        detail = f"{n_unstable} unstable and {n_undecided} undecided of {total} plants; e.g. " + "; ".join(
-            f"({_where(box, res.theta[i])})" for i in bad[:3])
+        detail = f"{n_unstable} unstable and {n_undecided} undecided of {total} sampled plants ({sampled}); e.g. " + \
+            "; ".join(f"({_where(box, res.theta[i])})" for i in bad[:3])
     cert: dict[str, Any] = {
         "box": box.describe(), "points_per_axis": box.points_per_axis, "lattice_plants": len(lattice),
+        "refined_plants": refined.plants, "refinement_rounds": refined.rounds,
+        "unresolved_pairs": refined.unresolved, "finest_unresolved_pairs": refined.finest,
+        "refinement": {"resolved_fraction": RESOLVED_FRACTION, "min_width_fraction": MIN_WIDTH_FRACTION,
+                       "cap": cap},
         "random_samples": box.samples, "seed": box.seed if box.samples else None, "plants": total,
         "stable": total - n_unstable - n_undecided, "unstable": n_unstable, "undecided": n_undecided,
         "worst_abscissa": {**dict(zip(box.names, map(float, res.theta[worst]), strict=True)),
                            "spectral_abscissa": float(res.abscissa[worst])},
-        "failing_points": listed,
+        "failing_points": listed, "proof": "sampled: the lattice, its refinement and the samples only",
     }
     varying = [k for k, (lo, hi) in enumerate(zip(box.lo, box.hi, strict=True)) if lo != hi]
     if len(varying) in (1, 2):
-        shape = tuple(len(a) for a in box.axes)
         values = (-res.abscissa[: len(lattice)]).reshape(shape)
         axes = [{"name": box.names[k], "unit": box.units[k] if box.units else "", "values": box.axes[k].tolist()}
                 for k in varying]
@@ -355,8 +389,9 @@ def grid_check(design: Any, box: Box, sweeper: Sweeper | None = None) -> Check:
                 "parameter": box.names[varying[0]], "unit": box.units[varying[0]] if box.units else ""}
     return Check(
         name="robust_grid", passed=passed, data=data,
-        target=f"stable on the {box.points_per_axis}-point lattice" + (f" and {box.samples} random samples"
-                                                                        if box.samples else ""),
+        target=f"stable at every sampled plant: the {box.points_per_axis}-point lattice refined until the margin "
+               "is resolved between neighbours" + (f", and {box.samples} random samples" if box.samples else "")
+               + " (sampled, not a proof)",
         achieved=achieved, margin=None if achieved is None else -achieved, unit="1/s", detail=detail,
         certificate=cert,
     )

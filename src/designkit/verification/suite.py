@@ -33,6 +33,8 @@ coupling           120   per-joint ``loops``                     intercoupling l
 designed_loop      125   a linear loop and a run                 the simulated loop is the designed one
 time_domain        130   a simulation and ``requirements``       overshoot, settling, rise, error, peak control
 torque_limits      140   a simulation and ``plant.limits``       commanded torques within the actuator limits
+box_runs           150   a run and ``plant.uncertainty``         the family's own run at the box's corners and
+                                                                 samples: every check passes at each
 ================== ===== ======================================= ==============================================
 """
 
@@ -68,6 +70,11 @@ class Context:
         The simulated law (the design's, with the spec's anti-windup; None: ``design.law``).
     trials : TrialsResult or None
         Every trial of a learning design.
+    rerun : callable or None
+        ``{parameter: value} -> tuple of Check``: the family's own run of the spec (its simulation or trials and its
+        checks) on the true plant with these parameter values, passed in by the runner (the layer above), which
+        the ``box_runs`` check calls at the points of the parameter box; None inside such a run (no nesting) and
+        without a simulation.
     """
 
     spec: Any
@@ -76,6 +83,7 @@ class Context:
     plant: Any = None
     law: Any = None
     trials: Any = None
+    rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None
 
     def true_plant(self, design: Any) -> Any:
         """The true plant (the design's when none was given)."""
@@ -117,6 +125,9 @@ class CheckRule:
     universal : bool
         Offered for every family, whether or not its ``checks`` name it (a property of any simulated loop,
         such as a chattering command); ``applies`` still decides.
+    reads : tuple of str
+        The ``requirements`` keys it judges (``"requirements.overshoot"``): a spec giving a requirement that no
+        check its family offers reads is refused when it is read (:class:`~designkit.schema.spec.Spec`).
     """
 
     name: str
@@ -130,6 +141,7 @@ class CheckRule:
     figures: tuple[Callable[[Any, Any], Any], ...] = ()
     diagnose: Callable[[Any, Any], Any] | None = None
     universal: bool = False
+    reads: tuple[str, ...] = ()
 
     def offered_for(self, design: Any, ctx: Context) -> bool:
         """True when the check runs for ``design``: its linearization (if it needs one) and what ``applies`` asks."""
@@ -226,8 +238,8 @@ def owner(rules: Sequence[CheckRule], check_name: str) -> CheckRule | None:
     return next((r for r in rules if r.owns(check_name)), None)
 
 
-def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any) -> Context:
-    return Context(spec, simulation, spec.numerics.solver, plant, law, trials)
+def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any, rerun: Any = None) -> Context:
+    return Context(spec, simulation, spec.numerics.solver, plant, law, trials, rerun)
 
 
 def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None, *,
@@ -238,7 +250,8 @@ def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None
 
 
 def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None, *,
-               rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None) -> tuple[Check, ...]:
+               rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None,
+               rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None) -> tuple[Check, ...]:
     """Run every check of ``rules`` that applies (see the module docstring).
 
     Parameters
@@ -257,12 +270,14 @@ def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None
         The simulated law (default ``design.law``).
     trials : TrialsResult, optional
         The trials of a learning design.
+    rerun : callable, optional
+        The family's own run at other parameter values (:attr:`Context.rerun`).
 
     Returns
     -------
     tuple of Check
     """
-    ctx = _context(spec, simulation, plant, law, trials)
+    ctx = _context(spec, simulation, plant, law, trials, rerun)
     checks: list[Check] = []
     for rule in resolve(rules):
         if rule.offered_for(design, ctx):

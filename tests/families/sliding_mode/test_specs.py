@@ -64,10 +64,11 @@ def test_example_specs_round_trip_through_the_json_schema(path):
 
 
 def test_proposed_conformance_case_verifies():
-    from tests.problems import PLANTS
+    from tests.problems import PLANTS, for_family
 
     controller, simulation, requirements = CASE
-    text = (f"name: conformance-sliding_mode-link\nplant: {PLANTS['link']}\ncontroller: {controller}\n"
+    text = (f"name: conformance-sliding_mode-link\nplant: {for_family('sliding_mode', PLANTS['link'])}\n"
+            f"controller: {controller}\n"
             f"requirements: {requirements}\nsimulation: {simulation}\n")
     result = run_text(text)
     assert result.verified, [(c.name, c.detail) for c in result.failed]

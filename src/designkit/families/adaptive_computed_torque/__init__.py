@@ -33,6 +33,7 @@ from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
+from designkit.families.adaptive_computed_torque.box import check_box
 from designkit.families.adaptive_computed_torque.laws import (
     KIND,
     Adaptation,
@@ -271,6 +272,7 @@ def _scheme_parts(spec: Any, a: Adaptation) -> tuple[list[Gain], list[str], tupl
 def synthesize(spec: Any, plant: Any) -> Design:
     """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
     a = adaptation(spec, plant)
+    check_box(spec, plant, tuple(a.names))
     n = plant.n_joints
     units = parameter_units(a.names)
     true = act.true_parameters(plant)
@@ -314,8 +316,9 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=AdaptiveComputedTorqueSpec, plants=("robot",), reference="trajectory",
+        uses=("plant.uncertainty", "plant.uncertainty.samples"), box_design="each",
         synthesize=synthesize, law=law,
-        checks=("lyapunov", "frozen_final", "time_domain", "torque_limits", *checks.RULES),
+        checks=("lyapunov", "frozen_final", "time_domain", "torque_limits", "box_runs", *checks.RULES),
         display=Display(
             label="Adaptive computed torque",
             law=("Craig (the default scheme): Γ = D̂(q) (q̈D + K1 e + K2 ė) + ĥ(q, q̇) = W(q, q̇, q̈D + K1 e + K2 ė) P̂,  "

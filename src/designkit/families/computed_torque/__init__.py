@@ -146,6 +146,7 @@ FAMILY = Family(
     kind=KIND,
     spec=ComputedTorqueLawSpec,
     plants=("robot",),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,

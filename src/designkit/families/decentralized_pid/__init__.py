@@ -237,6 +237,7 @@ FAMILY = Family(
     kind=KIND,
     spec=DecentralizedPidSpec,
     plants=("robot",),
+    uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,
     law=law,

@@ -201,6 +201,7 @@ FAMILY = Family(
     kind=KIND,
     spec=ILCSpec,
     plants=("robot",),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,

@@ -341,6 +341,7 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=MracSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
+        uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
         checks=("pole_placement", "lyapunov", "frozen_final", "robustness", "loop_margins", "designed_loop",
                 "time_domain", *checks.RULES),
         display=Display(

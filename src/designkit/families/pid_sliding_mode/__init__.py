@@ -232,6 +232,7 @@ FAMILY = Family(
     kind=KIND,
     spec=PidSlidingModeSpec,
     plants=("link",),
+    uses=("plant.uncertainty",),
     reference="step",
     references=("step", "square", "prbs", "quintic", "sine", "trapezoidal", "via_points"),
     synthesize=synthesize,

@@ -23,6 +23,7 @@ from designkit.families.pid_sliding_mode.robot_checks import (
 )
 from designkit.families.pid_sliding_mode.robot_figures import ROBOT_FIGURES
 from designkit.families.pid_sliding_mode.spec import KIND
+from designkit.synthesis.family import PlantField
 
 __all__ = ["extend", "json_summary", "section"]
 
@@ -127,6 +128,15 @@ def section(result: Any) -> ReportSection | None:
     return ReportSection("pid-sm-hierarchy", "Hierarchy of control: the relay amplitudes per joint", intro, (q,))
 
 
+ROBOT_FIELDS = (
+    PlantField("workspace", ("robot",), "the box of configurations the hierarchy of control bounds xi over"),
+    PlantField("gravity_feedforward", ("robot",), "the arm's gravity torque fed forward"),
+    PlantField("work_limit", ("robot",), "the configuration boxes the proven bound of sup|xi_i| may bisect"),
+)
+"""The controller fields only the robot's hierarchy of control reads; given on a link or an elastic joint, they
+are refused when the spec is read."""
+
+
 def extend(family: Any) -> Any:
     """``family`` also designing for robots (dispatched on the plant kind; a robot design's data is a
     :class:`~designkit.families.pid_sliding_mode.data.RobotSlidingData`)."""
@@ -145,4 +155,5 @@ def extend(family: Any) -> Any:
 
     return dataclasses.replace(family, plants=(*family.plants, "robot"), synthesize=synth, law=law_of,
                                checks=(*family.checks, CERTIFICATE_RULE, RUN_RULE), json=json_of,
-                               sections=(*family.sections, section), figures=(*family.figures, *ROBOT_FIGURES))
+                               sections=(*family.sections, section), figures=(*family.figures, *ROBOT_FIGURES),
+                               plant_fields=ROBOT_FIELDS)

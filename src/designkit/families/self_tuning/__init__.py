@@ -226,7 +226,8 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=SelfTuningSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
-        checks=("time_domain", *checks.RULES),
+        uses=("plant.uncertainty", "plant.uncertainty.samples"),
+        checks=("time_domain", "box_runs", *checks.RULES),
         display=Display(
             label="Self-tuning regulator (RLS and certainty-equivalence design)",
             law=("θ̂(k) = θ̂(k−1) + K(k) (y(k) − φ(k)ᵀ θ̂(k−1))  (recursive least squares, forgetting λ)",

@@ -240,6 +240,7 @@ FAMILY = Family(
     kind=KIND,
     spec=SlidingModeSpec,
     plants=("link",),
+    uses=("plant.uncertainty",),
     reference="step",
     references=("step", "square", "prbs"),
     synthesize=synthesize,

@@ -145,7 +145,8 @@ def _family() -> Family:
 
     return Family(
         kind=KIND, spec=SmidSpec, plants=("link", "robot"), reference="step", synthesize=synthesize, law=law,
-        checks=checks.RULES, validate=validate, references=tuple(dict.fromkeys(LINK_REFERENCES + ROBOT_REFERENCES)),
+        uses=("plant.uncertainty", "plant.uncertainty.samples"), checks=(*checks.RULES, "time_domain", "box_runs"),
+        validate=validate, references=tuple(dict.fromkeys(LINK_REFERENCES + ROBOT_REFERENCES)),
         display=Display(
             label="Sliding-mode parameter identification",
             law=("u = −K1 (x1 − xD) − K2 x2  (the servo driving the link)",

@@ -95,6 +95,7 @@ FAMILY = Family(
     kind=KIND,
     spec=StateRegulatorSpec,
     plants=("elastic_joint", "link"),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,
     law=law,

@@ -241,6 +241,7 @@ FAMILY = Family(
     kind=KIND,
     spec=VscSpec,
     plants=("link", "elastic_joint"),
+    uses=("plant.uncertainty",),
     reference="step",
     references=("step", "square", "prbs"),
     synthesize=synthesize,

@@ -26,4 +26,5 @@ def _sensitivity(result: Any, check: Any) -> Any:
 
 
 RULE = CheckRule(name="loop_margins", order=110, linear=True, applies=lambda d, c: d.input_loop is not None,
-                 run=_run, label="Stability margins at the plant input", figures=(_bode, _sensitivity))
+                 run=_run, label="Stability margins at the plant input", figures=(_bode, _sensitivity),
+                 reads=("requirements.gain_margin", "requirements.phase_margin", "requirements.modulus_margin"))

@@ -18,6 +18,8 @@ RULE = CheckRule(
     name="time_domain", order=130,
     applies=lambda d, c: c.simulation is not None and c.spec.requirements is not None, run=_run,
     label="Time-domain requirements",
+    reads=tuple(f"requirements.{k}" for k in ("overshoot", "settling_time", "rise_time", "steady_state_error",
+                                              "tracking_error", "max_control", "settling_band")),
     labels={"overshoot": "Overshoot", "settling_time": "Settling time (2 % band)", "rise_time": "Rise time",
             "steady_state_error": "Steady-state error", "max_control": "Peak control effort |u|",
             "tracking_error": "Tracking error"},

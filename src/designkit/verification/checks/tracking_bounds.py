@@ -21,4 +21,4 @@ def _figure(result: Any, check: Any) -> Any:
 
 RULE = CheckRule(name="tracking_bounds", order=100, figures=(_figure,),
                  applies=lambda d, c: c.uncertainty() is not None and d.reference == "trajectory", run=_run,
-                 label="Tracking error within bounds")
+                 label="Tracking error within bounds", reads=("requirements.tracking_error",))
