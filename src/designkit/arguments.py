@@ -120,7 +120,7 @@ def number(value: object, name: str, *, low: float | None = None, high: float | 
 
 def flag(value: object, name: str, *, error: ErrorType = SpecError) -> bool:
     """``value`` as a ``bool``: only ``True`` and ``False`` (NumPy booleans too)."""
-    if type(value).__name__ in ("bool", "bool_") and value in (True, False):
+    if isinstance(value, bool) or (type(value).__module__ == "numpy" and type(value).__name__ in ("bool", "bool_")):
         return bool(value)
     raise error(name, f"must be True or False, got {_got(value)}")
 
