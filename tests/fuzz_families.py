@@ -350,7 +350,8 @@ def family_mutants(seed: int, count: int) -> list[Case]:
 
     rng = random.Random(seed)
     kinds = sorted(FAMILIES)
-    out = []
+    out: list[Case] = []
+    turn = 0
     for k in range(count):
         if k % 9 == 8:
             name, path, value, doc = _sweep_case(rng)
@@ -359,7 +360,8 @@ def family_mutants(seed: int, count: int) -> list[Case]:
             name, path, value, doc = _comparison_case(rng)
             command = "verify"
         else:
-            name, path, value, doc = _family_case(kinds[k % len(kinds)], rng)
+            name, path, value, doc = _family_case(kinds[turn % len(kinds)], rng)
+            turn += 1
             command = "codegen" if rng.random() < 1 / 6 else "verify"
         out.append(Case(_dump(doc), name, path, repr(value)[:60], command))
     return out
@@ -437,6 +439,9 @@ def _main(argv: list[str]) -> int:  # python -m tests.fuzz_families [N] [SEED] [
             res = run_case(case, Path(tmp) / str(k))
             bad = violations(res)
             counts[(case.command, res.code)] = counts.get((case.command, res.code), 0) + 1
+            if k % 100 == 99:
+                print(f"# {k + 1} cases, {bad_cases} violations, {time.monotonic() - start:.0f} s", file=sys.stderr,
+                      flush=True)
             if bad or show_all:
                 bad_cases += bool(bad)
                 print(f"#{k} seed {seed} {case.command} {case.base} {case.path} = {case.value}: exit {res.code} "
