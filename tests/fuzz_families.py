@@ -147,7 +147,7 @@ def fields(node: dict[str, Any], prefix: str = "", depth: int = 0) -> list[tuple
 
 
 _WRONG = ("abc", True, [], {}, None, ".nan", ".inf", "1e400")
-_EXTREME = (0, -1, 1, 1e-12, -1e-12, 1e12, -1e12, 1e300, -1e300, 5e-324)
+_EXTREME = (0, -1, 1, 1e-12, -1e-12, 1e12, -1e12, 1e300, -1e300, 5e-324, 1e-300, 2.3e-308)
 
 
 def _number_values(node: dict[str, Any]) -> list[Any]:

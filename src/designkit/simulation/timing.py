@@ -215,7 +215,10 @@ def _switching_dt(limit: float, events: list[float]) -> float:
     """The largest step not above ``limit`` (s) that divides every event instant into whole steps (their rational
     greatest common divisor ``e``, then ``e / ceil(e / limit)``), or ``limit`` itself when there is no event."""
     e = _rational_gcd(events)
-    return limit if e is None else e / math.ceil(e / limit - ROUNDING)
+    if e is None:
+        return limit
+    ratio = e / limit - ROUNDING
+    return e / math.ceil(ratio) if math.isfinite(ratio) else limit  # too many steps to count: the step bound refuses
 
 
 def _default_dt(rate: float, duration: float, g: float | None) -> float:
