@@ -50,19 +50,23 @@ SLIDING = ("name: t\nplant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1
 
 
 @pytest.mark.parametrize("text, path", [
-    (LINK.replace("Km: 2.0", "Km: 5e-324"), "plant.Km"),
-    (LINK.replace("[-4, -5, -20]", "[-4, -5, -20], zero: -1e-310"), "controller.zero"),
     (LINK + "simulation: {noise: {std: 5e-324}}\n", "simulation.noise.std"),
     (SLIDING.replace("margin: 0.2", "margin: 0.2, chattering_band: 5e-324"), "controller.chattering_band"),
     (SLIDING.replace("margin: 0.2", "margin: 0.2, alpha: -2e-308"), "controller.alpha"),
-    (ROBOT + "requirements: {max_control: [1.0, 4e-320]}\n", "requirements.max_control[1]"),
+    (ROBOT + "simulation: {step: [0.5, 4e-320]}\n", "simulation.step"),
 ])
 def test_subnormal_numbers_are_refused_with_the_key_path(text, path):
-    """A nonzero number below the smallest normal float (2.2250738585072014e-308) in magnitude: whatever is
-    computed from it (a step, a scale) underflows to 0."""
+    """A nonzero number below the smallest normal float (2.2250738585072014e-308) in magnitude, in a field whose
+    range holds it: whatever is computed from it (a step, a scale) underflows to 0."""
     with pytest.raises(SpecError) as err:
         parse_spec(text)
     assert err.value.path == path and "subnormal" in err.value.message
+
+
+def test_a_range_that_excludes_subnormal_numbers_says_so_itself():
+    with pytest.raises(SpecError) as err:
+        parse_spec(LINK.replace("Km: 2.0", "Km: 5e-324"))
+    assert err.value.path == "plant.Km" and "must be between 1e-6 and 1e6" in err.value.message
 
 
 def test_zero_and_the_smallest_normal_numbers_are_read():

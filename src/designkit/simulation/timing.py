@@ -38,6 +38,7 @@ period and the delay into whole numbers of steps and satisfy ``dt * rate <= MAX_
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -170,7 +171,10 @@ def rates_of(requested: Any, *pole_sets: Any, reference_rate: float = 0.0) -> Ra
 
 
 def _nice_floor(value: float) -> float:
-    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (:data:`ROUNDING` relative slack)."""
+    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (:data:`ROUNDING` relative slack); a value too
+    small to round (0 or subnormal) is kept, at least the smallest float, for the step bound to refuse."""
+    if not value >= sys.float_info.min:
+        return max(value, math.ulp(0.0))
     exp = math.floor(math.log10(value * (1 + ROUNDING)))
     for mantissa in (5.0, 2.5, 2.0, 1.0):
         if mantissa * 10.0**exp <= value * (1 + ROUNDING):
