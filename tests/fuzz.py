@@ -174,8 +174,9 @@ def _alarm(signum: int, frame: Any) -> None:
 
 def outcome(text: str, folder: Path, command: str = "verify", extra: tuple[str, ...] = (),
             cpu: float | None = None) -> Outcome:
-    """Run ``designkit verify FILE --json`` or ``designkit synth FILE --out DIR`` in process on ``text``, with the
-    further options ``extra`` (e.g. ``--budget 4``); with ``cpu``, stopped after that many CPU seconds (SIGPROF)."""
+    """Run ``designkit verify FILE --json``, ``designkit synth FILE --out DIR`` or ``designkit codegen FILE --out DIR``
+    in process on ``text``, with the further options ``extra`` (e.g. ``--budget 4``); with ``cpu``, stopped after
+    that many CPU seconds (SIGPROF)."""
     import signal
     import time
 
@@ -185,7 +186,8 @@ def outcome(text: str, folder: Path, command: str = "verify", extra: tuple[str, 
     spec = folder / "spec.yaml"
     spec.write_text(text)
     out_dir = folder / "out"
-    argv = ["verify", str(spec), "--json"] if command == "verify" else ["synth", str(spec), "--out", str(out_dir)]
+    argv = {"verify": ["verify", str(spec), "--json"], "synth": ["synth", str(spec), "--out", str(out_dir)],
+            "codegen": ["codegen", str(spec), "--out", str(out_dir)]}[command]
     argv += list(extra)
     stdout, stderr = io.StringIO(), io.StringIO()
     previous = signal.signal(signal.SIGPROF, _alarm) if cpu else None

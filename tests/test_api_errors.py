@@ -302,3 +302,217 @@ def test_urdf_paths_and_numbers_off_the_chain(tmp_path):
     bad.write_text(text)
     with pytest.raises(dk.ModelError, match="base_link"):
         dk.robot_from_urdf(bad)
+
+
+# ------------------------------------------------------------------- every public function, every parameter
+
+
+class _Text(str):
+    """A str subclass whose own methods fail: the API reads its plain value or refuses it, never calls them."""
+
+    def encode(self, *args, **kwargs):
+        raise RuntimeError("a str subclass's encode was called")
+
+    def __fspath__(self):
+        raise RuntimeError("a str subclass's __fspath__ was called")
+
+
+MISSING = "missing-file.yaml"
+_NAN, _INF = float("nan"), float("inf")
+_COMMON = {"None": None, "bytes": b"x", "list": [1], "nul": "a\0b", "surrogate": "\ud800", "str-sub": _Text("2")}
+WRONG: dict[str, dict[str, object]] = {
+    "count": {**_COMMON, "str": "2", "float": 1.5, "bool": True, "negative": -5, "zero": 0, "nan": _NAN, "inf": _INF,
+              "huge": 10**400},
+    "seed": {**_COMMON, "str": "2", "float": 1.5, "bool": True, "negative": -5, "nan": _NAN, "huge": 10**400},
+    "positive": {**_COMMON, "str": "2", "bool": True, "negative": -5.0, "zero": 0, "nan": _NAN, "inf": _INF,
+                 "huge": 10**400, "complex": 1j},
+    "tolerance": {**_COMMON, "str": "2", "bool": True, "negative": -5.0, "nan": _NAN, "inf": _INF, "huge": 10**400},
+    "flag": {"None": None, "str": "yes", "int": 1, "float": 0.0, "nan": _NAN, "str-sub": _Text("True"), "list": []},
+    "name": {"None": None, "int": 1, "float": 1.5, "bool": True, "bytes": b"x", "nul": "a\0b", "surrogate": "\ud800",
+             "empty": "", "path": Path("x"), "list": ["x"]},
+    "yaml": {"None": None, "int": 1, "float": 1.5, "bool": True, "nul": "name: a\0b", "surrogate": "name: \ud800",
+             "path": Path("x"), "list": ["x"]},
+    "file": {"None": None, "int": 1, "bool": True, "bytes": b"x", "nul": "a\0b.yaml", "surrogate": "\ud800.yaml",
+             "empty": "", "list": ["x"], "missing": Path(MISSING), "folder": Path(".")},
+    "folder": {"None": None, "int": 1, "bool": True, "bytes": b"x", "nul": "a\0b", "surrogate": "\ud800",
+               "empty": "", "list": ["x"], "file": Path("a-file")},
+    "object": {"None": None, "str": "x", "int": 1, "str-sub": _Text("x"), "bytes": b"x", "missing": Path(MISSING),
+               "folder": Path("."), "dict": {"name": "x"}},
+}
+"""Wrong values by kind of parameter; ``missing``, ``folder`` and ``file`` are relative to the test's folder."""
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    import casadi as ca
+
+    folder = tmp_path_factory.mktemp("env")
+    spec_file = folder / "spec.yaml"
+    spec_file.write_text(POSSPEED_YAML)
+    loaded = dk.parse_spec(POSSPEED_YAML)
+    design = dk.synthesize(loaded.spec)
+    q = ca.SX.sym("q", 2)
+    sweepable = dk.parse_spec(POSSPEED_YAML.replace("tau: 0.5}", "tau: 0.5, uncertainty: {Km: [1.8, 2.2]}}")
+                              + "requirements: {overshoot: 20}\nsimulation: {duration: 1.0}\n")
+    return {"loaded": loaded, "sweepable": sweepable, "spec_file": spec_file, "spec": loaded.spec, "design": design,
+            "simulator": dk.build(loaded.spec, design), "result": dk.run(loaded, simulate=False),
+            "arm": dk.robot("planar2r"), "chain": dk.robot("planar2r").description,
+            "f": ca.Function("f", [q], [ca.cos(q[0]) + q[1] ** 2], ["q"], ["y"]),
+            "urdf": Path(dk.__file__).parent / "models" / "robots" / "planar2r.urdf"}
+
+
+def _codegen(loaded, out_dir, name=None):
+    """:func:`designkit.pipeline.codegen` (``designkit codegen``), imported when called."""
+    from designkit.pipeline import codegen
+
+    return codegen(loaded, out_dir, name=name)
+
+
+def _learn(result, feedforward):
+    return feedforward
+
+
+# function, its valid call (keyword arguments from env, out = a folder below the test's folder), its parameters
+CALLS = {
+    "load_spec": ("load_spec", lambda e, out: {"path": e["spec_file"]},
+                  {"path": "file"}),
+    "parse_spec": ("parse_spec", lambda e, out: {"text": POSSPEED_YAML, "path": "<string>"},
+                   {"text": "yaml", "path": "name"}),
+    "synthesize": ("synthesize", lambda e, out: {"spec": e["spec"], "plant": None, "base_dir": None},
+                   {"spec": "object", "plant": "object", "base_dir": "folder"}),
+    "run": ("run", lambda e, out: {"loaded": e["loaded"], "simulate": False, "budget": 60.0},
+            {"loaded": "object", "simulate": "flag", "budget": "positive"}),
+    "simulate": ("simulate", lambda e, out: {"spec": e["spec"], "design": e["design"], "plant": None},
+                 {"spec": "object", "design": "object", "plant": "object"}),
+    "build": ("build", lambda e, out: {"spec": e["spec"], "design": e["design"], "plant": None, "law": None,
+                                       "expected_runs": 1, "reference": None},
+              {"spec": "object", "design": "object", "plant": "object", "law": "object", "expected_runs": "count",
+               "reference": "object"}),
+    "run_trials": ("run_trials", lambda e, out: {"simulator": e["simulator"], "trials": 1, "learn": _learn,
+                                                 "feedforward": None},
+                   {"simulator": "object", "trials": "count", "learn": "object", "feedforward": "object"}),
+    "family": ("family", lambda e, out: {"kind": "pid_servo"}, {"kind": "name"}),
+    "zoo_plant": ("zoo_plant", lambda e, out: {"name": "planar2r", "overrides": None, "friction": True,
+                                               "motor_inertia": False, "consistent_inertia": None},
+                  {"name": "name", "overrides": "object", "friction": "flag", "motor_inertia": "flag",
+                   "consistent_inertia": "name"}),
+    "chain_plant": ("chain_plant", lambda e, out: {"description": e["chain"], "friction": True, "motor_inertia": False,
+                                                   "source": "", "consistent_inertia": None},
+                    {"description": "object", "friction": "flag", "motor_inertia": "flag", "source": "name",
+                     "consistent_inertia": "name"}),
+    "write_report": ("write_report", lambda e, out: {"result": e["result"], "out_dir": out, "processes": 1,
+                                                     "studies": False},
+                     {"result": "object", "out_dir": "folder", "processes": "count", "studies": "flag"}),
+    "sweep": ("sweep", lambda e, out: {"spec": e["sweepable"], "samples": 2, "seed": 0, "client": None,
+                                       "scheduler": None, "workers": None, "out": out, "chunk": None,
+                                       "engine": "process", "progress": False, "falsification": False, "report": False},
+              {"spec": "object", "samples": "count", "seed": "seed", "client": "object", "scheduler": "name",
+               "workers": "count", "out": "folder", "chunk": "count", "engine": "name", "progress": "flag",
+               "falsification": "flag", "report": "flag"}),
+    "codegen": (_codegen, lambda e, out: {"loaded": e["loaded"], "out_dir": out, "name": None},
+                {"loaded": "object", "out_dir": "folder", "name": "name"}),
+    "robot_from_dh": ("robot_from_dh", lambda e, out: {"description": e["chain"], "friction": False,
+                                                       "motor_inertia": False},
+                      {"description": "object", "friction": "flag", "motor_inertia": "flag"}),
+    "enclose": ("enclose", lambda e, out: {"function": e["f"], "box": {"q": ([0, 0], [1, 1])}, "output": 0,
+                                           "index": None, "rel_tol": 1e-3, "abs_tol": 0.0, "max_boxes": 100,
+                                           "strict": True, "thresholds": (None, None)},
+                {"function": "object", "box": "object", "output": "object", "index": "object", "rel_tol": "positive",
+                 "abs_tol": "tolerance", "max_boxes": "count", "strict": "flag", "thresholds": "object"}),
+    "model_bound": ("model_bound", lambda e, out: {"robot": e["arm"], "quantity": "mass_matrix", "index": (0, 0),
+                                                   "q": ([0, -1], [0, 1]), "rel_tol": 1e-2, "abs_tol": 0.0,
+                                                   "max_boxes": 1000, "strict": True},
+                    {"robot": "object", "quantity": "name", "index": "object", "q": "object", "rel_tol": "positive",
+                     "abs_tol": "tolerance", "max_boxes": "count", "strict": "flag"}),
+    "robot": ("robot", lambda e, out: {"name": "planar2r"}, {"name": "name"}),
+    "robot_from_urdf": ("robot_from_urdf", lambda e, out: {"path": e["urdf"], "base_link": None, "tip_link": None,
+                                                           "gravity": (0.0, 0.0, -9.81), "friction": False},
+                        {"path": "file", "base_link": "name", "tip_link": "name", "gravity": "object",
+                         "friction": "flag"}),
+}
+"""Every public function of ``designkit`` (and ``designkit.pipeline.codegen``) with a call that works and the kind
+of each parameter."""
+
+ALLOWED: dict[tuple[str, str], set[str]] = {
+    **{(f, p): {"None"} for f, p in [
+        ("synthesize", "plant"), ("simulate", "plant"), ("build", "plant"), ("build", "law"), ("build", "reference"),
+        ("run_trials", "feedforward"), ("run", "budget"), ("zoo_plant", "overrides"),
+        ("zoo_plant", "consistent_inertia"), ("chain_plant", "consistent_inertia"),
+        ("sweep", "client"), ("sweep", "scheduler"), ("sweep", "workers"),
+        ("sweep", "out"), ("sweep", "chunk"), ("codegen", "name"), ("robot_from_dh", "description"),
+        ("enclose", "index"), ("model_bound", "max_boxes"), ("robot_from_urdf", "base_link"),
+        ("robot_from_urdf", "tip_link")]},
+    ("synthesize", "base_dir"): {"None", "file"}, ("codegen", "loaded"): {"str", "str-sub"},
+    ("chain_plant", "source"): {"empty"}, ("parse_spec", "path"): {"empty"},
+    ("model_bound", "index"): {"None", "int"}, ("model_bound", "q"): {"int"},
+}
+"""Values of a parameter's kind that the parameter takes (``None`` where it means "the default")."""
+
+ALIASES = {("robot", "name"): "robot", ("zoo_plant", "name"): "robot", ("zoo_plant", "overrides"): "parameters"}
+"""Parameters whose errors carry the spec's name of the field (``plant.robot``, ``plant.parameters``)."""
+
+CASES = [(function, parameter, label) for function, (_, _, kinds) in CALLS.items() for parameter, kind in kinds.items()
+         for label in WRONG[kind] if label not in ALLOWED.get((function, parameter), set())]
+
+
+def test_the_campaign_covers_every_exported_function():
+    import inspect
+
+    exported = {name for name in dk.__all__ if name != "__version__" and inspect.isfunction(getattr(dk, name))}
+    assert exported | {"sweep", "codegen"} == set(CALLS)
+    for function, (target, _, kinds) in CALLS.items():
+        fn = getattr(dk, target) if isinstance(target, str) else target
+        named = {p.name for p in inspect.signature(fn).parameters.values() if p.kind is not p.VAR_KEYWORD}
+        if function != "sweep":  # dk.sweep forwards to designkit.sweep.api.sweep
+            assert set(kinds) <= named, (function, set(kinds) - named)
+
+
+def _call(which, env, _out, **changes):
+    target, valid, _ = CALLS[which]
+    fn = getattr(dk, target) if isinstance(target, str) else target
+    return fn(**{**valid(env, _out), **changes})
+
+
+@pytest.mark.parametrize(("function", "parameter", "label"), CASES, ids=["-".join(c) for c in CASES])
+def test_every_wrong_argument_is_refused_naming_it(env, tmp_path, monkeypatch, function, parameter, label):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a-file").write_text("in the way")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    value = WRONG[CALLS[function][2][parameter]][label]
+    with pytest.raises(dk.DesignkitError) as info:
+        _call(function, env, tmp_path / "out", **{parameter: value})
+    named = ALIASES.get((function, parameter), parameter)
+    assert parameter in str(info.value) or named in str(info.value) or (
+        label in ("missing", "folder") and (MISSING in str(info.value) or label == "folder")), str(info.value)
+    assert "\n" not in str(info.value)
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+
+
+@pytest.mark.parametrize("function", sorted(set(CALLS) - {"sweep", "write_report", "codegen", "run_trials"}))
+def test_the_valid_calls_of_the_campaign_work(env, tmp_path, function):
+    _call(function, env, tmp_path / "out")
+
+
+def test_a_str_subclass_is_read_as_its_text(env):
+    assert dk.parse_spec(_Text(POSSPEED_YAML)).spec == dk.parse_spec(POSSPEED_YAML).spec
+    assert dk.load_spec(_Text(str(env["spec_file"]))).spec == env["loaded"].spec
+    assert dk.robot(_Text("planar2r")).n == 2
+
+
+def test_a_sweep_with_a_client_that_is_not_one_writes_nothing(env, tmp_path):
+    with pytest.raises(dk.SpecError) as info:
+        dk.sweep(env["sweepable"], 2, client="x", out=tmp_path / "sweep")
+    assert info.value.path == "client"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("call", "path"), [
+    (lambda e: dk.build(e["spec"], e["design"], expected_runs=-5), "expected_runs"),
+    (lambda e: dk.sweep(e["sweepable"], 2, chunk=1.5, engine="process"), "--chunk"),
+    (lambda e: dk.write_report(e["result"], "unused", processes="2"), "processes"),
+    (lambda e: dk.run_trials(e["simulator"], 0, _learn), "trials"),
+])
+def test_numbers_out_of_their_range_are_refused_not_coerced(env, call, path):
+    with pytest.raises(dk.SpecError) as info:
+        call(env)
+    assert info.value.path == path

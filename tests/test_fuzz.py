@@ -14,6 +14,16 @@ import os
 import pytest
 
 from tests.fuzz import ROOT, mutants, outcome, violations
+from tests.fuzz_families import (
+    COMMANDS,
+    COMPARISONS,
+    FAMILY_BASES,
+    SWEEP_BASE,
+    family_mutants,
+    family_schema,
+    fields,
+    run_case,
+)
 from tests.fuzz_fields import CASE_BUDGET, CASE_CPU, GENERATORS, field_mutants
 
 FAST_SPECS = [ROOT / "specs" / f"{name}.yaml" for name in ("posspeed-link", "tracking-pid", "requirements-driven",
@@ -72,3 +82,43 @@ def test_field_mutants_keep_the_contract_within_their_bounds(tmp_path):
 def test_the_field_corpus_reaches_every_field_group(tmp_path):
     reached = {m.operator for m in field_mutants(0, N_FIELDS, tmp_path)}
     assert reached == {g.__name__[1:] for g in GENERATORS}
+
+
+N_FAMILY = int(os.environ.get("DESIGNKIT_FUZZ_FAMILY_CASES", "300"))
+"""Schema-driven mutants in the suite (``tests/fuzz_families.py``): about 16 per family, 43 comparison specs, 33
+sweeps, a sixth of the family mutants through codegen (about 25 s of CPU time).  A larger campaign:
+``DESIGNKIT_FUZZ_FAMILY_CASES=3000 python -m pytest tests/test_fuzz.py -k family``, or
+``python -m tests.fuzz_families 3000 SEED``, which prints each violation with a shell repro."""
+FAMILY_SEED = int(os.environ.get("DESIGNKIT_FUZZ_SEED", "0"))
+"""Seed of the schema-driven corpus."""
+
+
+def test_family_fields_comparisons_sweeps_and_codegen_keep_the_contract(tmp_path):
+    """Every family's controller fields, the requirements, simulation and numerics fields, comparison specs, sweep
+    sections and codegen: every mutant exits 0, 1 or 2 within its CPU bound; a refused one says so on one line naming
+    a key path and writes nothing."""
+    problems = []
+    for k, case in enumerate(family_mutants(FAMILY_SEED, N_FAMILY)):
+        result = run_case(case, tmp_path / f"c{k}")
+        problems += [f"#{k} {case.command} {case.base} {case.path} = {case.value}: {bad}: {result.err.strip()[:200]}"
+                     for bad in violations(result)]
+    assert not problems, "\n".join(problems)
+
+
+def test_the_family_corpus_reaches_every_family_comparisons_sweeps_and_codegen():
+    cases = family_mutants(0, N_FAMILY)
+    assert {c.base for c in cases} == {*FAMILY_BASES.values(), *COMPARISONS, SWEEP_BASE}
+    assert {c.command for c in cases} == set(COMMANDS)
+    assert any(c.path.startswith("sweep.") for c in cases)
+
+
+def test_the_walk_reaches_every_field_of_every_family():
+    """Every field a family's ``controller`` model declares (read from the pydantic model, not from the schema the
+    walk reads) is a field the mutants may change."""
+    from designkit.families import FAMILIES
+
+    assert set(FAMILY_BASES) == set(FAMILIES)
+    for kind, fam in FAMILIES.items():
+        declared = set(fam.spec.model_fields) - {"kind"}
+        walked = {path.split(".")[0] for path, _ in fields(family_schema(kind))}
+        assert declared == walked, kind

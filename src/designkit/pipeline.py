@@ -14,6 +14,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from designkit import arguments
 from designkit.errors import SpecError
 from designkit.schema.comparison import ComparisonSpec
 from designkit.schema.loader import LoadedSpec
@@ -368,6 +369,9 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True,
     elif not isinstance(loaded, LoadedSpec):
         hint = "; read a file with load_spec or YAML text with parse_spec" if isinstance(loaded, str | Path) else ""
         raise SpecError("loaded", f"expected a LoadedSpec or a Spec, got {type(loaded).__name__}{hint}")
+    simulate = arguments.flag(simulate, "simulate")
+    if budget is not None:
+        budget = arguments.number(budget, "budget", positive=True)
     if isinstance(loaded.spec, ComparisonSpec):
         return run_comparison(loaded, simulate=simulate, budget=budget)
     spec = loaded.spec
@@ -473,8 +477,10 @@ def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str |
     from designkit.synthesis.codegen import check_name, generate_law_code
 
     if name is not None:
-        check_name(name)
-    loaded = loaded if isinstance(loaded, LoadedSpec) else load_spec(loaded)
+        check_name(arguments.text(name, "name"))
+    if not isinstance(loaded, LoadedSpec):
+        loaded = load_spec(arguments.path(loaded, "loaded", what="a LoadedSpec or a spec file path"))
+    out_dir = arguments.path(out_dir, "out_dir", what="a folder path")
     single(loaded, "codegen")
     spec = loaded.spec
     check_budget(spec, base_dir(loaded), budget)

@@ -60,3 +60,24 @@ def test_incompatible_user_dt_is_refused_naming_simulation_dt(options, message):
     with pytest.raises(SpecError, match=message) as err:
         simulate(spec, design_of(spec))
     assert err.value.path == "simulation.dt"
+
+
+def test_the_switching_step_of_a_law_whose_largest_step_is_too_small_to_count():
+    """Events at 1 s and 0.5 s: their common divisor is 0.5 s, split into ceil(0.5 / 0.3) = 2 steps of 0.25 s; a
+    largest step of 2.6e-310 s would need more steps than a float counts: the step is left as is (the step bound
+    then refuses the run, naming simulation.duration)."""
+    from designkit.simulation.timing import _switching_dt
+
+    assert _switching_dt(0.3, [1.0, 0.5]) == pytest.approx(0.25, rel=1e-12)
+    assert _switching_dt(2.6e-310, [1.0]) == 2.6e-310
+    assert _switching_dt(0.3, []) == 0.3
+
+
+def test_a_default_step_too_small_to_round_is_kept_for_the_step_bound():
+    """0.0031 rounds down to 2.5e-3; 0, 1e-310 (subnormal) cannot be rounded to {1, 2, 2.5, 5} x 10^k and are kept (0 as
+    the smallest float), so that the step bound refuses the run instead of the logarithm failing."""
+    from designkit.simulation.timing import _nice_floor
+
+    assert _nice_floor(0.0031) == pytest.approx(2.5e-3, rel=1e-12)
+    assert _nice_floor(1e-310) == 1e-310
+    assert _nice_floor(0.0) == 5e-324

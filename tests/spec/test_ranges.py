@@ -319,10 +319,12 @@ def _is_int(rng: Range) -> bool:
 
 def inside(rng: Range) -> st.SearchStrategy:
     """Values in the range: its ends (closed ends), then uniform, log-uniform over positive ranges spanning
-    decades, and 0 where 0 means none."""
+    decades, and 0 where 0 means none; never a subnormal number (refused everywhere, see
+    ``test_loose_types.py``)."""
     if _is_int(rng):
         return st.integers(int(rng.low), int(rng.high))
-    options = [st.floats(rng.low, rng.high, exclude_min=rng.low_open, exclude_max=rng.high_open)]
+    options = [st.floats(rng.low, rng.high, exclude_min=rng.low_open, exclude_max=rng.high_open,
+                         allow_subnormal=False)]
     if rng.low > 0 and rng.high / rng.low > 1e3:
         options.append(st.floats(math.log10(rng.low), math.log10(rng.high)).map(lambda e: 10.0**e).filter(
             rng.contains))

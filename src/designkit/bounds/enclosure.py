@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit import arguments
 from designkit.bounds.box import Box
 from designkit.bounds.forms import ScalarProblem, scalar_expression
 from designkit.bounds.search import Side, maximize
@@ -105,15 +106,17 @@ class Enclosure:
                 f"[{self.min_value:.9g}, {self.max_value:.9g}], {self.boxes} boxes)")
 
 
-def _tolerances(rel_tol: float, abs_tol: float, max_boxes: int) -> None:
-    import math
+def _tolerances(rel_tol: float, abs_tol: float, max_boxes: int) -> tuple[float, float, int]:
+    return (arguments.number(rel_tol, "rel_tol", positive=True), arguments.number(abs_tol, "abs_tol", low=0.0),
+            arguments.integer(max_boxes, "max_boxes", low=1, high=10**9))
 
-    if not (isinstance(rel_tol, int | float) and math.isfinite(rel_tol) and rel_tol > 0):
-        raise SpecError("rel_tol", f"must be a positive number, got {rel_tol!r}")
-    if not (isinstance(abs_tol, int | float) and math.isfinite(abs_tol) and abs_tol >= 0):
-        raise SpecError("abs_tol", f"must be a non-negative number, got {abs_tol!r}")
-    if not (isinstance(max_boxes, int) and max_boxes >= 1):
-        raise SpecError("max_boxes", f"must be a positive integer, got {max_boxes!r}")
+
+def _thresholds(value: object) -> tuple[float | None, float | None]:
+    if isinstance(value, str | bytes) or not isinstance(value, tuple | list) or len(value) != 2:
+        raise SpecError("thresholds", f"must be a pair (low, high) of numbers or None, got {type(value).__name__}")
+    low, high = (None if v is None else arguments.number(v, f"thresholds[{k}]", finite=False)
+                 for k, v in enumerate(value))
+    return low, high
 
 
 def enclose(function: Any, box: Mapping[str, Any], *, output: int | str = 0, index: Any = None,
@@ -162,7 +165,9 @@ def enclose(function: Any, box: Mapping[str, Any], *, output: int | str = 0, ind
 
     if not isinstance(function, ca.Function):
         raise SpecError("function", f"must be a casadi.Function, got {type(function).__name__}")
-    _tolerances(rel_tol, abs_tol, max_boxes)
+    rel_tol, abs_tol, max_boxes = _tolerances(rel_tol, abs_tol, max_boxes)
+    strict = arguments.flag(strict, "strict")
+    thresholds = _thresholds(thresholds)
     the_box = Box.of(function, box)
     expr, x, label = scalar_expression(function, output, index)
     problem = ScalarProblem(expr, x, the_box.free)

@@ -14,6 +14,7 @@ import pkgutil
 from importlib import import_module
 from types import MappingProxyType
 
+from designkit import arguments
 from designkit.errors import SpecError
 from designkit.synthesis.family import Family
 
@@ -41,6 +42,7 @@ FAMILIES: MappingProxyType[str, Family] = MappingProxyType(_discover())
 
 def family(kind: str) -> Family:
     """The family registered for ``kind``; :class:`SpecError` naming ``controller.kind`` otherwise."""
+    kind = arguments.text(kind, "controller.kind")
     try:
         return FAMILIES[kind]
     except KeyError:
@@ -56,9 +58,13 @@ def synthesize(spec, plant=None, *, base_dir=None):
     """
     import dataclasses
 
+    from designkit.models.plant import Plant
     from designkit.spec.fields import spec_argument
 
     spec = spec_argument(spec)
+    arguments.instance(plant, "plant", Plant, "a Plant (dk.zoo_plant, spec.plant.build())", optional=True)
+    if base_dir is not None:
+        base_dir = arguments.path(base_dir, "base_dir", what="a folder path")
     if plant is None:
         from designkit.spec.plant_builder import plant_from_spec
 

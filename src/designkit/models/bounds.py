@@ -28,6 +28,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit import arguments
 from designkit.errors import ModelError
 from designkit.models.perturbation import PerturbationEnclosure, _side, perturbation_enclosure
 
@@ -100,8 +101,11 @@ def model_bound(robot: Any, quantity: str, index: Any = None, *, q: Any = None, 
     True
     """
     from designkit.bounds import MAX_BOXES, enclose
+    from designkit.models.robot import Robot
 
-    f = _function(robot, quantity)
+    arguments.instance(robot, "robot", Robot, "a Robot (dk.robot, dk.robot_from_dh, dk.robot_from_urdf)",
+                       error=ModelError)
+    f = _function(robot, arguments.text(quantity, "quantity", error=ModelError))
     n = robot.n
     given = {"q": q, "qd": qd, "qdd": qdd, "tau": tau}
     box: dict[str, Any] = {}

@@ -39,6 +39,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit import arguments
 from designkit.errors import ModelError
 from designkit.models import chain, regressor
 from designkit.models.batch import Evaluator, evaluate, evaluator_for, shape_output
@@ -332,6 +333,8 @@ def robot_from_dh(
     >>> round(float(arm.gravity_torque([0.0])[0]), 3)
     9.81
     """
+    friction = arguments.flag(friction, "friction", error=ModelError)
+    motor_inertia = arguments.flag(motor_inertia, "motor_inertia", error=ModelError)
     if description is None:
         links = fields.pop("links", None)
         if links is None:
@@ -346,6 +349,5 @@ def robot_from_dh(
             description = dataclasses.replace(description, **fields)
         except TypeError as exc:
             raise ModelError("description", str(exc)) from None
-    if not isinstance(description, ChainDescription):
-        raise ModelError(f"expected a ChainDescription, got {type(description).__name__}")
+    arguments.instance(description, "description", ChainDescription, "a ChainDescription", error=ModelError)
     return Robot(description, friction=friction, motor_inertia=motor_inertia)

@@ -24,6 +24,7 @@ from typing import Any
 
 import casadi as ca
 
+from designkit import arguments
 from designkit.errors import ModelError
 from designkit.models.chain import numeric_value
 from designkit.models.description import ChainDescription
@@ -220,6 +221,15 @@ def _consistent(robot: Robot, numeric: ChainDescription, method: str | None) -> 
     return Robot(description, friction=robot.friction, motor_inertia=robot.motor_inertia)
 
 
+CONSISTENT = ("raise", "nearest")
+"""The values of ``consistent_inertia``."""
+
+
+def _flags(friction: object, motor_inertia: object) -> tuple[bool, bool]:
+    return arguments.flag(friction, "friction", error=ModelError), arguments.flag(motor_inertia, "motor_inertia",
+                                                                                 error=ModelError)
+
+
 def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, friction: bool = True,
               motor_inertia: bool = False, consistent_inertia: str | None = None) -> RobotPlant:
     """A built-in robot (``planar2r``, ``scara``, ``puma560``, ``onelink``) as a plant.
@@ -245,9 +255,15 @@ def zoo_plant(name: str, *, overrides: Mapping[str, float] | None = None, fricti
     """
     from designkit.models.robots import ROBOTS, zoo_module
 
+    name = arguments.text(name, "robot", error=ModelError)
+    friction, motor_inertia = _flags(friction, motor_inertia)
+    if consistent_inertia is not None:
+        consistent_inertia = arguments.choice(consistent_inertia, "consistent_inertia", CONSISTENT, error=ModelError)
     if name not in ROBOTS:
         raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}")
     module = zoo_module(name)
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise ModelError("overrides", f"must be a mapping of parameter names to values, got {type(overrides).__name__}")
     overrides = dict(overrides or {})
     for key in overrides:
         if key not in module.DEFAULTS:
@@ -279,7 +295,11 @@ def chain_plant(description: ChainDescription, *, friction: bool = True, motor_i
     consistent_inertia : {"raise", "nearest"}, optional
         As in :func:`zoo_plant`.
     """
+    arguments.instance(description, "description", ChainDescription, "a ChainDescription", error=ModelError)
+    friction, motor_inertia = _flags(friction, motor_inertia)
+    source = arguments.text(source, "source", error=ModelError)
     if consistent_inertia is not None:
+        consistent_inertia = arguments.choice(consistent_inertia, "consistent_inertia", CONSISTENT, error=ModelError)
         from designkit.models.physical import nearest_consistent
 
         description, _ = nearest_consistent(description, consistent_inertia)

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from designkit import arguments
 from designkit.errors import ModelError
 from designkit.models.description import ChainDescription
 from designkit.models.robot import Robot, robot_from_dh
@@ -185,7 +186,7 @@ def _serial_chain(root: ET.Element, base_link: str | None, tip_link: str | None)
             raise ModelError(f"URDF must have one root link, found {roots}")
         base_link = roots[0]
     elif base_link not in links:
-        raise ModelError(f"URDF has no link {base_link!r}")
+        raise ModelError("base_link", f"URDF has no link {base_link!r}")
 
     def movable_below(link: str) -> str | None:
         for joint in children[link]:
@@ -208,7 +209,7 @@ def _serial_chain(root: ET.Element, base_link: str | None, tip_link: str | None)
                                  "only serial chains are supported")
             tip_link = moving[0].child
     elif tip_link not in links:
-        raise ModelError(f"URDF has no link {tip_link!r}")
+        raise ModelError("tip_link", f"URDF has no link {tip_link!r}")
     chain = _path(by_child, base_link, tip_link)
     on_chain = {base_link, *(j.child for j in chain)}
 
@@ -281,11 +282,24 @@ def description_from_urdf(path: str | os.PathLike[str], *, base_link: str | None
     Raises
     ------
     ModelError
-        Malformed or unsupported URDF (one line, naming the joint or link).
+        Malformed or unsupported URDF (one line, naming the joint or link), or an argument of the wrong type
+        (naming it).
     """
+    path = arguments.path(path, "path", error=ModelError, what="a URDF file path")
+    base_link, tip_link = (None if v is None else arguments.text(v, k, error=ModelError)
+                           for k, v in (("base_link", base_link), ("tip_link", tip_link)))
+    gravity = _gravity(gravity)
     chain = _serial_chain(_read(path), base_link, tip_link)
     description = to_modified_dh(chain, gravity=gravity)
     return description
+
+
+def _gravity(value: object) -> tuple[float, float, float]:
+    """``gravity`` as three finite numbers (m/s^2)."""
+    if isinstance(value, str | bytes) or not hasattr(value, "__len__") or len(value) != 3:
+        raise ModelError("gravity", f"must be three numbers (m/s^2), got {type(value).__name__}")
+    x, y, z = (arguments.number(v, f"gravity[{k}]", error=ModelError) for k, v in enumerate(value))
+    return x, y, z
 
 
 def robot_from_urdf(path: str | os.PathLike[str], *, base_link: str | None = None, tip_link: str | None = None,
@@ -306,6 +320,7 @@ def robot_from_urdf(path: str | os.PathLike[str], *, base_link: str | None = Non
     >>> arm.n
     2
     """
+    friction = arguments.flag(friction, "friction", error=ModelError)
     description = description_from_urdf(path, base_link=base_link, tip_link=tip_link, gravity=gravity)
     return robot_from_dh(description, friction=friction)
 

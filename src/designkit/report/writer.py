@@ -14,6 +14,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from designkit import arguments
 from designkit.errors import PATH_LIMIT, OutputError, SpecError, shorten
 from designkit.report.html import render_html
 from designkit.report.model import build_report_model
@@ -61,6 +62,10 @@ def _stage(folder: Path, name: str, data: bytes) -> Path:
     return Path(tmp)
 
 
+MAX_PROCESSES = 256
+"""Most processes :func:`write_report` may draw its figures with."""
+
+
 def _report_folder(out_dir: Path, name: str) -> Path:
     if not name or name in (".", "..") or "/" in name or "\\" in name or os.sep in name:
         raise ValueError(f"spec name {name!r} cannot be used as a folder name")
@@ -74,10 +79,9 @@ def _shown(path: Path) -> str:
 def _check_destination(out_dir: object, name: str) -> Path:
     """The report folder ``out_dir/name``, checked before anything is rendered; ``OutputError`` when it
     cannot be one (a file in the way, no permission to create it)."""
-    if isinstance(out_dir, bytes | bytearray) or not isinstance(out_dir, str | os.PathLike):
-        raise OutputError("out_dir", f"expected a folder path (str or os.PathLike), got {type(out_dir).__name__}")
+    out_dir = arguments.path(out_dir, "out_dir", error=OutputError, what="a folder path")
     try:
-        folder = _report_folder(Path(out_dir), name)
+        folder = _report_folder(out_dir, name)
     except (TypeError, ValueError) as exc:
         raise OutputError("out_dir", str(exc)) from None
     for path in (folder / HTML_NAME, folder / PDF_NAME):
@@ -103,7 +107,8 @@ def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1,
     out_dir : path-like
         Report root; created when missing.
     processes : int
-        2 draws the figures on two cores (see :func:`~designkit.report.model.build_report_model`).
+        1 to :data:`MAX_PROCESSES`; 2 draws the figures on two cores (see
+        :func:`~designkit.report.model.build_report_model`).
     studies : bool
         Lay out the run's studies (:mod:`designkit.studies`, run on first access); False leaves them out of the
         report (the run's own verdict, checks and figures only).
@@ -125,6 +130,8 @@ def write_report(result, out_dir: str | os.PathLike[str], *, processes: int = 1,
     """
     if not all(hasattr(result, name) for name in ("loaded", "design", "checks", "simulation")):  # a PipelineResult
         raise SpecError("result", f"expected the PipelineResult of designkit.run, got {type(result).__name__}")
+    processes = arguments.integer(processes, "processes", low=1, high=MAX_PROCESSES)
+    studies = arguments.flag(studies, "studies")
     _check_destination(out_dir, result.loaded.spec.name)  # before the costly rendering
     model = build_report_model(result, processes=processes, studies=studies)
     html = render_html(model).encode("utf-8")

@@ -28,7 +28,6 @@ import math
 import os
 import re
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import yaml
@@ -36,6 +35,7 @@ from pydantic import ValidationError
 from yaml.events import AliasEvent, MappingStartEvent, SequenceStartEvent
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
+from designkit import arguments
 from designkit.errors import PATH_LIMIT, QUOTE_LIMIT, SpecError, short_repr, shorten
 from designkit.schema.comparison import ComparisonSpec
 from designkit.schema.spec import Spec
@@ -479,6 +479,7 @@ def parse_spec(text: str | bytes, *, path: str = "<string>") -> LoadedSpec:
                         "use load_spec for a file")
     if not isinstance(path, str):
         raise SpecError("path", f"expected a str, got {type(path).__name__}")
+    text, path = arguments.text(text, "text"), arguments.text(path, "path")
     _check_size(len(text), "the spec text")
     source = text.encode("utf-8", errors="surrogatepass")
     _check_size(len(source), "the spec text")
@@ -526,13 +527,10 @@ def load_spec(path: str | os.PathLike[str]) -> LoadedSpec:
         A path of the wrong type, a missing, unreadable or oversized file (refused before it is
         read in full), malformed YAML or a schema violation.
     """
-    if isinstance(path, bytes | bytearray) or not isinstance(path, str | os.PathLike):
-        hint = "; for YAML text use parse_spec" if isinstance(path, bytes | bytearray) else ""
-        raise SpecError("path", f"expected a file path (str or os.PathLike), got {type(path).__name__}{hint}")
-    try:
-        p = Path(path)
-    except TypeError:  # a PathLike that returns bytes
-        raise SpecError("path", "expected a file path (str or os.PathLike of str)") from None
+    if isinstance(path, bytes | bytearray):
+        raise SpecError("path", f"expected a file path (str or os.PathLike), got {type(path).__name__}; "
+                        "for YAML text use parse_spec")
+    p = arguments.path(path, "path")
     shown = shorten(str(p), PATH_LIMIT)
     try:
         with p.open("rb") as fh:

@@ -53,7 +53,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from designkit import arguments
 from designkit.errors import SpecError
+from designkit.models.plant import Plant
 from designkit.simulation.compiled import (
     CHUNK,
     COMPILE_BREAK_EVEN,
@@ -83,7 +85,10 @@ from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
 
-__all__ = ["COMPILE_BREAK_EVEN", "Simulator", "build", "simulate"]
+__all__ = ["COMPILE_BREAK_EVEN", "MAX_EXPECTED_RUNS", "Simulator", "build", "simulate"]
+
+MAX_EXPECTED_RUNS = 10**9
+"""Largest ``expected_runs`` of :func:`build`."""
 
 def _closed_loop_poles(design: Design, plant: Any) -> list[np.ndarray]:
     """Poles that set the time scales: the nominal closed loop and the closed loop on the true plant.
@@ -261,7 +266,8 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         The controller (default: ``design.law``); any :class:`~designkit.synthesis.law.Law`, e.g. a
         frozen-gain variant of an adaptive law.
     expected_runs : int
-        How many times the simulator will run (a sweep): weighs the choice of compiled evaluation.
+        How many times the simulator will run (a sweep), 1 to :data:`MAX_EXPECTED_RUNS`: weighs the choice of
+        compiled evaluation.
     reference : Reference, optional
         The reference to follow (default :func:`~designkit.simulation.reference.reference_of`), e.g. the
         spec's scaled to a small signal.
@@ -281,6 +287,10 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     spec = spec_argument(spec)
     if not isinstance(design, Design):
         raise SpecError("design", f"must be a Design (dk.synthesize(spec)), got {type(design).__name__}")
+    arguments.instance(plant, "plant", Plant, "a Plant (dk.zoo_plant, spec.plant.build())", optional=True)
+    arguments.instance(law, "law", Law, "a Law (a design's law)", optional=True)
+    arguments.instance(reference, "reference", Reference, "a Reference", optional=True)
+    expected_runs = arguments.integer(expected_runs, "expected_runs", low=1, high=MAX_EXPECTED_RUNS)
     true_plant = design.plant if plant is None else plant
     sim, kind = spec.simulation, design.reference
     motion = design.motion

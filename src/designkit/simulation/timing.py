@@ -41,6 +41,7 @@ class, :func:`step_field`: a boundary layer, a band, a relay amplitude) with the
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -173,7 +174,10 @@ def rates_of(requested: Any, *pole_sets: Any, reference_rate: float = 0.0) -> Ra
 
 
 def _nice_floor(value: float) -> float:
-    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (:data:`ROUNDING` relative slack)."""
+    """Largest number ``{1, 2, 2.5, 5} x 10^k`` not above ``value`` (:data:`ROUNDING` relative slack); a value too
+    small to round (0 or subnormal) is kept, at least the smallest float, for the step bound to refuse."""
+    if not value >= sys.float_info.min:
+        return max(value, math.ulp(0.0))
     exp = math.floor(math.log10(value * (1 + ROUNDING)))
     for mantissa in (5.0, 2.5, 2.0, 1.0):
         if mantissa * 10.0**exp <= value * (1 + ROUNDING):
@@ -218,7 +222,10 @@ def _switching_dt(limit: float, events: list[float]) -> float:
     """The largest step not above ``limit`` (s) that divides every event instant into whole steps (their rational
     greatest common divisor ``e``, then ``e / ceil(e / limit)``), or ``limit`` itself when there is no event."""
     e = _rational_gcd(events)
-    return limit if e is None else e / math.ceil(e / limit - ROUNDING)
+    if e is None:
+        return limit
+    ratio = e / limit - ROUNDING
+    return e / math.ceil(ratio) if math.isfinite(ratio) else limit  # too many steps to count: the step bound refuses
 
 
 def _default_dt(rate: float, duration: float, g: float | None) -> float:

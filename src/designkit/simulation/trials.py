@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from designkit import arguments
+from designkit.errors import SpecError
 from designkit.simulation.result import SimulationResult
 
 __all__ = ["Learning", "LearningRule", "MAX_TRIALS", "TrialsResult", "run_trials"]
@@ -80,6 +82,18 @@ class TrialsResult:
         return np.array([float(np.sqrt(np.mean(r.tracking_errors**2))) for r in self.results])
 
 
+def _feedforward(value: object, shape: tuple[int, int]) -> np.ndarray:
+    """``value`` as a finite real array of ``shape`` (one row per sample, one column per input)."""
+    try:
+        out = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SpecError("feedforward", f"must be an array of real numbers, got {type(value).__name__}") from None
+    if out.size != shape[0] * shape[1] or not np.all(np.isfinite(out)):
+        raise SpecError("feedforward", f"must hold {shape[0]} x {shape[1]} finite values (samples x inputs), got "
+                        f"{out.size} values")
+    return out.reshape(shape)
+
+
 def run_trials(simulator: object, trials: int, learn: LearningRule,
                feedforward: np.ndarray | None = None) -> TrialsResult:
     """Run ``trials`` repetitions of ``simulator``, updating the feedforward with ``learn`` after each.
@@ -97,13 +111,20 @@ def run_trials(simulator: object, trials: int, learn: LearningRule,
 
     Raises
     ------
+    SpecError
+        An argument of the wrong type or size (naming it): ``trials`` not 1 to :data:`MAX_TRIALS`, a
+        ``feedforward`` that is not a real array of ``(samples, inputs)`` values.
     ValueError
-        When ``trials < 1`` or the learning rule returns an array of the wrong shape.
+        When the learning rule returns an array of the wrong shape.
     """
-    if not 1 <= trials <= MAX_TRIALS:
-        raise ValueError(f"trials must be between 1 and {MAX_TRIALS}, got {trials}")
+    from designkit.simulation.run import Simulator
+
+    arguments.instance(simulator, "simulator", Simulator, "a Simulator (dk.build(spec, design))")
+    trials = arguments.integer(trials, "trials", low=1, high=MAX_TRIALS)
+    if not callable(learn):
+        raise SpecError("learn", f"must be a function (result, feedforward) -> feedforward, got {type(learn).__name__}")
     shape = (simulator.time.size, simulator.n_inputs)
-    ff = np.zeros(shape) if feedforward is None else np.asarray(feedforward, dtype=float).reshape(shape)
+    ff = np.zeros(shape) if feedforward is None else _feedforward(feedforward, shape)
     results, used = [], []
     for k in range(trials):
         res = simulator.run(feedforward=ff)

@@ -7,7 +7,8 @@ built from these, so that one rule (and one error message) holds everywhere.
 Booleans are not numbers and text is not a number: wherever a field (or an item of a list or
 mapping field) holds an ``int`` or a ``float``, ``true`` / ``yes`` is refused (pydantic's lax mode
 would read it as 1), so is a quoted value (``'2.0'``, which lax mode would parse), and an integer
-beyond the floating-point range is refused where a ``float`` is meant; where a field holds only a
+beyond the floating-point range is refused where a ``float`` is meant, and so is a subnormal number (nonzero but
+below 2.2e-308 in magnitude, ``5e-324``); where a field holds only a
 boolean, a number (``friction: 1``) is refused.  Only JSON's types are read.  The rule
 is read from each field's annotation by :class:`Section`, so it holds for every section without
 restating it per field.
@@ -37,6 +38,18 @@ _NOT_BOOLEAN = "not a boolean (true/false, yes/no, on/off)"
 
 FLOAT_MAX = sys.float_info.max
 """Largest finite float (about 1.8e308): a larger integer cannot be a float."""
+FLOAT_MIN = sys.float_info.min
+"""Smallest normal float (about 2.2e-308): a nonzero number below it in magnitude is subnormal (``5e-324``), kept
+with fewer significant digits, and whatever is computed from it (a step, a scale, a reciprocal) underflows."""
+
+
+def _subnormal(value: float) -> bool:
+    return value != 0.0 and abs(value) < FLOAT_MIN
+
+
+def _subnormal_message(value: object) -> str:
+    return (f"must be 0 or at least {FLOAT_MIN:.3g} in magnitude (a subnormal number is too small to compute "
+            f"with), got {short_repr(value)}")
 
 
 @dataclass(frozen=True)
@@ -128,7 +141,31 @@ def _number_problem(rule: _NumberRule, value: object, where: str = "") -> tuple[
     return None
 
 
+def _subnormal_problem(rule: _NumberRule, value: object, where: str) -> tuple[str, str] | None:
+    """``(inner key path, message)`` of the first subnormal number of a validated value."""
+    if isinstance(value, float) and rule.scalar is not None and _subnormal(value):
+        return where, _subnormal_message(value)
+    if isinstance(value, list | tuple) and rule.items is not None:
+        for k, item in enumerate(value):
+            problem = _subnormal_problem(rule.items, item, f"{where}[{k}]")
+            if problem is not None:
+                return problem
+    if isinstance(value, dict) and rule.values is not None:
+        for key, item in value.items():
+            problem = _subnormal_problem(rule.values, item, f"{where}.{key}")
+            if problem is not None:
+                return problem
+    return None
+
+
 _RULES: dict[tuple[type, str], _NumberRule | None] = {}
+
+
+def _field_rule(cls: type, name: str, annotation: Any) -> _NumberRule | None:
+    key = (cls, name)
+    if key not in _RULES:
+        _RULES[key] = _rule(annotation)
+    return _RULES[key]
 
 
 class Section(BaseModel):
@@ -150,15 +187,24 @@ class Section(BaseModel):
             field = cls.model_fields.get(name) if isinstance(name, str) else None
             if field is None:
                 continue  # an unknown key: the schema's error
-            key = (cls, name)
-            if key not in _RULES:
-                _RULES[key] = _rule(field.annotation)
-            rule = _RULES[key]
+            rule = _field_rule(cls, name, field.annotation)
             if rule is not None:
                 problem = _number_problem(rule, value, name)
                 if problem is not None:
                     raise ValueError(f"{problem[0]}: {problem[1]}")
         return data
+
+    @model_validator(mode="after")
+    def _no_subnormal_numbers(self) -> Section:
+        """After the fields' own ranges (whose messages say more where they exclude it): no subnormal number."""
+        cls = type(self)
+        for name, field in cls.model_fields.items():
+            rule = _field_rule(cls, name, field.annotation)
+            if rule is not None:
+                problem = _subnormal_problem(rule, getattr(self, name), name)
+                if problem is not None:
+                    raise ValueError(f"{problem[0]}: {problem[1]}")
+        return self
 
 
 def _finite(value: float) -> float:
@@ -234,6 +280,8 @@ def _number(value: object, where: str = "") -> float:
     value = float(value)
     if not math.isfinite(value):
         raise ValueError(f"{where}must be finite, got {value}")
+    if _subnormal(value):
+        raise ValueError(f"{where}{_subnormal_message(value)}")
     return value
 
 

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from designkit.errors import OutputError, SpecError
+from designkit.sweep.arguments import check
 from designkit.sweep.chunk import Job, base, prepared
 from designkit.sweep.result import SweepResult, Worst
 
@@ -100,14 +101,10 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     """
     from designkit.sweep import engine as eng
 
-    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or not 1 <= samples <= MAX_SAMPLES:
-        raise SpecError("--samples", f"must be an integer from 1 to {MAX_SAMPLES:,}, got {samples!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed <= 2**32 - 1:
-        raise SpecError("--seed", f"must be an integer from 0 to 2^32 - 1, got {seed!r}")
-    if chunk is not None and (isinstance(chunk, bool) or not 1 <= int(chunk) <= 1_000_000):
-        raise SpecError("--chunk", f"must be 1 to 1,000,000 samples, got {chunk!r}")
-    if engine not in ("dask", "process"):
-        raise SpecError("engine", f"must be 'dask' or 'process', got {engine!r}")
+    a = check(samples, seed, client, scheduler, workers, out, chunk, engine, progress, falsification, report,
+              max_samples=MAX_SAMPLES)
+    samples, seed, workers, out, chunk, engine, progress, falsification, report = (
+        a.samples, a.seed, a.workers, a.out, a.chunk, a.engine, a.progress, a.falsification, a.report)
     probed = False
     if scheduler is not None and engine == "dask" and client is None:
         from designkit.sweep.scheduler import endpoint, probe
@@ -122,8 +119,6 @@ def sweep(spec: Any, samples: int, *, seed: int = 0, client: Any = None, schedul
     sim = ready.simulator
     batch = _batch_size(sim.time.size, len(ready.plant.positions), len(ready.plant.inputs), chunk)
     key = hashlib.sha256(f"{text}\0{seed}\0{chunk}".encode()).hexdigest()
-    if workers is not None and (isinstance(workers, bool) or not 1 <= int(workers) <= 1024):
-        raise SpecError("--workers", f"must be 1 to 1024, got {workers!r}")
     own = engine == "dask" and client is None
     cluster = None
     if own:  # connect before anything is written: an unreachable scheduler leaves no folder behind

@@ -19,6 +19,7 @@ from collections.abc import Callable
 from types import ModuleType
 from typing import Any
 
+from designkit import arguments
 from designkit.errors import ModelError
 from designkit.models.robot import Robot
 from designkit.models.robots import onelink, planar2r, puma560, scara
@@ -56,7 +57,7 @@ def _check_values(name: str, overrides: dict[str, Any]) -> None:
         if key not in units or isinstance(value, bool | str) or not isinstance(value, int | float):
             continue  # symbols, options and unknown names: the builder's own rules
         positive = units[key][0] not in _NON_NEGATIVE_UNITS
-        v = float(value)
+        v = arguments.number(value, key, finite=False, error=ModelError)
         if not math.isfinite(v) or (positive and v <= 0) or (not positive and v < 0):
             need = "positive and finite" if positive else "non-negative and finite"
             raise ModelError(key, f"must be {need} ({units[key][1]}, {units[key][0]}), got {v:g}")
@@ -87,11 +88,17 @@ def robot(name: str, **overrides: Any) -> Robot:
     >>> arm.n, arm.description.links[1].a
     (2, 0.5)
     """
+    name = arguments.text(name, "name", error=ModelError)
     try:
         builder = ROBOTS[name]
     except KeyError:
         raise ModelError("robot", f"unknown robot {name!r}; choose from {sorted(ROBOTS)}") from None
     method = overrides.pop("consistent_inertia", None)
+    if method not in (None, False):
+        method = arguments.choice(method, "consistent_inertia", ("raise", "nearest"), error=ModelError)
+    for option in ("friction", "motor_inertia"):
+        if option in overrides:
+            overrides[option] = arguments.flag(overrides[option], option, error=ModelError)
     _check_values(name, overrides)
     arm = builder(**overrides)
     if method in (None, False):
