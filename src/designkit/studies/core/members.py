@@ -14,13 +14,12 @@ the unchanged plant measured against that variant's own re-run without the plant
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from designkit.comparison.verdicts import CheckLine, check_lines, check_summary, member_sentence, member_verified
-from designkit.studies.core.budget import Budget
+from designkit.studies.core.budget import Budget, cpu_seconds
 from designkit.studies.core.study import Row
 from designkit.studies.core.variants import run_row
 
@@ -184,9 +183,9 @@ def run_again(member: Member, change: str, make: Callable[[], Any], value: Any, 
     row = run_row(keep, factor, value, metrics, budget)
     run = made.get("run")
     if table and run is not None and run.simulation is not None and row.outcome != "diverged":
-        start = time.perf_counter()
+        start = cpu_seconds()
         row = replace(row, metrics={**row.metrics, **table_metrics(run)})
-        budget.record(time.perf_counter() - start)
+        budget.record(cpu_seconds() - start)
     return Measured(member.label, change, row, check_lines(run.checks) if run is not None else (), run)
 
 

@@ -44,6 +44,9 @@ class Row:
         The checks that failed or are undecided (their labels), or why the variant was not run.
     seconds : float
         Wall time of the variant's run (s); not part of the row's value.
+    cpu : float
+        Processor time of the variant's run (s, :func:`~designkit.studies.core.budget.cpu_seconds`), charged to the
+        study's budget; not part of the row's value.
     """
 
     factor: float
@@ -52,6 +55,7 @@ class Row:
     outcome: str
     detail: str = ""
     seconds: float = field(default=0.0, compare=False)
+    cpu: float = field(default=0.0, compare=False)
 
     def __post_init__(self) -> None:
         if self.outcome not in OUTCOMES:
@@ -177,7 +181,7 @@ class StudyContext:
     earlier: tuple[Any, ...] = ()
 
     def run_all(self, tasks: Any, budget: Any) -> list[Any]:
-        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, each row's wall time charged
+        """The rows of independent variant ``tasks`` (each ``() -> Row``), in order, each row's processor time charged
         to ``budget``.
 
         They run in this process: a variant solves LMIs with Clarabel, whose native thread pool a forked child
@@ -186,7 +190,7 @@ class StudyContext:
         """
         rows = [task() for task in tasks]
         for row in rows:
-            budget.record(row.seconds)
+            budget.record(row.cpu)
         return rows
 
     def study(self, name: str) -> Any:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.studies.core.budget import Budget
+from designkit.studies.core.budget import Budget, cpu_seconds
 from designkit.studies.core.metrics import values
 from designkit.studies.core.study import Row
 
@@ -71,7 +71,7 @@ def run_variant(result: Any, knob: Any, value: Any, factor: float, metrics: tupl
 def run_row(make: Any, factor: float, value: Any, metrics: tuple, budget: Budget | None = None) -> Row:
     """The row of the run ``make()`` returns (a :class:`~designkit.runner.run.Run` of the family's own run).
 
-    ``budget`` (when given) is charged with the row's wall time; a batch run on two cores
+    ``budget`` (when given) is charged with the row's processor time; a batch run on two cores
     (:meth:`~designkit.studies.core.study.StudyContext.run_all`) passes none and charges the rows it gets back.
     A variant the family refuses (a :class:`~designkit.errors.DesignkitError`: no equilibrium, an operator that
     cannot be built, a setting the family does not take) is a ``refused`` row with the family's message; a run that
@@ -80,7 +80,7 @@ def run_row(make: Any, factor: float, value: Any, metrics: tuple, budget: Budget
     """
     from designkit.errors import DesignkitError
 
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), cpu_seconds()
     try:
         with np.errstate(all="ignore"):
             run = make()
@@ -91,9 +91,9 @@ def run_row(make: Any, factor: float, value: Any, metrics: tuple, budget: Budget
         row = Row(float(factor), _value(value), {m.key: None for m in metrics}, "refused", _first(exc))
     except (ValueError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as exc:
         row = Row(float(factor), _value(value), {m.key: None for m in metrics}, "not run", _first(exc))
-    row = dataclasses.replace(row, seconds=time.perf_counter() - start)
+    row = dataclasses.replace(row, seconds=time.perf_counter() - start, cpu=cpu_seconds() - cpu)
     if budget is not None:
-        budget.record(row.seconds)
+        budget.record(row.cpu)
     return row
 
 
