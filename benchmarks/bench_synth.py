@@ -219,6 +219,7 @@ def main() -> None:
         stack_cmd = [sys.executable, "-c", _REPLAY, json.dumps(stack_modules), json.dumps(DEFERRED_AT_CVXPY_IMPORT)]
         synth, serial, serial_cpu, lean, lean_cpu, stack, stack_cpu = [], [], [], [], [], [], []
         lean_before: list[float] = []
+        lean_before_cpu: list[float] = []
         env = {**os.environ, "PYTHONPATH": str(before_src)} if before_src is not None else None
         for _ in range(args.repeat):  # interleaved, so all see the same load
             stack += _times(stack_cmd, 1, cpu=stack_cpu)
@@ -226,7 +227,8 @@ def main() -> None:
             synth += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=synth_cpu)
             serial += _times([*SYNTH, "--out", str(out), "--jobs", "1"], 1, check_reports=out, cpu=serial_cpu)
             if before_src is not None:
-                lean_before += _times([*SYNTH, "--out", str(out), "--no-studies"], 1, check_reports=out, env=env)
+                lean_before += _times([*SYNTH, "--out", str(out), "--no-studies"], 1, check_reports=out,
+                                      cpu=lean_before_cpu, env=env)
                 before += _times([*SYNTH, "--out", str(out)], 1, check_reports=out, cpu=before_cpu, env=env)
         speedup = _parallel_speedup()
         phases = _phases() if args.phases else None
@@ -251,7 +253,7 @@ def main() -> None:
     print(row(f"import the stack ({len(stack_modules)} modules)", stack, kc))
     print(row("designkit synth posspeed-link --out DIR --no-studies (HTML + PDF)", lean, nc))
     if lean_before:
-        print(row(f"same, src/ of {args.before} (before)", lean_before, None))
+        print(row(f"same, src/ of {args.before} (before)", lean_before, statistics.median(lean_before_cpu)))
     print(row("designkit synth posspeed-link --out DIR (with the studies)", synth, sc))
     ss, ssc = statistics.median(serial), statistics.median(serial_cpu)
     print(row("same with --jobs 1 (one process)", serial, ssc))
@@ -288,6 +290,7 @@ def main() -> None:
         "ratio_to_python_c_pass": s / b, "ratio_no_studies_to_stack": n / k, "ratio_to_stack": s / k,
         "parallel_speedup_of_two_processes": speedup,
         "before": {"ref": args.before, "runs": before, "cpu_runs": before_cpu, "runs_no_studies": lean_before,
+                   "cpu_runs_no_studies": lean_before_cpu,
                    "ratio_no_studies_to_stack": statistics.median(lean_before) / k if lean_before else None,
                    "ratio_to_stack": statistics.median(before) / k} if before else None,
         "budget_ratio_to_stack": BUDGET_RATIO,
