@@ -46,3 +46,14 @@ def test_no_module_outside_the_studies_names_a_study():
                 if module in names:
                     offenders.append(f"{rel} imports designkit.studies.{module}")
     assert not offenders, offenders
+
+
+def test_a_study_is_found_by_name_without_importing_the_others():
+    import subprocess
+
+    code = ("import sys\nfrom designkit.studies import STUDIES\nassert 'lab2' in STUDIES and len(STUDIES) >= 6\n"
+            "STUDIES['gains']\n"
+            "print(sorted({m.split('.')[2] for m in sys.modules if m.startswith('designkit.studies.')}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(SRC.parent), "PATH": "/usr/bin:/bin"}).stdout
+    assert out.strip() == "['core', 'gains']"

@@ -159,3 +159,22 @@ def test_import_cvxpy_defers_scipy_stats_and_leaves_the_real_module_importable()
     assert got["is_module"] is True  # the real scipy.stats afterwards
     expected = -(0.25 * np.log(0.25) + 0.75 * np.log(0.75))  # nats, computed here
     assert got["value"] == pytest.approx(expected, rel=1e-15) and got["real"] == pytest.approx(expected, rel=1e-15)
+
+
+def test_an_in_process_solve_imports_cvxpy_without_scipy_stats(tmp_path):
+    """No solver process (the Python API, ``--jobs 1``): the Lyapunov LMI is solved here, cvxpy imported with
+    ``scipy.stats`` deferred, and the certificate is the one the check passes on."""
+    spec = tmp_path / "posspeed.yaml"
+    spec.write_text(POSSPEED_YAML)
+    script = (
+        "import json, sys\n"
+        "from designkit.pipeline import run\n"
+        "from designkit.schema.loader import load_spec\n"
+        f"r = run(load_spec({str(spec)!r}))\n"
+        "lyap = [c for c in r.checks if c.name == 'lyapunov'][0]\n"
+        "print(json.dumps({'cvxpy': 'cvxpy' in sys.modules, 'stats': 'scipy.stats' in sys.modules,\n"
+        "                  'lyapunov': lyap.passed, 'margin': lyap.margin}))\n"
+    )
+    got = _fresh_interpreter(script)
+    assert got == {**got, "cvxpy": True, "stats": False, "lyapunov": True}
+    assert got["margin"] > 0

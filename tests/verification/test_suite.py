@@ -117,3 +117,18 @@ def test_every_check_rule_is_offered_by_some_family():
     universal = {name for name, rule in GENERIC.items() if rule.universal}  # offered for every family
     assert universal == {"command_chatter"}
     assert offered | universal >= set(GENERIC)
+
+
+def test_a_generic_check_is_found_by_name_without_importing_the_others():
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "src"
+    code = ("import sys\nfrom designkit.verification.suite import GENERIC\nassert 'coupling' in GENERIC\n"
+            "assert GENERIC['lyapunov'].name == 'lyapunov'\n"
+            "print(sorted(m.split('.')[-1] for m in sys.modules if m.startswith('designkit.verification.checks.')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(src), "PATH": "/usr/bin:/bin"}).stdout
+    assert out.strip() == "['lyapunov']"
+    assert list(GENERIC) == sorted(GENERIC, key=lambda name: GENERIC[name].order)  # iteration: report order

@@ -1,52 +1,36 @@
 """The controller families, one module (or package) each, and the registry derived from them.
 
-Every module or subpackage of this package (other than those starting with ``_``) defines ``FAMILY``,
-a :class:`~designkit.synthesis.family.Family`.  :data:`FAMILIES` maps each ``kind`` to it, in
-module-name order; the spec's ``controller`` union, the loader's tags, the checks that run and
-the report's law and gain tables are derived from it.  Adding a family is adding a module here
-(see ``docs/architecture.md`` for the worked examples); a family with checks, figures or
-diagnoses of its own is a package holding them.
+Every module or subpackage of this package (other than those starting with ``_``) is named by its
+controller ``kind`` and defines ``FAMILY``, a :class:`~designkit.synthesis.family.Family` of that kind.
+:data:`FAMILIES` maps each ``kind`` to it, in module-name order; the spec's ``controller`` union, the
+loader's tags, the checks that run and the report's law and gain tables are derived from it.  The kinds
+are read from the package listing and a family's module is imported when its kind is first asked for
+(:class:`designkit.discovery.Registry`), so a run imports the family it designs with and no other.
+Adding a family is adding a module here (see ``docs/architecture.md`` for the worked examples); a family
+with checks, figures or diagnoses of its own is a package holding them.
 """
 
 from __future__ import annotations
 
-import pkgutil
-from importlib import import_module
-from types import MappingProxyType
-
 from designkit import arguments
+from designkit.discovery import Registry
 from designkit.errors import SpecError
 from designkit.synthesis.family import Family
 
 __all__ = ["FAMILIES", "check_rules", "family", "synthesize"]
 
 
-def _discover() -> dict[str, Family]:
-    found: dict[str, Family] = {}
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        module = import_module(f"{__name__}.{info.name}")
-        fam = getattr(module, "FAMILY", None)
-        if not isinstance(fam, Family):
-            raise TypeError(f"{module.__name__} defines no FAMILY")
-        if fam.kind in found:
-            raise TypeError(f"controller kind {fam.kind!r} registered twice ({module.__name__})")
-        found[fam.kind] = fam
-    return found
-
-
-FAMILIES: MappingProxyType[str, Family] = MappingProxyType(_discover())
-"""Controller kind -> :class:`~designkit.synthesis.family.Family` (read-only)."""
+FAMILIES: Registry = Registry(__name__, "FAMILY", Family, key="kind")
+"""Controller kind -> :class:`~designkit.synthesis.family.Family` (read-only; a family's module is imported when its
+kind is first looked up, iterating the values imports every family)."""
 
 
 def family(kind: str) -> Family:
     """The family registered for ``kind``; :class:`SpecError` naming ``controller.kind`` otherwise."""
     kind = arguments.text(kind, "controller.kind")
-    try:
-        return FAMILIES[kind]
-    except KeyError:
-        raise SpecError("controller.kind", f"unknown controller kind {kind!r}; known: {sorted(FAMILIES)}") from None
+    if kind not in FAMILIES:
+        raise SpecError("controller.kind", f"unknown controller kind {kind!r}; known: {sorted(FAMILIES)}")
+    return FAMILIES[kind]
 
 
 def synthesize(spec, plant=None, *, base_dir=None):

@@ -11,17 +11,20 @@ requirements) apply to it unchanged and their errors name ``controllers[<i>]`` i
 from __future__ import annotations
 
 import re
+from functools import cache
 from typing import Annotated, Any, Union
 
 from pydantic import Field, ValidationError, create_model, model_validator
 
 from designkit.families import FAMILIES
-from designkit.schema.spec import Spec
+from designkit.schema.by_kind import ByKind
+from designkit.schema.spec import Spec, assembled
 from designkit.spec.fields import Section
 from designkit.spec.plants import PlantSpec
 from designkit.spec.sections import Numerics, Requirements, Simulation, Studies
 
-__all__ = ["MAX_CONTROLLERS", "ComparisonSpec", "ControllerEntry", "entry_models", "member_name"]
+__all__ = ["MAX_CONTROLLERS", "ComparisonSpec", "ControllerEntry", "assembled_comparison", "entry_model",
+           "entry_models", "member_name"]
 
 MAX_CONTROLLERS = 6
 """Most controllers a comparison spec names (at least 2)."""
@@ -30,22 +33,30 @@ LABEL_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]*$"
 """A label is also a folder name (the controller's own report): letters, digits, ``_ . -``."""
 
 
+def entry_model(kind: str) -> type:
+    """The ``controllers`` entry of a registered kind: the family's spec model plus an optional ``label`` (imports
+    that family only)."""
+    base = FAMILIES[kind].spec
+    model = create_model(
+        f"{base.__name__}Entry", __base__=base, __module__=__name__,
+        label=(str | None, Field(default=None, pattern=LABEL_PATTERN, max_length=40,
+                                 description="How the comparison names this controller (default: its kind).")),
+    )
+    model.__doc__ = f"A ``controllers`` entry of kind {kind!r}: its ``controller`` section plus a label."
+    return model
+
+
+ENTRY = ByKind(entry_model)
+"""How an entry of ``controllers`` is validated: by the entry model of the family its ``kind`` names."""
+
+
 def entry_models() -> tuple[type, ...]:
-    """One model per registered family: its spec model plus an optional ``label`` (registry order)."""
-    out = []
-    for fam in FAMILIES.values():
-        base = fam.spec
-        model = create_model(
-            f"{base.__name__}Entry", __base__=base, __module__=__name__,
-            label=(str | None, Field(default=None, pattern=LABEL_PATTERN, max_length=40,
-                                     description="How the comparison names this controller (default: its kind).")),
-        )
-        model.__doc__ = f"A ``controllers`` entry of kind {fam.kind!r}: its ``controller`` section plus a label."
-        out.append(model)
-    return tuple(out)
+    """One model per registered family: its spec model plus an optional ``label`` (registry order; imports every
+    family)."""
+    return tuple(ENTRY.model_of(kind) for kind in FAMILIES)
 
 
-ControllerEntry = Annotated[Union[entry_models()], Field(discriminator="kind")]  # noqa: UP007  (built at runtime)
+ControllerEntry = Annotated[Section, ENTRY]
 """One entry of ``controllers``: a family's ``controller`` section with an optional ``label``."""
 
 
@@ -131,6 +142,25 @@ class ComparisonSpec(Section):
                 raise ValueError(_member_error(k, exc)) from None
         return self
 
+    @classmethod
+    def model_json_schema(cls, *args: Any, **kwargs: Any) -> dict[str, Any]:
+        """The JSON Schema of a comparison spec, each entry the union of every family's entries
+        (:func:`assembled_comparison`)."""
+        if cls is ComparisonSpec:
+            return assembled_comparison().model_json_schema(*args, **kwargs)
+        return super().model_json_schema(*args, **kwargs)
+
+
+@cache
+def assembled_comparison() -> type[ComparisonSpec]:
+    """:class:`ComparisonSpec` with its entries typed as the discriminated union of every family's entry (imports
+    every family): the model its JSON Schema is generated from."""
+    entries = list[ENTRY.union()]  # type: ignore[misc]
+    model = create_model("ComparisonSpec", __base__=ComparisonSpec, __module__=__name__,
+                         controllers=(entries, Field(min_length=2, max_length=MAX_CONTROLLERS)))
+    model.__doc__ = ComparisonSpec.__doc__
+    return model
+
 
 def json_schema(form: str = "single") -> dict[str, Any]:
     """The JSON Schema of a spec: ``"single"`` (``controller:``), ``"comparison"`` (``controllers:``) or
@@ -141,7 +171,7 @@ def json_schema(form: str = "single") -> dict[str, Any]:
         return ComparisonSpec.model_json_schema()
     from pydantic import TypeAdapter
 
-    schema = TypeAdapter(Union[Spec, ComparisonSpec]).json_schema()  # noqa: UP007
+    schema = TypeAdapter(Union[assembled(), assembled_comparison()]).json_schema()  # noqa: UP007
     schema["oneOf"] = schema.pop("anyOf")  # exclusive: each form forbids the other's key
     schema["title"] = "designkit spec (one controller, or a comparison of several)"
     return schema

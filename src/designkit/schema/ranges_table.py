@@ -65,10 +65,10 @@ def _walk(model: type[BaseModel], path: str, where: tuple[str, ...]) -> Iterator
 
 def declared_ranges() -> tuple[RangeRow, ...]:
     """Every range declared in the spec format, walking :class:`~designkit.schema.spec.Spec` (every family)."""
-    from designkit.schema.spec import Spec
+    from designkit.schema.spec import assembled
 
     rows: list[RangeRow] = []
-    for row in _walk(Spec, "", ()):
+    for row in _walk(assembled(), "", ()):
         if row not in rows:
             rows.append(row)
     return tuple(rows)

@@ -1,19 +1,23 @@
 """The spec format: a plant, a controller to synthesise, requirements, a simulation scenario, numerics.
 
 Every section forbids unknown keys and is frozen; numbers must be finite.  The ``controller``
-section is the discriminated union of the registered families' spec models
-(:data:`designkit.families.FAMILIES`), so a new family needs no change here; each family also
-checks its cross-section rules (e.g. poles or requirements) and which plant kinds it accepts.
-``designkit schema`` prints the JSON Schema generated from these models.
+section is one of the registered families' spec models (:data:`designkit.families.FAMILIES`), chosen
+by its ``kind`` and validated by that family's model alone (:class:`~designkit.schema.by_kind.ByKind`:
+a spec imports the family it names and no other), so a new family needs no change here; each family
+also checks its cross-section rules (e.g. poles or requirements) and which plant kinds it accepts.
+``designkit schema`` prints the JSON Schema generated from these models (:func:`assembled`: the
+``controller`` union of every family).
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Union
+from functools import cache
+from typing import Annotated, Any
 
-from pydantic import Field, model_validator
+from pydantic import Field, create_model, model_validator
 
 from designkit.families import FAMILIES
+from designkit.schema.by_kind import ByKind
 from designkit.spec.controllers import PoleRequirementsController
 from designkit.spec.fields import Section, check_conjugates
 from designkit.spec.plants import DHLink, ElasticJointPlantSpec, LinkPlantSpec, PlantSpec, RobotPlantSpec, Uncertainty
@@ -41,17 +45,20 @@ __all__ = [
     "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "LinkPlantSpec", "Noise", "Numerics",
     "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory", "Relay",
     "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Studies", "Trajectory",
-    "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "check_conjugates", "controller_models",
-    "given_settings",
+    "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "assembled", "check_conjugates",
+    "controller_models", "given_settings",
 ]
 
 
 def controller_models() -> tuple[type, ...]:
-    """The registered families' spec models, in registry order."""
+    """The registered families' spec models, in registry order (imports every family)."""
     return tuple(f.spec for f in FAMILIES.values())
 
 
-Controller = Annotated[Union[controller_models()], Field(discriminator="kind")]  # noqa: UP007  (built at runtime)
+CONTROLLER = ByKind(lambda kind: FAMILIES[kind].spec)
+"""How the ``controller`` section is validated: by the model of the family its ``kind`` names."""
+
+Controller = Annotated[Section, CONTROLLER]
 """The ``controller`` section: one of the registered families' models, chosen by ``kind``."""
 
 
@@ -82,6 +89,23 @@ class Spec(Section):
         if fam.validate is not None:
             fam.validate(self)
         return self
+
+    @classmethod
+    def model_json_schema(cls, *args: Any, **kwargs: Any) -> dict[str, Any]:
+        """The JSON Schema of the spec, its ``controller`` the union of every family's section (:func:`assembled`)."""
+        if cls is Spec:
+            return assembled().model_json_schema(*args, **kwargs)
+        return super().model_json_schema(*args, **kwargs)
+
+
+@cache
+def assembled() -> type[Spec]:
+    """:class:`Spec` with its ``controller`` typed as the discriminated union of every registered family's section
+    (imports every family): the model the JSON Schema and the ranges table are generated from."""
+    model = create_model("Spec", __base__=Spec, __module__=__name__,
+                         controller=(CONTROLLER.union(), ...))
+    model.__doc__ = Spec.__doc__
+    return model
 
 
 def given_settings(spec: Spec) -> tuple[str, ...]:

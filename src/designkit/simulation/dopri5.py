@@ -12,7 +12,11 @@ set by the tolerances, not by the grid.
 Tolerances: ``numerics.rtol`` and ``numerics.atol`` when the spec gives them, else :data:`RTOL` and
 :data:`ATOL` (about what RK4 on the default grid, ``dt |p|max = 0.02``, reaches).  The library is built by the
 system C compiler (:data:`FLAGS`) and cached under a hash of its source (:func:`designkit.cache.cache_dir`
-``("codegen")``); with ``numerics.compile: never`` or without a compiler the same algorithm runs interpreted
+``("codegen")``).  The loop's constants (the law's gains, the element's limits, the numbers of the reference's
+interpolation) are lifted out of the generated code into an array the run passes
+(:func:`designkit.simulation.lifted.lift_constants`), so loops of one structure -- a study's variants of a law --
+share one library, compiled once, and give the numbers their own library would.  With ``numerics.compile:
+never`` or without a compiler the same algorithm runs interpreted
 (:mod:`designkit.simulation.dopri5_py`: CasADi's virtual machine for the right-hand side, a Python loop per
 step).
 """
@@ -73,6 +77,9 @@ class Dopri5:
         ``dk_proj(s) -> s``: the law's projection of the controller states (``Law.project_resets``), applied at
         every grid instant; where it moves the state, the run starts again from the projected state there (a
         fresh derivative, as at a breakpoint).  None: no projection.
+    constants : ndarray
+        The loop's constants the library reads (the last input of its lifted ``dk_rhs`` and ``dk_rec``); empty for
+        a library compiled with its constants written in.
     """
 
     library: Path | None
@@ -87,6 +94,7 @@ class Dopri5:
     atol: float
     compiled_now: bool = False
     proj: ca.Function | None = None
+    constants: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stats: dict[str, float] = field(default_factory=dict)
     _lib: list = field(default_factory=list, repr=False)
     _prepared: dict = field(default_factory=dict, repr=False)
@@ -97,7 +105,7 @@ class Dopri5:
             fn = lib.dk_dopri5
             vec = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
             fn.argtypes = [vec, vec, vec, ctypes.c_long, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-                           ctypes.c_long, vec, vec]
+                           ctypes.c_long, vec, vec, vec]
             fn.restype = ctypes.c_int
             self._lib.extend([lib, fn])
         return self._lib[1]
@@ -129,7 +137,8 @@ class Dopri5:
             self.stats.update(count)
             status = int(stop < n)
         else:
-            status = self._entry()(s0, W, brk, n, self.dt, self.rtol, self.atol, budget, R, stats)
+            G = np.ascontiguousarray(self.constants if self.constants.size else np.zeros(1), dtype=float)
+            status = self._entry()(s0, W, brk, n, self.dt, self.rtol, self.atol, budget, R, stats, G)
             self.stats.update(evaluations=int(stats[0]), accepted=int(stats[1]), rejected=int(stats[2]))
             stop = int(stats[3])
         if status and failure is not None:
@@ -266,7 +275,7 @@ def _hold(library: Path) -> bool:
 
 
 def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float = RTOL, atol: float = ATOL,
-                 compile: bool = True, resets: bool = False) -> tuple[Dopri5, str]:
+                 compile: bool = True, resets: bool = False, lift: bool = True) -> tuple[Dopri5, str]:
     """The :class:`Dopri5` of the smooth loop ``plant`` under ``law`` with ``element``, compiled when it can be.
 
     Parameters
@@ -281,6 +290,9 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
         Build (or load) the C library; False: the interpreted driver.
     resets : bool
         Apply the law's projection at every grid instant (``Dopri5.proj``; ``Law.project_resets``).
+    lift : bool
+        Compile the loop with its constants lifted into an input (module docstring), so that a loop of the same
+        structure reuses the library; False writes them into the code (one library per loop).
 
     Returns
     -------
@@ -294,9 +306,18 @@ def build_dopri5(plant: Any, law: Any, element: Any, dt: float, *, rtol: float =
              "rtol": float(rtol), "atol": float(atol)}
     cc = _compiler()
     why = "numerics.compile: never" if not compile else "no C compiler on PATH" if cc is None else ""
-    built = _library(source(rhs, rec, nw, n_ref, proj=proj), cc) if not why and cc is not None else why
+    if why or cc is None:
+        return Dopri5(library=None, rhs=rhs, rec=rec, proj=proj, **sizes), why
+    constants = np.zeros(0)
+    code = (rhs, rec)
+    if lift:
+        from designkit.simulation.lifted import lift_constants
+
+        code, constants = lift_constants((rhs, rec))
+    built = _library(source(*code, nw, n_ref, proj=proj), cc)
     if isinstance(built, str):
         return Dopri5(library=None, rhs=rhs, rec=rec, proj=proj, **sizes), built
     library, now = built
-    return (Dopri5(library=library, rhs=rhs, rec=rec, compiled_now=now, proj=proj, **sizes),
+    return (Dopri5(library=library, rhs=rhs, rec=rec, compiled_now=now, proj=proj, constants=constants,
+                   **sizes),
             "compiled now" if now else "cached library")

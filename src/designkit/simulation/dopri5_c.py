@@ -21,13 +21,15 @@ single run records them (:mod:`designkit.simulation.observed` adds one that runs
 each grid point on the fly instead).  Entry point::
 
     int dk_dopri5(const double *s0, const double *W, const double *brk, long N, double dt, double rtol,
-                  double atol, long max_steps, double *R, double *stats)
+                  double atol, long max_steps, double *R, double *stats, const double *G)
 
 ``W`` holds the per-step input columns ``w_k`` one after the other (``NW`` numbers each), ``brk[k] != 0``
 marks a breakpoint at ``t_k``; ``R`` receives the record of every grid point (``NREC`` numbers each),
 ``stats`` the evaluations, accepted and rejected steps, and the index of the grid point where the
-integration stopped (``N`` when it did not).  Returns 0, or 1 (step size underflow, step budget exhausted or
-a state beyond 1e150 in magnitude: the records from there on are NaN).
+integration stopped (``N`` when it did not); ``G`` the loop's constants, the last input of ``dk_rhs`` and ``dk_rec``
+when they were lifted out of the code (:mod:`designkit.simulation.lifted`; unread otherwise).  Returns 0, or 1
+(step size underflow, step budget exhausted or a state beyond 1e150 in magnitude: the records from there on are
+NaN).
 """
 
 from __future__ import annotations
@@ -59,7 +61,7 @@ typedef void (*dk_emit)(void *user, long k, const double *s);
 
 typedef struct {{
   const double *W; long k0, k1; double dt;
-  const double *P; int np; const double *held; double q[NQ + 1];
+  const double *P; int np; const double *held; double q[NQ + 1]; const double *G;
   casadi_int iw[RHS_IW + REC_IW + 1]; casadi_real w[RHS_W + REC_W + 1]; double a[NA + 1];
   long nfev;
 }} dk_ctx;
@@ -88,7 +90,7 @@ static void dk_f(dk_ctx *c, double t, const double *s, double *out) {{
   const casadi_real *arg[RHS_ARG + 3] = {{0}};
   casadi_real *res[RHS_RES + 1] = {{0}};
   dk_ref(c, t, c->a);
-  arg[0] = s; arg[1] = c->a; arg[2] = c->held;
+  arg[0] = s; arg[1] = c->a; arg[2] = c->held; arg[3] = c->G;
   res[0] = out;
   dk_rhs(arg, res, c->iw, c->w, 0);
   c->nfev++;
@@ -97,7 +99,7 @@ static void dk_f(dk_ctx *c, double t, const double *s, double *out) {{
 static void dk_record(dk_ctx *c, long k, const double *s, double *out) {{
   const casadi_real *arg[REC_ARG + 3] = {{0}};
   casadi_real *res[REC_RES + 1] = {{0}};
-  arg[0] = s; arg[1] = c->W + (size_t)k * DK_WSTRIDE; arg[2] = c->W + (size_t)k * DK_WSTRIDE + 3 * NA;
+  arg[0] = s; arg[1] = c->W + (size_t)k * DK_WSTRIDE; arg[2] = c->W + (size_t)k * DK_WSTRIDE + 3 * NA; arg[3] = c->G;
   res[0] = out;
   dk_rec(arg, res, c->iw, c->w, 0);
 }}
@@ -291,10 +293,10 @@ static void dk_emit_record(void *user, long k, const double *s) {{
 }}
 
 int dk_dopri5(const double *s0, const double *W, const double *brk, long N, double dt, double rtol,
-              double atol, long max_steps, double *R, double *stats) {{
+              double atol, long max_steps, double *R, double *stats, const double *G) {{
   dk_ctx c;
   memset(&c, 0, sizeof c);
-  c.W = W; c.dt = dt;
+  c.W = W; c.dt = dt; c.G = G;
   dk_rec_user u = {{&c, R}};
   int status = dk_integrate(&c, s0, brk, N, rtol, atol, max_steps, dk_emit_record, &u, stats);
   for (long j = (long)stats[3]; j < N; ++j)

@@ -3,8 +3,10 @@
 A study varies what a family declares it may vary (its knobs, :mod:`designkit.synthesis.knobs`) and runs every
 variant through the family's own run with the family's own checks (:mod:`designkit.runner`); it measures what the
 family declares meaningful (its metrics) and says only what those runs showed.  Every module or package of this
-package other than :mod:`~designkit.studies.core` (and names starting with ``_``) defines ``STUDY``, a
-:class:`~designkit.studies.core.study.Study`; :data:`STUDIES` maps each name to it, in report order.  Adding a study
+package other than :mod:`~designkit.studies.core` (and names starting with ``_``) is named by its study and defines
+``STUDY``, a :class:`~designkit.studies.core.study.Study`; :data:`STUDIES` maps each name to it (a study's module is
+imported when its name is first looked up: :class:`designkit.discovery.Registry`), and :func:`in_report_order` lists
+them in report order.  Adding a study
 is adding a module here: no generic file changes, the report lays out its section and figures, ``synth --json``
 carries its rows, and the spec's ``studies`` section takes its settings under its name.
 
@@ -21,39 +23,40 @@ outside the knob's declared range, or a budget too small for one variant is refu
 
 from __future__ import annotations
 
-import pkgutil
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
-from importlib import import_module
-from types import MappingProxyType
 from typing import Any
 
+from designkit.discovery import Registry
 from designkit.errors import SpecError
 from designkit.studies.core.study import Study, StudyContext, StudyResult
 
-__all__ = ["DEFAULT_BUDGET", "STUDIES", "StudyFix", "run_studies", "study_fixes", "study_settings", "validate"]
+__all__ = ["DEFAULT_BUDGET", "STUDIES", "StudyFix", "in_report_order", "run_studies", "study_fixes", "study_settings",
+           "validate"]
 
 DEFAULT_BUDGET = 15.0
 """Seconds of work each study may spend on its variants when the spec's ``studies.budget`` is not given."""
 
 
+def _registry() -> Registry:
+    return Registry(__name__, "STUDY", Study, skip=("core",))
+
+
+STUDIES: Mapping[str, Study] = _registry()
+"""Study name -> :class:`~designkit.studies.core.study.Study` (read-only; a study's module is imported when its name
+is first looked up)."""
+
+
+def in_report_order(studies: Mapping[str, Study] | None = None) -> tuple[Study, ...]:
+    """Every study of ``studies`` (default :data:`STUDIES`, each imported) by ``(order, name)``: report order."""
+    found = STUDIES if studies is None else studies
+    return tuple(sorted(found.values(), key=lambda st: (st.order, st.name)))
+
+
 def _discover() -> dict[str, Study]:
-    found: dict[str, Study] = {}
-    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name.startswith("_") or info.name == "core":
-            continue
-        module = import_module(f"{__name__}.{info.name}")
-        study = getattr(module, "STUDY", None)
-        if not isinstance(study, Study):
-            raise TypeError(f"{module.__name__} defines no STUDY")
-        if study.name in found:
-            raise TypeError(f"study {study.name!r} registered twice ({module.__name__})")
-        found[study.name] = study
-    return dict(sorted(found.items(), key=lambda kv: (kv[1].order, kv[0])))
-
-
-STUDIES: MappingProxyType[str, Study] = MappingProxyType(_discover())
-"""Study name -> :class:`~designkit.studies.core.study.Study`, in report order (read-only)."""
+    """Every study module of the package (listed afresh), name -> study, in report order."""
+    return {st.name: st for st in in_report_order(_registry())}
 
 
 def _section(spec: Any) -> Any:
@@ -111,7 +114,7 @@ def validate(spec: Any, family: Any) -> None:
     for name, raw in _raw(spec).items():
         study = STUDIES.get(name)
         if study is None:
-            known = ", ".join(n for n in STUDIES if STUDIES[n].settings is not None)
+            known = ", ".join(st.name for st in in_report_order() if st.settings is not None)
             raise SpecError(f"studies.{name}", f"unknown study; the studies with settings are {known}")
         settings = _parse(study, raw)
         if study.validate is not None:
@@ -134,7 +137,7 @@ def run_studies(result: Any) -> tuple[StudyResult, ...]:
     spec = result.loaded.spec
     fam = None if comparison else family(result.design.kind)
     out: list[StudyResult] = []
-    for study in STUDIES.values():
+    for study in in_report_order():
         if study.comparison != comparison or not study.applies(result, fam):
             continue
         start = time.perf_counter()

@@ -215,7 +215,7 @@ def solve_margin_lmi(
     done, remote = solver_process.call("margin_lmi", Ah, solver=solver, equality=equality)
     if done:
         return remote
-    import cvxpy as cp
+    cp = solver_process.cvxpy()
 
     n = Ah[0].shape[0]
     eye = np.eye(n)

@@ -185,7 +185,7 @@ def solve_lp(c: np.ndarray, G: np.ndarray, h: np.ndarray, *, solver: str = "CLAR
     done, remote = solver_process.call("lp", c, G, h, solver=solver)
     if done:
         return remote
-    import cvxpy as cp
+    cp = solver_process.cvxpy()
 
     c, G, h = np.asarray(c, dtype=float), np.asarray(G, dtype=float), np.asarray(h, dtype=float)
     x = cp.Variable(len(c))

@@ -16,7 +16,7 @@ is re-checked with NumPy in the parent (:mod:`designkit.verification.certificate
 decides.  Any failure of the channel (the child could not start, died, or answered with an
 error) makes the parent solve in-process, as it does when no child runs (the Python API, a
 one-core machine, or ``designkit synth --jobs 1``), so an error a solve raises is raised in the
-parent exactly as without the child.
+parent exactly as without the child.  A solve in-process imports cvxpy the same way (:func:`cvxpy`).
 
 Waiting.  When a solve is requested before the child has finished importing cvxpy, the parent
 would sit idle; work registered with :func:`while_waiting` (the command line registers the imports
@@ -43,7 +43,7 @@ from typing import Any, BinaryIO
 
 from designkit.processes import can_fork
 
-__all__ = ["SOLVERS", "SolverProcess", "active", "call", "serve", "start", "stop", "while_waiting"]
+__all__ = ["SOLVERS", "SolverProcess", "active", "call", "cvxpy", "serve", "start", "stop", "while_waiting"]
 
 SOLVERS: dict[str, tuple[str, str]] = {
     "margin_lmi": ("designkit.verification.lmi", "solve_margin_lmi"),
@@ -282,6 +282,22 @@ def import_cvxpy() -> Any:
             if sys.modules.get(name) is standin:
                 del sys.modules[name]
     return cvxpy
+
+
+def cvxpy() -> Any:
+    """The cvxpy module for a solve in this process: imported by :func:`import_cvxpy` (its deferred modules left
+    unimported) the first time, by a plain import should that fail."""
+    module = sys.modules.get("cvxpy")
+    if module is not None:
+        return module
+    try:
+        return import_cvxpy()
+    except Exception:  # noqa: BLE001 - a cvxpy release that needs a deferred module at import: import it whole
+        for name in [m for m in sys.modules if m == "cvxpy" or m.startswith("cvxpy.")]:
+            del sys.modules[name]
+        import cvxpy as module
+
+        return module
 
 
 def serve(stdin: BinaryIO | None = None, stdout: BinaryIO | None = None) -> None:

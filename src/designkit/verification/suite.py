@@ -41,12 +41,11 @@ box_runs           150   a run and ``plant.uncertainty``         the family's ow
 from __future__ import annotations
 
 import dataclasses
-import pkgutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from importlib import import_module
 from typing import Any
 
+from designkit.discovery import Registry
 from designkit.verification.check import Check
 
 __all__ = ["CheckRule", "Context", "GENERIC", "applicable", "generic", "owner", "resolve", "run_checks", "words_of"]
@@ -167,44 +166,35 @@ def words_of(name: str) -> str:
     return name.replace("_", " ").capitalize()
 
 
-def _discover() -> dict[str, CheckRule]:
-    from designkit.verification import checks
-
-    found: dict[str, CheckRule] = {}
-    for info in sorted(pkgutil.iter_modules(checks.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        module = import_module(f"{checks.__name__}.{info.name}")
-        rule = getattr(module, "RULE", None)
-        if not isinstance(rule, CheckRule):
-            raise TypeError(f"{module.__name__} defines no RULE")
-        if rule.name in found:
-            raise TypeError(f"check {rule.name!r} registered twice ({module.__name__})")
-        found[rule.name] = rule
-    return dict(sorted(found.items(), key=lambda item: item[1].order))
+_RULES = Registry("designkit.verification.checks", "RULE", CheckRule)
+"""Check name -> the generic :class:`CheckRule` of the module of that name (imported on first lookup)."""
 
 
-_GENERIC: dict[str, CheckRule] = {}
+_ORDERED: dict[str, CheckRule] = {}
 
 
 def generic() -> Mapping[str, CheckRule]:
-    """The generic checks, name -> :class:`CheckRule`, in report order (discovered on first use)."""
-    if not _GENERIC:
-        _GENERIC.update(_discover())
-    return _GENERIC
+    """The generic checks, name -> :class:`CheckRule`, in report order (every rule module imported)."""
+    if not _ORDERED:
+        _ORDERED.update(sorted(_RULES.items(), key=lambda item: item[1].order))
+    return _ORDERED
 
 
 class _Generic(Mapping[str, CheckRule]):
-    """Read-only view of :func:`generic` (discovery deferred to first access)."""
+    """Read-only view of the generic checks: a rule is imported when its name is looked up, iteration goes in
+    report order (importing every rule module)."""
 
     def __getitem__(self, name: str) -> CheckRule:
-        return generic()[name]
+        return _RULES[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in _RULES
 
     def __iter__(self):  # type: ignore[no-untyped-def]
         return iter(generic())
 
     def __len__(self) -> int:
-        return len(generic())
+        return len(_RULES)
 
 
 GENERIC: Mapping[str, CheckRule] = _Generic()
@@ -224,10 +214,10 @@ def resolve(offered: Sequence[str | CheckRule]) -> tuple[CheckRule, ...]:
     for item in offered:
         if isinstance(item, CheckRule):
             rules.append(item)
-        elif item in generic():
-            rules.append(generic()[item])
+        elif item in _RULES:
+            rules.append(_RULES[item])
         else:
-            raise ValueError(f"unknown check {item!r}; the generic checks are {sorted(generic())}")
+            raise ValueError(f"unknown check {item!r}; the generic checks are {sorted(_RULES)}")
     names = {r.name for r in rules}
     rules += [r for r in generic().values() if r.universal and r.name not in names]
     return tuple(sorted(rules, key=lambda r: r.order))
