@@ -52,7 +52,8 @@ def rms(x: np.ndarray) -> float:
         return 0.0
     if not np.all(np.isfinite(x)):
         return math.inf
-    return float(np.sqrt(np.mean(x * x)))
+    peak = float(np.max(np.abs(x)))  # scaled by the peak: no overflow of x * x for a large finite record
+    return peak * float(np.sqrt(np.mean((x / peak) ** 2))) if peak > 0 else 0.0
 
 
 def adaptive_variant(design: Any, *, gamma_scale: float = 1.0, gamma: Any = None, Q: Any = None, initial: Any = None,

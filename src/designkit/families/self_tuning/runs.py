@@ -145,8 +145,8 @@ def excitation(s: Samples, window: int) -> tuple[np.ndarray, np.ndarray]:
     one is zero); NaN before a full window."""
     phi = s.phi
     M, n = phi.shape
-    outer = phi[:, :, None] * phi[:, None, :]
-    csum = np.cumsum(outer, axis=0)
+    with np.errstate(all="ignore"):  # a diverged run's regressors overflow: inf, then NaN below
+        csum = np.cumsum(phi[:, :, None] * phi[:, None, :], axis=0)
     lam, norm = np.full(M, np.nan), np.full(M, np.nan)
     if window > M:
         return lam, norm
