@@ -115,7 +115,15 @@ def _sign_changes(s: np.ndarray) -> int:
 
 
 def measure(design: Any, sim: Any) -> VscRun:
-    """The measurements of ``sim``, a run of the ``design`` (module docstring)."""
+    """The measurements of ``sim``, a run of the ``design`` (module docstring); of a run that diverged, the
+    measurements are not finite from that instant on (``finite_run`` reports it) and are computed so."""
+    if getattr(sim, "diverged_at", None) is None:
+        return _measure(design, sim)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _measure(design, sim)
+
+
+def _measure(design: Any, sim: Any) -> VscRun:
     info: VscData = design.data
     c = np.asarray(info.c, float)
     al, be = np.asarray(info.alpha, float), np.asarray(info.beta, float)
