@@ -48,3 +48,15 @@ def test_first_instant_not_finite_is_named(where, k):
     assert check.name == "finite_run" and check.passed is False
     assert f"the run diverged at t = {T[k]:.6g} s" in check.detail
     assert check.certificate["diverged_at_s"] == T[k]
+
+
+def test_diagnosis_names_the_instant_and_the_other_failed_checks():
+    from types import SimpleNamespace
+
+    x1, u = 1 - np.exp(-5 * T), np.exp(-5 * T)
+    u[6:] = np.nan
+    (check,) = RULE.run(None, Context(None, _run(x1, u)))
+    other = SimpleNamespace(name="settling_time", passed=False)
+    cause, fix = RULE.diagnose(SimpleNamespace(checks=(check, other)), check)
+    assert f"t = {T[6]:.6g} s" in cause
+    assert "settling_time" in fix and "finite_run" not in fix

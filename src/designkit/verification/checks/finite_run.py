@@ -31,6 +31,17 @@ def _run(design: Any, ctx: Context) -> tuple:
     return (Check("finite_run", False, TARGET, at, None, "s", detail, cert),)
 
 
+def _diagnose(result: Any, check: Any) -> tuple[str, str]:
+    """The divergence as the root cause; the fix is what the run's other failed checks propose."""
+    others = [c.name for c in getattr(result, "checks", ()) if c.passed is False and c.name != "finite_run"]
+    cause = (f"The closed loop diverged: {check.detail}. Every measurement after that instant is of records that "
+             "are not finite.")
+    fix = ("Keep the loop bounded: the other failed checks of this run"
+           + (f" ({', '.join(others)})" if others else "") + " say which part of the design or scenario drives "
+           "the divergence and what would do instead.")
+    return cause, fix
+
+
 def _applies(design: Any, ctx: Context) -> bool:
     """A simulated run that diverged (a record not finite, or the integrator stopped)."""
     sim = ctx.simulation
@@ -40,6 +51,6 @@ def _applies(design: Any, ctx: Context) -> bool:
 
 
 RULE = CheckRule(name="finite_run", order=5, universal=True, applies=_applies, run=_run,
-                 label="The run stays finite",
+                 label="The run stays finite", diagnose=_diagnose,
                  glossary=(("diverged", "a state or command not finite, or beyond 1e150 in magnitude"),))
 """Offered for every family (``universal``): a property of any simulated loop."""
