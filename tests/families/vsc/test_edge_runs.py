@@ -33,3 +33,14 @@ def test_single_step_run_is_judged_and_drawn(tmp_path, capsys):
     assert "never reached the hold band" in failed_line(out, "vsc_band")
     html = (tmp_path / "out" / "vsc-link" / "report.html").read_text()
     assert "the switching function" in html
+
+
+def test_diverging_run_is_measured_and_fails(tmp_path, capsys):
+    """tau up to 1000 s in the design box: the gains designed over it throw the nominal link off; the run diverges,
+    ``finite_run`` names the instant, and the regulator's own measurements judge the records without a warning."""
+    text = LINK_SPEC.read_text().replace("tau: [0.35, 0.65]", "tau: [0.35, 1000]")
+    assert "1000]" in text
+    code, out, _ = run_cli(tmp_path, capsys, text)
+    assert code == 1, out
+    assert "the run diverged at t = " in failed_line(out, "finite_run")
+    assert "vsc_band" in out
