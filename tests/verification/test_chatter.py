@@ -58,3 +58,18 @@ def test_a_switching_law_is_not_offered_the_check_and_a_smooth_loop_passes():
     result = dk.run(dk.load_spec("specs/sliding-mode-link.yaml"))
     assert "command_chatter" not in [c.name for c in result.checks]  # its family measures its chattering band
     assert _chatter_check("specs/posspeed-link.yaml").passed is True
+
+
+def test_a_command_that_stops_being_finite_is_measured_up_to_that_instant():
+    """A diverged run's command (NaN from sample 1500 on) is measured as its finite part, without a warning."""
+    import warnings
+
+    rng = np.random.default_rng(1)
+    u = 26.0 * np.sign(np.cumsum(rng.normal(size=T.size)) % 7 - 3.5)
+    cut = u.copy()
+    cut[1500:] = np.nan
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        m = input_chatter("u", T, cut, speed=np.ones(T.size), reference=np.zeros((T.size, 1, 3)))
+    ref = input_chatter("u", T[:1500], u[:1500], speed=np.ones(1500), reference=np.zeros((1500, 1, 3)))
+    assert m == ref and m.chatters

@@ -80,7 +80,7 @@ def test_time_domain_checks_use_only_the_result_fields():
     spec, fam, design = _setup(SERVO_FULL)
     sim = _linear_sim(design)
     other = dataclasses.replace(
-        sim, controller_state=np.full((len(sim.time), 4), np.nan), measured=np.zeros_like(sim.measured),
+        sim, controller_state=np.full((len(sim.time), 4), 7.0), measured=np.zeros_like(sim.measured),
         settings={"integrator": "something else"},
     )
     a = [c.to_dict() for c in run_checks(spec, design, sim)]
@@ -115,7 +115,7 @@ def test_every_check_rule_is_offered_by_some_family():
 
     offered = {c for f in FAMILIES.values() for c in f.check_names}
     universal = {name for name, rule in GENERIC.items() if rule.universal}  # offered for every family
-    assert universal == {"command_chatter"}
+    assert universal == {"command_chatter", "finite_run"}
     assert offered | universal >= set(GENERIC)
 
 

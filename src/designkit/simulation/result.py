@@ -148,6 +148,21 @@ class SimulationResult:
         """``x1 - xD`` of the first joint (rad), shape ``(N,)``."""
         return self.tracking_errors[:, 0]
 
+    @property
+    def diverged_at(self) -> float | None:
+        """The first instant (s) at which the run stops being finite -- a plant state, a controller state or a
+        command not finite or beyond :data:`~designkit.simulation.integrate.DIVERGED` in magnitude -- or None
+        for a run that stays finite throughout."""
+        from designkit.simulation.integrate import DIVERGED
+
+        rows = [np.asarray(a, dtype=float).reshape(np.size(self.time), -1)
+                for a in (self.state, self.controller_state, self.u_command)]
+        data = np.hstack(rows)
+        with np.errstate(invalid="ignore"):
+            bad = ~np.all(np.isfinite(data) & (np.abs(data) < DIVERGED), axis=1)
+        first = np.flatnonzero(bad)
+        return float(self.time[first[0]]) if first.size else None
+
 
 def _owned(value: Any) -> np.ndarray:
     """``value`` as a float array the result may keep: a read-only float array is taken as it is (the simulator

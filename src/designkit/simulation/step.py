@@ -141,7 +141,8 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
     if per_step:
         v, e_next = element.function(u_cmd, e)
         u_app = line[L.nu * (L.delay_steps - 1):] if L.delay_steps > 0 else v
-        line_next = ca.vertcat(v, line[: L.nu * (L.delay_steps - 1)]) if L.delay_steps > 0 else line
+        kept = L.nu * (L.delay_steps - 1)  # a one-step line keeps nothing (CasADi slices a scalar [:0] to 1x0)
+        line_next = (ca.vertcat(v, line[:kept]) if kept > 0 else v) if L.delay_steps > 0 else line
     else:
         u_app, e_next, line_next = element.function(u_cmd, e)[0], e, line
     held = ca.vertcat(noise, dist, uff, m_cmd, e, gate, u_app, d_hold, p)

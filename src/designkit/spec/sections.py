@@ -317,6 +317,18 @@ class Simulation(Section):
     anti_windup: AntiWindup | None = None
     trajectory: Trajectory | None = None
 
+    def still_reference(self) -> str | None:
+        """The key path of a reference that does not move -- ``simulation.step`` all 0 without a trajectory, or
+        a trajectory whose ``amplitude`` is 0 on every joint -- or None when it moves (or has no amplitude)."""
+        if self.trajectory is None:
+            key, value = "simulation.step", self.step
+        elif hasattr(self.trajectory, "amplitude"):
+            key, value = "simulation.trajectory.amplitude", self.trajectory.amplitude
+        else:
+            return None
+        values = value if isinstance(value, list | tuple) else [value]
+        return key if all(float(v) == 0.0 for v in values) else None
+
 
 class Numerics(Section):
     """How the numbers are computed (not what is designed).

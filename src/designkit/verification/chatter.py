@@ -93,8 +93,15 @@ def _reference_jumps(reference: np.ndarray | None, n: int) -> np.ndarray:
 
 def input_chatter(name: str, t: np.ndarray, u: np.ndarray, speed: np.ndarray | None = None,
                   reference: np.ndarray | None = None) -> InputChatter:
-    """Measure one input's command ``u`` (sampled at ``t``, s) for chattering (module docstring)."""
+    """Measure one input's command ``u`` (sampled at ``t``, s) for chattering (module docstring); a run that stops
+    being finite is measured up to that instant (its divergence is ``finite_run``'s to report)."""
     u = np.asarray(u, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(u))
+    if bad.size:
+        n = int(bad[0])
+        u, t = u[:n], np.asarray(t)[:n]
+        speed = None if speed is None else np.asarray(speed, dtype=float)[:n]
+        reference = None if reference is None else np.asarray(reference, dtype=float)[:n]
     du = np.diff(u)
     ptp = float(np.ptp(u)) if u.size else 0.0
     idx = np.flatnonzero((np.abs(du) > JUMP * ptp) & ~_reference_jumps(reference, u.size)) if ptp > 0 else \

@@ -110,12 +110,14 @@ def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t = np.asarray(sim.time, dtype=float)
     e = np.abs(_errors(sim))
+    if not np.all(np.isfinite(e)):
+        at = float(t[np.flatnonzero(~np.all(np.isfinite(e), axis=1))[0]])
+        return (Check("tracking_convergence", False, "finite error", None, None, "rad",
+                      f"the tracking error stopped being finite at t = {at:.6g} s: the run diverged",
+                      {"diverged_at_s": at}),)
     tail = t >= t[-1] - TAIL * (t[-1] - t[0])
     peak = np.max(e, axis=0)
     last = np.max(e[tail], axis=0)
-    if not np.all(np.isfinite(e)):
-        return (Check("tracking_convergence", False, "finite error", None, None, "rad",
-                      "the tracking error stopped being finite", {}),)
     ratio = last / np.where(peak > 0, peak, 1.0)
     ok = bool(np.all((ratio <= TRACK_FRACTION) | (last <= TRACK_FLOOR)))
     worst = int(np.argmax(ratio))
@@ -146,7 +148,9 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
     filtered = design.data.adaptation.acceleration == "filtered" and not slotine
     tol = V_TOL_FILTERED if filtered else V_TOL_IDEAL
     if not np.all(np.isfinite(V)):
-        return (Check("adaptive_lyapunov", False, "finite V", None, None, "", "V stopped being finite", {}),)
+        at = float(t[np.flatnonzero(~np.isfinite(V))[0]])
+        return (Check("adaptive_lyapunov", False, "finite V", None, None, "",
+                      f"V stopped being finite at t = {at:.6g} s: the run diverged", {"diverged_at_s": at}),)
     rise, k = lyapunov_rise(V)
     rel = rise / V[0] if V[0] > 0 else rise
     predicted = float(np.sum(0.5 * (Vdot[1:] + Vdot[:-1]) * np.diff(t)))

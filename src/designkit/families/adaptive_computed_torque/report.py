@@ -95,6 +95,8 @@ def _tracking_question(result: Any) -> Question:
     if check is None:
         return Question("Does the tracking error go to zero?", ("The run was not judged.",))
     c = check.certificate
+    if "last_window_rad" not in c:  # a run that diverged: the check says when
+        return Question("Does the tracking error go to zero?", (f"No: {check.detail}.",))
     words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last "
                       f"{_f(c['tail_s'], 3)} s" for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"],
                                                                                  strict=True)))
@@ -137,6 +139,8 @@ def _lyapunov_question(result: Any) -> Question:
     if check is None:
         return Question("Is the Lyapunov function of the adaptive loop non-increasing?", ("The run was not judged.",))
     c = check.certificate
+    if "V0" not in c:  # a run that diverged: the check says when
+        return Question("Is the Lyapunov function of the adaptive loop non-increasing?", (f"No: {check.detail}.",))
     if result.design.data.adaptation.scheme == "slotine_li":
         what = "V = ½ sᵀD(q)s + ½ (P − P̂)ᵀK⁻¹(P − P̂), with s = ė + Λe and the true inertia D(q),"
     else:

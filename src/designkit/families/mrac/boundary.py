@@ -52,6 +52,9 @@ MAX_RUNS = 10
 """Most simulations of one bisection (the spec's own run included when given)."""
 FLOQUET_GRID = 24
 """Scales evaluated at once on the first, logarithmic, grid of the Floquet boundary search."""
+RK4_RESOLUTION = 1.0
+"""Largest ``dt |lambda|`` (grid step times the reference model's fastest pole) at which the monodromy matrix is
+integrated on the run's grid; RK4 itself turns unstable near 2.8, so a coarser grid gives no Floquet estimate."""
 
 
 @dataclass(frozen=True)
@@ -188,16 +191,19 @@ def _monodromy_radius(sig: dict[str, np.ndarray], i0: int, i1: int, dt: float, k
 
     X = np.tile(np.eye(4), (m, 1, 1))
     A_next = matrix(0)
-    for i in range(i1 - i0):
-        A0, A_next = A_next, matrix(i + 1)
-        Am = 0.5 * (A0 + A_next)
-        k1 = A0 @ X
-        k2 = Am @ (X + 0.5 * dt * k1)
-        k3 = Am @ (X + 0.5 * dt * k2)
-        k4 = A_next @ (X + dt * k3)
-        X = X + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    with np.errstate(all="ignore"):
-        radius = np.max(np.abs(np.linalg.eigvals(X)), axis=1)
+    with np.errstate(all="ignore"):  # a scale whose monodromy overflows is unstable: radius inf below
+        for i in range(i1 - i0):
+            A0, A_next = A_next, matrix(i + 1)
+            Am = 0.5 * (A0 + A_next)
+            k1 = A0 @ X
+            k2 = Am @ (X + 0.5 * dt * k1)
+            k3 = Am @ (X + 0.5 * dt * k2)
+            k4 = A_next @ (X + dt * k3)
+            X = X + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        finite = np.all(np.isfinite(X), axis=(1, 2))
+        radius = np.full(m, np.inf)
+        if finite.any():
+            radius[finite] = np.max(np.abs(np.linalg.eigvals(X[finite])), axis=1)
     return np.where(np.isfinite(radius), radius, np.inf)
 
 
@@ -205,7 +211,8 @@ def floquet_boundary(sim: Any, design: Any, spec: Any, plant: Any, *, around: fl
                      Q: Any = None) -> dict[str, Any] | None:
     """Estimate 3 of the module docstring: ``{"scale", "k", "grid": [(scale, radius)...]}`` -- the smallest scale
     whose monodromy matrix has a multiplier outside the unit circle, refined to 1 %; None for a reference that
-    is not periodic or no crossing on the grid (``around``: a scale to centre the grid on, default 1; ``Q``: another
+    is not periodic, a run's grid too coarse for RK4 on the model (:data:`RK4_RESOLUTION`) or no crossing on the
+    grid (``around``: a scale to centre the grid on, default 1; ``Q``: another
     weighting, as for :func:`frozen_signal_bound`)."""
     idx = period_indices(sim)
     if idx is None:
@@ -215,6 +222,9 @@ def floquet_boundary(sim: Any, design: Any, spec: Any, plant: Any, *, around: fl
         return None
     t = np.asarray(sim.time, dtype=float)
     dt = float(t[1] - t[0])
+    a1, a2 = sig["a"]
+    if dt * float(np.max(np.abs(np.roots([1.0, a2, a1])))) > RK4_RESOLUTION:
+        return None  # the run's grid does not resolve the model's own dynamics: RK4 on it says nothing
     k = plant_ratio(design, final_link(spec, plant))
     centre = 1.0 if around is None else float(around)
     grid = np.geomspace(centre / 100.0, centre * 100.0, FLOQUET_GRID)

@@ -36,8 +36,10 @@ from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.runs import (
     adapted,
     assess,
+    change_in_run,
     final_link,
     gram,
+    in_run,
     last_event,
     matching,
     model_position,
@@ -74,7 +76,7 @@ def mismatch_reasons(design: Any, spec: Any, plant: Any) -> list[str]:
     n = design.data
     Km, tau = float(plant.parameter("Km").value), float(plant.parameter("tau").value)
     out = []
-    change = spec.simulation.plant_change
+    change = change_in_run(spec)
     if change is not None:
         moved = ", ".join(f"{k} {plant.parameter(k).value:g} → {v:g}" for k, v in change.values.items()
                           if plant.parameter(k).value != v)
@@ -88,7 +90,7 @@ def mismatch_reasons(design: Any, spec: Any, plant: Any) -> list[str]:
     if max(abs(a - b) / abs(b) for a, b in zip(initial, start, strict=True)) > 1e-9:
         out.append(f"the initial parameters ({initial[0]:.4g}, {initial[1]:.4g}) are not those that put the link on "
                    f"the model ({start[0]:.4g}, {start[1]:.4g})")
-    if spec.simulation.perturbation is not None:
+    if spec.simulation.perturbation is not None and in_run(spec, spec.simulation.perturbation.time):
         out.append(f"a perturbation acts from t = {spec.simulation.perturbation.time:g} s")
     return out
 
@@ -136,8 +138,9 @@ def _adaptation_error(design: Any, ctx: Context) -> tuple[Check, ...]:
                       cert, data=data),)
     if reasons:
         ok = bool(ra < rf)
+        share = f" ({_f(100 * ra / rf, 3)} %)" if rf > 0 else ""
         detail = (f"RMS of e = ym − x1 over the run: {_f(ra)} rad with adaptation, {_f(rf)} rad with the gains frozen "
-                  f"at their initial values ({_f(100 * ra / rf, 3)} %), because {'; '.join(reasons)}")
+                  f"at their initial values{share}, because {'; '.join(reasons)}")
         if not ok:
             detail += ": adaptation did not lower the error"
         return (Check("adaptation_error", ok, target, ra, rf - ra, "rad", detail, cert, data=data),)

@@ -30,9 +30,9 @@ import numpy as np
 from designkit.families.mrac.laws import adaptive_law
 from designkit.families.mrac.model import PARAMETERS, SENSITIVITY_NAMES, ReferenceModel, matching_parameters
 
-__all__ = ["Assessment", "BOUND_FACTOR", "GROWTH_LIMIT", "adaptive_variant", "adapted", "assess", "final_link",
-           "gram", "last_event", "matching", "model_position", "plant_ratio", "rms", "sensitivities", "simulate",
-           "swing", "window_masks"]
+__all__ = ["BOUND_FACTOR", "GROWTH_LIMIT", "Assessment", "adapted", "adaptive_variant", "assess", "change_in_run",
+           "final_link", "gram", "in_run", "last_event", "matching", "model_position", "plant_ratio", "rms",
+           "sensitivities", "simulate", "swing", "window_masks"]
 
 BOUND_FACTOR = 10.0
 """A run whose output error exceeds this many times the reference's swing has diverged."""
@@ -52,7 +52,8 @@ def rms(x: np.ndarray) -> float:
         return 0.0
     if not np.all(np.isfinite(x)):
         return math.inf
-    return float(np.sqrt(np.mean(x * x)))
+    peak = float(np.max(np.abs(x)))  # scaled by the peak: no overflow of x * x for a large finite record
+    return peak * float(np.sqrt(np.mean((x / peak) ** 2))) if peak > 0 else 0.0
 
 
 def adaptive_variant(design: Any, *, gamma_scale: float = 1.0, gamma: Any = None, Q: Any = None, initial: Any = None,
@@ -94,9 +95,22 @@ def adapted(sim: Any) -> np.ndarray:
     return _states(sim, PARAMETERS)
 
 
-def final_link(spec: Any, plant: Any) -> tuple[float, float]:
-    """``(Km, tau)`` of the true link at the end of the run (after ``simulation.plant_change``)."""
+def in_run(spec: Any, time: float) -> bool:
+    """Whether the instant ``time`` (s) falls within the run of ``spec`` (at or before ``simulation.duration``)."""
+    duration = spec.simulation.duration
+    return duration is None or float(time) <= float(duration) * (1 + 1e-12)
+
+
+def change_in_run(spec: Any) -> Any:
+    """``simulation.plant_change`` when it happens within the run, else None."""
     change = spec.simulation.plant_change
+    return change if change is not None and in_run(spec, change.time) else None
+
+
+def final_link(spec: Any, plant: Any) -> tuple[float, float]:
+    """``(Km, tau)`` of the true link at the end of the run (after ``simulation.plant_change`` when the run
+    reaches it)."""
+    change = change_in_run(spec)
     p = plant.with_params(**change.values) if change is not None else plant
     return float(p.parameter("Km").value), float(p.parameter("tau").value)
 

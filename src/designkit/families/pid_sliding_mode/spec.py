@@ -147,3 +147,7 @@ def validate(spec: Any) -> None:
     if traj is not None and traj.kind not in kinds:
         raise ValueError(f"simulation.trajectory.kind: the {ctl.form} form follows {', '.join(kinds)}, not "
                          f"{traj.kind} (controller.form)")
+    key = sim.still_reference()
+    if key is not None:
+        raise ValueError(f"{key}: the reference does not move (amplitude 0): there is no error to slide to 0 (the "
+                         "switching band and the integration step are sized on the reference's displacement)")

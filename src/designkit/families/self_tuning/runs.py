@@ -116,8 +116,12 @@ def sylvester_condition(s: Samples, design: Any) -> np.ndarray:
     M[:, 0, 0] = 1.0
     M[:, 0, 1], M[:, 1, 0], M[:, 1, 1], M[:, 1, 2] = m[:, 2], m[:, 0], m[:, 3], m[:, 2]
     M[:, 2, 0], M[:, 2, 2] = m[:, 1], m[:, 3]
-    with np.errstate(all="ignore"):
-        return np.linalg.cond(M) if len(m) else np.zeros(0)
+    cond = np.full(len(m), np.nan)  # NaN where the estimate is not finite (a diverged run)
+    finite = np.all(np.isfinite(M), axis=(1, 2))
+    if finite.any():
+        with np.errstate(all="ignore"):
+            cond[finite] = np.linalg.cond(M[finite])
+    return cond
 
 
 def characteristic_error(s: Samples, design: Any) -> np.ndarray:
@@ -141,20 +145,25 @@ def excitation(s: Samples, window: int) -> tuple[np.ndarray, np.ndarray]:
     one is zero); NaN before a full window."""
     phi = s.phi
     M, n = phi.shape
-    outer = phi[:, :, None] * phi[:, None, :]
-    csum = np.cumsum(outer, axis=0)
+    with np.errstate(all="ignore"):  # a diverged run's regressors overflow: inf, then NaN below
+        csum = np.cumsum(phi[:, :, None] * phi[:, None, :], axis=0)
     lam, norm = np.full(M, np.nan), np.full(M, np.nan)
     if window > M:
         return lam, norm
-    R = csum[window - 1:].copy()
-    R[1:] -= csum[: M - window]
-    lam[window - 1:] = np.linalg.eigvalsh(R / window)[:, 0]
-    d = np.sqrt(np.clip(np.einsum("kii->ki", R), 1e-300, None))
-    C = R / (d[:, :, None] * d[:, None, :])
-    zero = np.einsum("kii->ki", R).min(axis=1) <= 1e-300
-    vals = np.linalg.eigvalsh(C)[:, 0]
-    vals[zero] = 0.0
-    norm[window - 1:] = np.clip(vals, 0.0, None)
+    with np.errstate(all="ignore"):  # a diverged run's regressors overflow: NaN from there on
+        R = csum[window - 1:].copy()
+        R[1:] -= csum[: M - window]
+        finite = np.all(np.isfinite(R), axis=(1, 2))
+        d = np.sqrt(np.clip(np.einsum("kii->ki", R), 1e-300, None))
+        C = R / (d[:, :, None] * d[:, None, :])
+        zero = np.einsum("kii->ki", R).min(axis=1) <= 1e-300
+    lam_w, vals = np.full(len(R), np.nan), np.full(len(R), np.nan)
+    if finite.any():
+        lam_w[finite] = np.linalg.eigvalsh(R[finite] / window)[:, 0]
+        vals[finite] = np.linalg.eigvalsh(C[finite])[:, 0]
+    vals[zero & finite] = 0.0
+    lam[window - 1:] = lam_w
+    norm[window - 1:] = np.where(np.isfinite(vals), np.clip(vals, 0.0, None), np.nan)
     return lam, norm
 
 

@@ -122,12 +122,15 @@ def measure(label: str, sim: Any, design: Any, spec: Any, plant: Any) -> Measure
                    first=first, peak_u=float(np.nanmax(np.abs(u))),
                    rms_u=_rms(u), error=err, reconverged=reconverged, trace=float(s.trace[-1]),
                    bounded=int(s.bounded.sum()), held=int(s.held.sum()),
-                   condition=float(np.nanmax(cond)) if cond.size else math.nan, finite=finite)
+                   condition=float(np.nanmax(cond)) if np.any(np.isfinite(cond)) else math.nan, finite=finite)
 
 
 def _rms(x: np.ndarray) -> float:
     x = np.asarray(x, dtype=float)
-    return float(np.sqrt(np.mean(x * x))) if x.size and np.all(np.isfinite(x)) else math.inf
+    if not (x.size and np.all(np.isfinite(x))):
+        return math.inf
+    peak = float(np.max(np.abs(x)))  # scaled by the peak: no overflow of x * x for a large finite record
+    return peak * float(np.sqrt(np.mean((x / peak) ** 2))) if peak > 0 else 0.0
 
 
 def _f(x: float | None, digits: int = 3) -> str:

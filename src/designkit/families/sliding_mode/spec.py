@@ -129,6 +129,6 @@ def validate(spec: Any) -> None:
                          "would not cover the run")
     if sim.anti_windup is not None:
         raise ValueError("simulation.anti_windup: the sliding-mode law has no integral to wind up")
-    if reference_amplitude(sim)[0] == 0.0:
-        key = "simulation.step" if sim.trajectory is None else "simulation.trajectory.amplitude"
+    key = sim.still_reference()
+    if key is not None:
         raise ValueError(f"{key}: the reference does not move (amplitude 0): there is no error to slide to 0")

@@ -193,10 +193,22 @@ def contraction(run: ArmRun, idx: np.ndarray) -> float:
     root = np.sqrt(np.asarray(run.ident.gamma, dtype=float))
     p = root.size
     T = np.eye(p)
-    for k in idx:
-        A = np.eye(p) - (run.ident.Ts / run.m2[k]) * (root[:, None] * run.phi[k] * root[None, :])
-        T = A @ T
+    with np.errstate(all="ignore"):  # a diverged run's regressors overflow: no contraction (inf)
+        for k in idx:
+            A = np.eye(p) - (run.ident.Ts / run.m2[k]) * (root[:, None] * run.phi[k] * root[None, :])
+            T = A @ T
+    if not np.all(np.isfinite(T)):
+        return math.inf
     return float(np.linalg.norm(T, 2) ** 2) if idx.size else 1.0
+
+
+def _slowest_rate(run: ArmRun, idx: np.ndarray, root: np.ndarray) -> float:
+    """``lambda_min(Gamma^1/2 Gbar Gamma^1/2)`` (1/s) over the samples ``idx``; NaN when the regressors of a
+    diverged run are not finite there."""
+    with np.errstate(all="ignore"):
+        G = (run.phi[idx] / run.m2[idx, None, None]).mean(axis=0)
+        H = root[:, None] * G * root[None, :]
+    return float(np.linalg.eigvalsh(H)[0]) if np.all(np.isfinite(H)) else math.nan
 
 
 def counted(run: ArmRun, mask: np.ndarray) -> np.ndarray:
@@ -214,10 +226,9 @@ def window_rates(run: ArmRun, mask: np.ndarray, length: float) -> tuple[np.ndarr
     ends, kappa, rate = [], [], []
     for start in range(0, idx.size - per + 1, per):
         block = idx[start:start + per]
-        G = (run.phi[block] / run.m2[block, None, None]).mean(axis=0)
         ends.append(float(run.t[block[-1]]))
         kappa.append(contraction(run, block))
-        rate.append(float(np.linalg.eigvalsh(root[:, None] * G * root[None, :])[0]))
+        rate.append(_slowest_rate(run, block, root))
     return np.asarray(ends), np.asarray(kappa), np.asarray(rate)
 
 
@@ -228,6 +239,5 @@ def segment_rate(run: ArmRun, mask: np.ndarray) -> tuple[float, float, float]:
     if idx.size == 0:
         return 1.0, 0.0, 0.0
     root = np.sqrt(np.asarray(run.ident.gamma, dtype=float))
-    G = (run.phi[idx] / run.m2[idx, None, None]).mean(axis=0)
-    rate = float(np.linalg.eigvalsh(root[:, None] * G * root[None, :])[0])
+    rate = _slowest_rate(run, idx, root)
     return contraction(run, idx), (rate if math.isfinite(rate) else 0.0), float(run.t[idx[-1]] - run.t[idx[0]])

@@ -164,8 +164,12 @@ def _least_excited(run: ArmRun, mask: np.ndarray) -> tuple[str, ...]:
     if idx.size == 0:
         return run.ident.names
     root = np.sqrt(np.asarray(run.ident.gamma, dtype=float))
-    G = (run.phi[idx] / run.m2[idx, None, None]).mean(axis=0)
-    _, vec = np.linalg.eigh(root[:, None] * G * root[None, :])
+    with np.errstate(all="ignore"):
+        G = (run.phi[idx] / run.m2[idx, None, None]).mean(axis=0)
+        H = root[:, None] * G * root[None, :]
+    if not np.all(np.isfinite(H)):  # a diverged run: no direction can be told apart
+        return run.ident.names
+    _, vec = np.linalg.eigh(H)
     w = np.abs(vec[:, 0])
     return tuple(run.ident.names[i] for i in np.argsort(w)[::-1] if w[i] >= 0.3 * w.max())
 

@@ -88,7 +88,8 @@ def lyapunov(design: Any, spec: Any, plant: Any, sim: Any) -> tuple[np.ndarray, 
     a, b = true_parameters(spec, plant, t)
     g = design.data.gamma
     ah, bh = (np.asarray(sim.signals[n], dtype=float) for n in ("a_hat", "b_hat"))
-    return t, (a - ah) ** 2 / g[0] + (b - bh) ** 2 / g[1]
+    with np.errstate(over="ignore", invalid="ignore"):  # estimates that blew up give V = inf (or NaN): judged so
+        return t, (a - ah) ** 2 / g[0] + (b - bh) ** 2 / g[1]
 
 
 def excitation(design: Any, sim: Any, mask: np.ndarray) -> dict[str, Any]:
@@ -162,7 +163,9 @@ def _lyapunov(design: Any, ctx: Context) -> tuple[Check, ...]:
     worst, where = 0.0, None
     for m in segments(ctx.spec, t, design.data.window, design.data.Ts):
         seg = V[m]
-        rise = (seg - np.minimum.accumulate(seg) - V_FLOOR) / max(float(seg[0]), 1e-300)
+        with np.errstate(invalid="ignore"):  # inf - inf of a V that blew up: NaN, and V not finite fails below
+            rise = (seg - np.minimum.accumulate(seg) - V_FLOOR) / max(float(seg[0]), 1e-300)
+        rise = np.where(np.isnan(rise), -np.inf, rise)
         k = int(np.argmax(rise))
         if rise[k] > worst:
             worst, where = float(rise[k]), float(t[m][k])

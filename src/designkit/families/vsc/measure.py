@@ -104,8 +104,8 @@ def run_models(design: Any, sim: Any) -> list[tuple[float, tuple[np.ndarray, np.
     values = dict(st.get("plant") or {})
     out = [(float(sim.time[0]), model.at(values))]
     change = st.get("plant_change")
-    if change:
-        out.append((float(change.get("time_applied", change["time"])), model.at({**values, **change["values"]})))
+    if change and change.get("time_applied") is not None:  # None: the change falls after the end of the run
+        out.append((float(change["time_applied"]), model.at({**values, **change["values"]})))
     return out
 
 
@@ -115,7 +115,15 @@ def _sign_changes(s: np.ndarray) -> int:
 
 
 def measure(design: Any, sim: Any) -> VscRun:
-    """The measurements of ``sim``, a run of the ``design`` (module docstring)."""
+    """The measurements of ``sim``, a run of the ``design`` (module docstring); of a run that diverged, the
+    measurements are not finite from that instant on (``finite_run`` reports it) and are computed so."""
+    if getattr(sim, "diverged_at", None) is None:
+        return _measure(design, sim)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        return _measure(design, sim)
+
+
+def _measure(design: Any, sim: Any) -> VscRun:
     info: VscData = design.data
     c = np.asarray(info.c, float)
     al, be = np.asarray(info.alpha, float), np.asarray(info.beta, float)
@@ -161,8 +169,11 @@ def measure(design: Any, sim: Any) -> VscRun:
     tail = slice(max(0, len(t) - max(2, len(t) // 20)), None)
     offset_tol = abs(g_sigma) * float(np.max(band[tail])) + 0.02 * abs(pred)
     if reach is None:
+        from designkit.families.vsc.surface import reduced_poles
+
         return VscRun(hold, None, None, None, None, None, 0, 0, 0.0, None, 0.0, None, None, matched, pred, final,
-                      offset_tol, g_sigma, out)
+                      offset_tolerance=offset_tol, sigma_gain=g_sigma,
+                      expected_poles=tuple(complex(v) for v in reduced_poles(A, B, c)), data=out)
     after = np.abs(sigma[reach:]) / band[reach:]
     j = int(np.argmax(after))
     # the sliding samples: after the first sign change of sigma past the reaching time

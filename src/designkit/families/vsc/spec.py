@@ -131,5 +131,7 @@ def validate(spec: Any) -> None:
     if spec.plant.kind == "elastic_joint" and (spec.plant.mgl or 0.0) > 0:
         raise ValueError("plant.mgl: the regulator is designed on the linear plant at rest at the reference; with "
                          "gravity the rest state needs a holding torque the law does not provide (mgl = 0 only)")
-    if sim.trajectory is None and float(sim.step if not isinstance(sim.step, list | tuple) else sim.step[0]) == 0:
-        raise ValueError("simulation.step: the reference does not move (step 0): there is no error to regulate")
+    key = sim.still_reference()
+    if key is not None:
+        raise ValueError(f"{key}: the reference does not move (amplitude 0): there is no error to regulate (the "
+                         "relay's band and the integration step are sized on the reference's displacement)")
