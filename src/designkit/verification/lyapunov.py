@@ -37,6 +37,7 @@ decision rules and the keys of the certificate stored in the :class:`Check`.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -57,6 +58,14 @@ from designkit.verification.lmi import (
     unstable_eigenvalue,
 )
 from designkit.verification.tolerances import EIG_RECHECK_TOL, LMI_EPS, LMI_SOLVER_OK
+
+
+def _lyapunov_equation(a: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``X`` with ``a X + X a' = q`` (scipy); its warning that ``a`` has an eigenvalue pair summing to about zero
+    (a marginal loop, solved by perturbing it) is not printed: every solution is judged by its rounding bounds."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return scipy.linalg.solve_continuous_lyapunov(a, q)
 
 __all__ = [
     "Coordinates",
@@ -208,7 +217,7 @@ def equation_certificate(A: np.ndarray) -> dict[str, float] | None:
     c = coordinates([A])
     Ab = A * c.d[None, :] / c.d[:, None]
     try:
-        Pb = scipy.linalg.solve_continuous_lyapunov(Ab.T, -np.eye(n))
+        Pb = _lyapunov_equation(Ab.T, -np.eye(n))
     except (ValueError, np.linalg.LinAlgError):
         return None
     Pb = 0.5 * (Pb + Pb.T)
@@ -281,7 +290,7 @@ def lyapunov_equation(A: np.ndarray, Q: np.ndarray | None = None, *, balanced: b
     d = coordinates([A]).d if balanced else np.ones(n)
     Ab = A * d[None, :] / d[:, None]
     # scipy solves a X + X a^H = q; with a = Ab' this is Ab'X + X Ab = q
-    Pb = scipy.linalg.solve_continuous_lyapunov(Ab.T, -Q)
+    Pb = _lyapunov_equation(Ab.T, -Q)
     Pb = 0.5 * (Pb + Pb.T)
     return Pb / d[None, :] / d[:, None]
 
@@ -322,6 +331,6 @@ def cross_check(A: np.ndarray, *, eps: float = LMI_EPS, solver: str = "CLARABEL"
     Ab = A * c.d[None, :] / c.d[:, None]
     Pb = (sol.P * c.d[None, :]) * c.d[:, None]
     Qb = -(Ab.T @ Pb + Pb @ Ab)
-    Xb = scipy.linalg.solve_continuous_lyapunov(Ab.T, -Qb)
+    Xb = _lyapunov_equation(Ab.T, -Qb)
     err = float(np.max(np.abs(Xb - Pb)) / (1.0 + np.max(np.abs(Pb))))
     return CrossCheck(recheck([A], sol.P, eps=eps), eq, err, sol.status)

@@ -104,13 +104,15 @@ def excitation(design: Any, sim: Any, mask: np.ndarray) -> dict[str, Any]:
     pu = np.concatenate([[0.0], u[:-1]])
     xD = np.concatenate([np.zeros(N), xm[:-N]])
     uD = np.concatenate([np.zeros(N), pu[:-N]])
-    det = xm * uD - pu * xD
-    m = mask & (t >= t[0] + x.window)
-    phi1 = np.stack([-xm[m], pu[m]])
-    phi2 = np.stack([-xD[m], uD[m]])
-    G = (phi1 @ phi1.T + phi2 @ phi2.T) / max(int(m.sum()), 1)
-    root = np.diag(np.sqrt(np.asarray(x.gamma, dtype=float)))
-    rho = float(np.linalg.eigvalsh(root @ G @ root)[0]) if m.any() else 0.0
+    with np.errstate(over="ignore", invalid="ignore"):  # a run that blew up: products inf or NaN, judged so
+        det = xm * uD - pu * xD
+        m = mask & (t >= t[0] + x.window)
+        phi1 = np.stack([-xm[m], pu[m]])
+        phi2 = np.stack([-xD[m], uD[m]])
+        G = (phi1 @ phi1.T + phi2 @ phi2.T) / max(int(m.sum()), 1)
+        root = np.diag(np.sqrt(np.asarray(x.gamma, dtype=float)))
+        P = root @ G @ root
+    rho = (float(np.linalg.eigvalsh(P)[0]) if np.all(np.isfinite(P)) else math.nan) if m.any() else 0.0
     span = float(t[m][-1] - t[m][0]) if m.any() else 0.0
     return {"gram": G, "rho": rho, "span": span, "det": det, "mask": m, "regressors": (xm, pu, xD, uD)}
 
@@ -123,10 +125,11 @@ def sampled_step(design: Any, sim: Any) -> float:
     ex = excitation(design, sim, np.ones(len(sim.time), dtype=bool))
     xm, pu, xD, uD = ex["regressors"]
     ga, gb = x.gamma
-    p11 = ga * (xm**2 + xD**2)
-    p22 = gb * (pu**2 + uD**2)
-    p12 = -math.sqrt(ga * gb) * (xm * pu + xD * uD)
-    lam = 0.5 * (p11 + p22) + np.sqrt(0.25 * (p11 - p22) ** 2 + p12**2)
+    with np.errstate(over="ignore", invalid="ignore"):  # a run that blew up: inf or NaN, judged below
+        p11 = ga * (xm**2 + xD**2)
+        p22 = gb * (pu**2 + uD**2)
+        p12 = -math.sqrt(ga * gb) * (xm * pu + xD * uD)
+        lam = 0.5 * (p11 + p22) + np.sqrt(0.25 * (p11 - p22) ** 2 + p12**2)
     return float(x.Ts * np.max(lam)) if lam.size and np.all(np.isfinite(lam)) else math.inf
 
 
