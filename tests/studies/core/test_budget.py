@@ -16,7 +16,7 @@ def test_waiting_costs_no_processor_time_and_working_does():
     while time.process_time() < end:
         pass
     worked = cpu_seconds() - before
-    assert waited < 0.1 and worked >= 0.19
+    assert waited < 0.1 and worked >= 0.15  # os.times counts in clock ticks (10 ms)
 
 
 def test_the_safety_net_trips_beyond_its_factor_and_says_so():
