@@ -185,3 +185,14 @@ def test_jobs_must_be_1_or_2(tmp_path, capsys, value):
     assert exc.value.code == 2
     assert "--jobs" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_checks_table_writes_an_undefined_value_as_a_dash_without_its_unit():
+    from designkit.cli import _checks_table
+    from designkit.verification.check import Check
+
+    table = _checks_table([Check("vsc_band", False, "≤ 0.1", float("nan"), float("nan"), "rad"),
+                           Check("overshoot", True, "≤ 5 %", 2.5, 2.5, "%")])
+    diverged, finite = table.splitlines()[1:3]
+    assert "nan" not in table and "—" in diverged and "rad" not in diverged
+    assert "2.5 %" in finite

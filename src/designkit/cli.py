@@ -34,14 +34,14 @@ def _one_line(text: str) -> str:
 
 def _fmt(value: object) -> str:
     if isinstance(value, float):
-        return f"{value:.4g}"
+        return "—" if value != value else f"{value:.4g}"  # NaN: a value a diverged run does not define
     return "" if value is None else str(value)
 
 
 def _checks_table(checks) -> str:
     rows = [("check", "status", "achieved", "target", "margin")]
     for c in checks:
-        achieved = f"{_fmt(c.achieved)} {c.unit}".strip()
+        achieved = _fmt(c.achieved) if _fmt(c.achieved) in ("", "—") else f"{_fmt(c.achieved)} {c.unit}".strip()
         rows.append((c.name, c.status, achieved, c.target, _fmt(c.margin)))
     widths = [max(len(r[i]) for r in rows) for i in range(5)]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in rows]
