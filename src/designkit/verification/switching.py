@@ -1,0 +1,222 @@
+"""How a commanded input switches, measured on the simulated record as physics.
+
+Every law's command ``u`` (``SimulationResult.u_command``, one column per input) is split into
+
+* the **averaged control** ``u_avg``: the centred moving average of ``u`` over a window ``w`` (s) set by the
+  loop's time scale (:func:`loop_window`), never by the integration step; for a switching law it is the
+  equivalent control the plant responds to;
+* the **switching component** ``s = u - u_avg``.
+
+Measured per input:
+
+* the amplitudes, the RMS of ``s`` and of ``u_avg`` over the run (the command's unit), and the peak ``|s|``;
+  the switching part **dominates** when ``rms(s) > rms(u_avg)``;
+* the **reversals**: turning points of ``u`` counted with a hysteresis ``h`` (a move against the current
+  direction by more than ``h`` since the last extremum reverses it), ``h = max(HYSTERESIS * rms(s),
+  FLOOR * range(u))``; the **reversal rate** is the count per second of the run (1/s); a square wave of
+  frequency ``f`` reverses ``2 f`` times a second, as does a sine;
+* the **total variation** ``TV = sum |u_{k+1} - u_k|`` and its rate ``TV / duration`` (the command's unit per
+  second, what ``requirements.max_command_variation`` bounds);
+* the rate against the clocks that could set it: the record's step ``dt`` (the integration step) and, when the
+  command is sampled, the sampling period ``Ts``.  The rate is **set by the step** when it exceeds
+  ``STEP_SHARE / dt`` (a fifth of the step's Nyquist rate ``1/(2 dt)``): the verdict then depends on a
+  numerical choice.  It is **set by the sampling** when it exceeds ``STEP_SHARE / Ts``.
+
+A record that stops being finite is measured up to that instant (the divergence is ``finite_run``'s to report).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FLOOR", "HYSTERESIS", "STEP_SHARE", "Switching", "loop_window", "measure", "moving_average",
+           "reversals", "warning"]
+
+HYSTERESIS = 0.5
+"""Share of the switching component's RMS a move must exceed to reverse the direction."""
+
+FLOOR = 1e-3
+"""Share of the command's range below which a move never counts (round-off of a smooth command)."""
+
+STEP_SHARE = 0.1
+"""A reversal rate above this many per step (``STEP_SHARE / dt``) is set by the step."""
+
+WINDOW_SHARE = 0.01
+"""Without a loop time scale, the averaging window is this share of the run's duration."""
+
+
+@dataclass(frozen=True)
+class Switching:
+    """How one input's command switches (module docstring).
+
+    Parameters
+    ----------
+    name : str
+        The input.
+    window : float
+        Averaging window ``w`` (s).
+    switching_rms, switching_peak : float
+        RMS and peak ``|s|`` of the switching component (the command's unit).
+    averaged_rms : float
+        RMS of the averaged control ``u_avg`` (the command's unit).
+    reversals : int
+        Reversals of the command over the run.
+    rate : float
+        Reversals per second of the run (1/s).
+    variation : float
+        Total variation ``TV`` (the command's unit).
+    variation_rate : float
+        ``TV`` per second of the run (the command's unit per second).
+    step : float
+        The record's step ``dt`` (s).
+    sampling_period : float
+        ``Ts`` (s); 0 for a continuous-time command.
+    duration : float
+        The measured (finite) part of the run (s).
+    """
+
+    name: str
+    window: float
+    switching_rms: float
+    switching_peak: float
+    averaged_rms: float
+    reversals: int
+    rate: float
+    variation: float
+    variation_rate: float
+    step: float
+    sampling_period: float
+    duration: float
+
+    @property
+    def dominates(self) -> bool:
+        """The switching component's RMS exceeds the averaged control's."""
+        return self.switching_rms > self.averaged_rms and self.reversals > 0
+
+    @property
+    def ratio(self) -> float:
+        """``rms(s) / rms(u_avg)`` (inf for a zero averaged control with a switching part)."""
+        if self.averaged_rms > 0:
+            return self.switching_rms / self.averaged_rms
+        return float("inf") if self.switching_rms > 0 else 0.0
+
+    @property
+    def step_set(self) -> bool:
+        """The reversal rate exceeds ``STEP_SHARE / dt``: the integration step sets it."""
+        return self.step > 0 and self.rate > STEP_SHARE / self.step
+
+    @property
+    def sampling_set(self) -> bool:
+        """The command is sampled and its reversal rate exceeds ``STEP_SHARE / Ts``."""
+        return self.sampling_period > 0 and self.rate > STEP_SHARE / self.sampling_period
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-serialisable form (units: s, 1/s, the command's unit)."""
+        return {"input": self.name, "window_s": self.window, "switching_rms": self.switching_rms,
+                "switching_peak": self.switching_peak, "averaged_rms": self.averaged_rms,
+                "switching_to_averaged": self.ratio if np.isfinite(self.ratio) else None,
+                "reversals": self.reversals, "reversal_rate_per_s": self.rate,
+                "total_variation": self.variation, "variation_per_s": self.variation_rate,
+                "step_s": self.step, "step_nyquist_per_s": 0.5 / self.step if self.step > 0 else None,
+                "sampling_period_s": self.sampling_period, "dominates": self.dominates,
+                "set_by_step": self.step_set, "set_by_sampling": self.sampling_set}
+
+
+def moving_average(t: np.ndarray, u: np.ndarray, window: float) -> np.ndarray:
+    """Centred moving average of ``u`` (sampled at ``t``, s) over ``window`` (s), by the trapezoidal running
+    integral; near the ends the window is cut to the record (the mean over what there is)."""
+    t = np.asarray(t, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if u.size < 2 or window <= 0:
+        return u.copy()
+    integral = np.concatenate(([0.0], np.cumsum(0.5 * (u[1:] + u[:-1]) * np.diff(t))))
+    lo = np.clip(t - window / 2, t[0], t[-1])
+    hi = np.clip(t + window / 2, t[0], t[-1])
+    width = hi - lo
+    area = np.interp(hi, t, integral) - np.interp(lo, t, integral)
+    return np.where(width > 0, area / np.where(width > 0, width, 1.0), u)
+
+
+def reversals(u: np.ndarray, hysteresis: float) -> int:
+    """Turning points of ``u`` with a hysteresis (the command's unit): the direction reverses when ``u`` moves
+    against it by more than ``hysteresis`` from the last extremum; the first direction taken is no reversal."""
+    u = np.asarray(u, dtype=float)
+    if u.size < 2:
+        return 0
+    direction, count = 0, 0
+    high = low = extremum = float(u[0])
+    for value in u[1:].tolist():
+        if direction == 0:
+            high, low = max(high, value), min(low, value)
+            if value - low > hysteresis:
+                direction, extremum = 1, value
+            elif high - value > hysteresis:
+                direction, extremum = -1, value
+        elif direction * (value - extremum) > 0:
+            extremum = value
+        elif direction * (extremum - value) > hysteresis:
+            direction, extremum, count = -direction, value, count + 1
+    return count
+
+
+def loop_window(spec: Any, duration: float) -> float:
+    """The averaging window (s) from the loop's time scale: ``1 / max |Re p|`` over the poles the controller
+    requests (``controller.poles``, 1/s) when it gives any, else ``WINDOW_SHARE`` of the run's ``duration`` (s);
+    never shorter than two sampling periods of a sampled command."""
+    window = WINDOW_SHARE * duration
+    poles = getattr(getattr(spec, "controller", None), "poles", None)
+    try:
+        fastest = max(abs(complex(p).real) for p in np.ravel(np.asarray(poles, dtype=complex))) if poles else 0.0
+    except (TypeError, ValueError):
+        fastest = 0.0
+    if fastest > 0:
+        window = 1.0 / fastest
+    sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
+    return max(window, 2 * sampling)
+
+
+def measure(name: str, t: np.ndarray, u: np.ndarray, window: float, sampling_period: float = 0.0) -> Switching:
+    """Measure how the command ``u`` (sampled at ``t``, s) switches (module docstring), averaging over ``window``
+    (s); ``sampling_period`` (s, 0: continuous) is the controller's."""
+    t = np.asarray(t, dtype=float)
+    u = np.asarray(u, dtype=float)
+    bad = np.flatnonzero(~np.isfinite(u) | ~np.isfinite(t))
+    if bad.size:
+        t, u = t[: bad[0]], u[: bad[0]]
+    duration = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    avg = moving_average(t, u, window)
+    s = u - avg
+    s_rms = float(np.sqrt(np.mean(s ** 2))) if s.size else 0.0
+    a_rms = float(np.sqrt(np.mean(avg ** 2))) if avg.size else 0.0
+    peak = float(np.max(np.abs(s))) if s.size else 0.0
+    span = float(np.ptp(u)) if u.size else 0.0
+    count = reversals(u, max(HYSTERESIS * s_rms, FLOOR * span)) if span > 0 else 0
+    tv = float(np.sum(np.abs(np.diff(u)))) if u.size > 1 else 0.0
+    rate = count / duration if duration > 0 else 0.0
+    return Switching(name, float(window), s_rms, peak, a_rms, count, rate, tv,
+                     tv / duration if duration > 0 else 0.0, step, float(sampling_period), duration)
+
+
+def warning(m: Switching, unit: str = "") -> str | None:
+    """The page-1 sentence for an input whose switching part dominates or whose reversal rate the step or the
+    sampling sets (None otherwise)."""
+    if not (m.dominates or m.step_set or m.sampling_set) or m.reversals == 0:
+        return None
+    u = f" {unit}" if unit else ""
+    parts = [f"The commanded {m.name} switches {m.rate:.3g} times a second ({m.reversals} reversals in "
+             f"{m.duration:.3g} s) with a switching component of RMS {m.switching_rms:.3g}{u} (peak "
+             f"{m.switching_peak:.3g}{u}) on an averaged control of RMS {m.averaged_rms:.3g}{u} (averaged over "
+             f"{m.window:.3g} s)"]
+    if m.dominates:
+        parts.append("the switching part dominates the command")
+    if m.step_set:
+        parts.append(f"the rate is set by the integration step (dt = {m.step:.3g} s, whose Nyquist rate is "
+                     f"{0.5 / m.step:.3g} per second), so the verdict depends on a numerical choice and holds for a "
+                     f"continuous-time switch simulated at that step, not for a controller as implemented")
+    elif m.sampling_set:
+        parts.append(f"the rate is set by the sampling period ({m.sampling_period:.3g} s)")
+    return "; ".join(parts) + "."
