@@ -60,7 +60,8 @@ def _run(design: Any, ctx: Context) -> tuple:
                           "reversal rate of a commanded input"))
     if req is not None and getattr(req, "max_command_variation", None) is not None:
         out.append(_bound("max_command_variation", float(req.max_command_variation), measured,
-                          lambda m: m.variation_rate, f"{_unit(design, 0) or 'unit'}/s", "total variation per second of a commanded input"))
+                          lambda m: m.variation_rate, f"{_unit(design, 0) or 'unit'}/s",
+                          "total variation per second of a commanded input"))
     return tuple(out)
 
 
