@@ -18,9 +18,10 @@ Measured per input:
 * the **total variation** ``TV = sum |u_{k+1} - u_k|`` and its rate ``TV / duration`` (the command's unit per
   second, what ``requirements.max_command_variation`` bounds);
 * the rate against the clocks that could set it: the record's step ``dt`` (the integration step) and, when the
-  command is sampled, the sampling period ``Ts``.  The rate is **set by the step** when it exceeds
-  ``STEP_SHARE / dt`` (a fifth of the step's Nyquist rate ``1/(2 dt)``): the verdict then depends on a
-  numerical choice.  It is **set by the sampling** when it exceeds ``STEP_SHARE / Ts``.
+  command is sampled, the sampling period ``Ts``.  A record at step ``dt`` reverses at most ``1/dt`` times a
+  second (a reversal every step, a square wave at the step's Nyquist frequency ``1/(2 dt)``); the rate is
+  **set by the step** when it exceeds ``STEP_SHARE / dt``: the verdict then depends on a numerical choice.
+  It is **set by the sampling** when it exceeds ``STEP_SHARE / Ts``.
 
 A record that stops being finite is measured up to that instant (the divergence is ``finite_run``'s to report).
 """
@@ -33,7 +34,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["FLOOR", "HYSTERESIS", "STEP_SHARE", "Switching", "loop_window", "measure", "moving_average",
-           "reversals", "warning"]
+           "judge", "of_run", "reversals", "warning"]
 
 HYSTERESIS = 0.5
 """Share of the switching component's RMS a move must exceed to reverse the direction."""
@@ -120,7 +121,7 @@ class Switching:
                 "switching_to_averaged": self.ratio if np.isfinite(self.ratio) else None,
                 "reversals": self.reversals, "reversal_rate_per_s": self.rate,
                 "total_variation": self.variation, "variation_per_s": self.variation_rate,
-                "step_s": self.step, "step_nyquist_per_s": 0.5 / self.step if self.step > 0 else None,
+                "step_s": self.step, "step_max_rate_per_s": 1 / self.step if self.step > 0 else None,
                 "sampling_period_s": self.sampling_period, "dominates": self.dominates,
                 "set_by_step": self.step_set, "set_by_sampling": self.sampling_set}
 
@@ -214,9 +215,37 @@ def warning(m: Switching, unit: str = "") -> str | None:
     if m.dominates:
         parts.append("the switching part dominates the command")
     if m.step_set:
-        parts.append(f"the rate is set by the integration step (dt = {m.step:.3g} s, whose Nyquist rate is "
-                     f"{0.5 / m.step:.3g} per second), so the verdict depends on a numerical choice and holds for a "
-                     f"continuous-time switch simulated at that step, not for a controller as implemented")
+        parts.append(f"the rate is set by the integration step (dt = {m.step:.3g} s, which allows at most "
+                     f"{1 / m.step:.3g} reversals a second), so the verdict depends on a numerical choice and "
+                     f"holds for a continuous-time switch simulated at that step, not for a controller as implemented")
     elif m.sampling_set:
         parts.append(f"the rate is set by the sampling period ({m.sampling_period:.3g} s)")
     return "; ".join(parts) + "."
+
+
+def judge(m: Switching, unit: str = "") -> tuple[bool, str]:
+    """A switching law's chattering judged as physics: it passes when its switching component does not dominate
+    the equivalent (averaged) control and its reversal rate is not set by the integration step (a rate set by the
+    sampling period is the controller's own clock and is allowed).  Returns ``(passed, words)``."""
+    u = f" {unit}" if unit else ""
+    ratio = "inf" if not np.isfinite(m.ratio) else f"{m.ratio:.3g}"
+    words = (f"switching component RMS {m.switching_rms:.3g}{u} against the equivalent control's "
+             f"{m.averaged_rms:.3g}{u} (ratio {ratio}, averaged over {m.window:.3g} s); {m.rate:.3g} reversals a "
+             f"second against at most {1 / m.step:.3g} the step allows" if m.step > 0 else "no record")
+    if m.sampling_period > 0:
+        words += f" and {1 / m.sampling_period:.3g} samples a second"
+    faults = []
+    if m.dominates:
+        faults.append("the switching part dominates the command")
+    if m.step_set:
+        faults.append("the rate is set by the integration step, a numerical choice")
+    return not faults, words + (": " + " and ".join(faults) if faults else "")
+
+
+def of_run(sim: Any, spec: Any, j: int = 0, window: float | None = None) -> Switching:
+    """How input ``j`` of the run ``sim`` (a ``SimulationResult``) switches, averaged over ``window`` (s; None:
+    :func:`loop_window` of ``spec``), with the spec's ``simulation.sampling_period``."""
+    duration = float(sim.time[-1] - sim.time[0]) if len(sim.time) > 1 else 0.0
+    sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
+    w = loop_window(spec, duration) if window is None else max(float(window), 2 * sampling)
+    return measure(sim.input_names[j], sim.time, np.asarray(sim.u_command)[:, j], w, sampling)

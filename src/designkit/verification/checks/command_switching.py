@@ -36,14 +36,10 @@ def _bound(name: str, limit: float, measured: list, value: Any, unit: str, what:
 
 def _run(design: Any, ctx: Context) -> tuple:
     from designkit.verification.check import Check
-    from designkit.verification.switching import loop_window, measure, warning
+    from designkit.verification.switching import of_run, warning
 
     sim = ctx.simulation
-    duration = float(sim.time[-1] - sim.time[0]) if len(sim.time) > 1 else 0.0
-    window = loop_window(ctx.spec, duration)
-    sampling = float(getattr(getattr(ctx.spec, "simulation", None), "sampling_period", 0.0) or 0.0)
-    measured = [measure(name, sim.time, sim.u_command[:, j], window, sampling)
-                for j, name in enumerate(sim.input_names)]
+    measured = [of_run(sim, ctx.spec, j) for j in range(len(sim.input_names))]
     warnings = tuple(w for j, m in enumerate(measured) if (w := warning(m, _unit(design, j))) is not None)
     worst = max(measured, key=lambda m: m.rate)
     cert = {"inputs": [m.to_dict() for m in measured],
