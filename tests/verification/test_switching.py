@@ -108,3 +108,16 @@ def test_a_diverged_record_is_measured_up_to_the_divergence():
     m = measure("u", T, u, window=0.2)
     assert m.duration == pytest.approx(1.0, abs=2 * DT)
     assert m.rate == pytest.approx(100.0, rel=0.02)
+
+
+def test_loop_window_from_the_design_poles_then_the_spec_then_the_run():
+    from types import SimpleNamespace as Ns
+
+    from designkit.verification.switching import loop_window
+
+    spec = Ns(controller=Ns(poles=[-4.0, -20.0]), simulation=Ns(sampling_period=0.0))
+    assert loop_window(Ns(poles=(complex(-5, 3),)), spec, 3.0) == pytest.approx(0.2)  # the sliding pole -c
+    assert loop_window(Ns(poles=()), spec, 3.0) == pytest.approx(0.05)
+    assert loop_window(None, Ns(controller=Ns(), simulation=Ns(sampling_period=0.0)), 3.0) == pytest.approx(0.03)
+    sampled = Ns(controller=Ns(poles=[-400.0]), simulation=Ns(sampling_period=0.01))
+    assert loop_window(None, sampled, 3.0) == pytest.approx(0.02)  # at least two sampling periods

@@ -163,18 +163,22 @@ def reversals(u: np.ndarray, hysteresis: float) -> int:
     return count
 
 
-def loop_window(spec: Any, duration: float) -> float:
-    """The averaging window (s) from the loop's time scale: ``1 / max |Re p|`` over the poles the controller
-    requests (``controller.poles``, 1/s) when it gives any, else ``WINDOW_SHARE`` of the run's ``duration`` (s);
-    never shorter than two sampling periods of a sampled command."""
+def loop_window(design: Any, spec: Any, duration: float) -> float:
+    """The averaging window (s) from the loop's time scale: ``1 / max |Re p|`` over the poles the design requests
+    (``Design.poles``, 1/s: the placed poles, a sliding law's sliding poles) or, without any, the spec's
+    ``controller.poles``; else ``WINDOW_SHARE`` of the run's ``duration`` (s); never shorter than two sampling
+    periods of a sampled command."""
     window = WINDOW_SHARE * duration
-    poles = getattr(getattr(spec, "controller", None), "poles", None)
-    try:
-        fastest = max(abs(complex(p).real) for p in np.ravel(np.asarray(poles, dtype=complex))) if poles else 0.0
-    except (TypeError, ValueError):
-        fastest = 0.0
-    if fastest > 0:
-        window = 1.0 / fastest
+    fastest = 0.0
+    for poles in (getattr(design, "poles", None), getattr(getattr(spec, "controller", None), "poles", None)):
+        try:
+            fastest = max((abs(complex(p).real) for p in np.ravel(np.asarray(poles, dtype=complex))), default=0.0) \
+                if poles is not None and len(poles) else 0.0
+        except (TypeError, ValueError):
+            fastest = 0.0
+        if fastest > 0:
+            window = 1.0 / fastest
+            break
     sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
     return max(window, 2 * sampling)
 
@@ -242,10 +246,10 @@ def judge(m: Switching, unit: str = "") -> tuple[bool, str]:
     return not faults, words + (": " + " and ".join(faults) if faults else "")
 
 
-def of_run(sim: Any, spec: Any, j: int = 0, window: float | None = None) -> Switching:
-    """How input ``j`` of the run ``sim`` (a ``SimulationResult``) switches, averaged over ``window`` (s; None:
-    :func:`loop_window` of ``spec``), with the spec's ``simulation.sampling_period``."""
+def of_run(design: Any, sim: Any, spec: Any, j: int = 0) -> Switching:
+    """How input ``j`` of the run ``sim`` (a ``SimulationResult``) of ``design`` switches, averaged over
+    :func:`loop_window`, with the spec's ``simulation.sampling_period``."""
     duration = float(sim.time[-1] - sim.time[0]) if len(sim.time) > 1 else 0.0
     sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
-    w = loop_window(spec, duration) if window is None else max(float(window), 2 * sampling)
-    return measure(sim.input_names[j], sim.time, np.asarray(sim.u_command)[:, j], w, sampling)
+    return measure(sim.input_names[j], sim.time, np.asarray(sim.u_command)[:, j],
+                   loop_window(design, spec, duration), sampling)

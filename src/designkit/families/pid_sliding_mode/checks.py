@@ -132,7 +132,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     from designkit.verification.switching import judge, of_run
 
     freq = run.switching_frequency
-    physics = of_run(ctx.simulation, ctx.spec)
+    physics = of_run(design, ctx.simulation, ctx.spec)
     calm, words = judge(physics, "N*m")
     chatter = Check(
         CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not set by the step",

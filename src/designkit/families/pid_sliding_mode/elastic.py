@@ -248,7 +248,7 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     dev = float(np.max(np.abs(x3 - ideal)))
     from designkit.verification.switching import judge, of_run
 
-    physics = of_run(sim, ctx.spec)
+    physics = of_run(design, sim, ctx.spec)
     calm, words = judge(physics)
     return (
         Check(BAND, ok, f"|slm| <= {band:.4g} rad*s", worst, band - worst, "rad*s",

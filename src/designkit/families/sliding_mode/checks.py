@@ -180,7 +180,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
 
         amp = run.amplitude if run.amplitude is not None else 0.0
         sliding = band.passed is True
-        physics = of_run(sim, ctx.spec, 0, 1.0 / c)
+        physics = of_run(design, sim, ctx.spec)
         calm, words = judge(physics, "N*m")
         chatter = Check(
             "chattering", calm if sliding else None, "switching part within the equivalent control, rate not set by "

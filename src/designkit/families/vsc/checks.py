@@ -189,7 +189,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                           "expected": [[z.real, z.imag] for z in want]}, required=False))
     from designkit.verification.switching import judge, of_run
 
-    physics = of_run(ctx.simulation, ctx.spec, 0, 1.0 / max(abs(complex(p).real) for p in req) if req else None)
+    physics = of_run(design, ctx.simulation, ctx.spec)
     calm, words = judge(physics)
     out.append(Check("vsc_chattering", calm, "switching part within the equivalent control, rate not set by the "
                      "step", run.switching_frequency, None, "1/s",

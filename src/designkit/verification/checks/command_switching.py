@@ -39,7 +39,7 @@ def _run(design: Any, ctx: Context) -> tuple:
     from designkit.verification.switching import of_run, warning
 
     sim = ctx.simulation
-    measured = [of_run(sim, ctx.spec, j) for j in range(len(sim.input_names))]
+    measured = [of_run(design, sim, ctx.spec, j) for j in range(len(sim.input_names))]
     warnings = tuple(w for j, m in enumerate(measured) if (w := warning(m, _unit(design, j))) is not None)
     worst = max(measured, key=lambda m: m.rate)
     cert = {"inputs": [m.to_dict() for m in measured],
