@@ -123,3 +123,16 @@ def test_bad_requirement_is_refused_with_its_key(tmp_path, capsys, key, value):
     code = main(["verify", str(path)])
     err = capsys.readouterr().err
     assert code == 2 and f"requirements.{key}" in err
+
+
+def test_a_sampled_switching_law_is_set_by_its_sampling_not_the_step():
+    text = Path("specs/sliding-mode-link.yaml").read_text().replace(
+        "duration: 3.0", "duration: 3.0\n  sampling_period: 0.001")
+    result = dk.run(dk.parse_spec(text))
+    measured = next(c for c in result.checks if c.name == "command_switching").certificate["inputs"][0]
+    u = np.asarray(result.simulation.u_command[:, 0])
+    own = _own_reversals(u)  # a held command changes at most once a sample
+    assert measured["reversals"] == pytest.approx(own, rel=0.02)
+    assert measured["reversal_rate_per_s"] <= 1000.0
+    assert measured["set_by_sampling"] is True and measured["set_by_step"] is False
+    assert any("sampling period (0.001 s)" in w for w in result.warnings)
