@@ -13,7 +13,8 @@
 
 ``pid_sm_run`` (order 127) measures the run (:mod:`~designkit.families.pid_sliding_mode.measure`):
 ``pid_sm_in_band`` (required: after reaching, ``|slm|`` stays in the band), ``pid_sm_precision`` and
-``pid_sm_chattering`` (informational).
+``pid_sm_chattering`` (informational: the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`).
 """
 
 from __future__ import annotations

@@ -17,7 +17,8 @@ with and without the design margin (``certificate["gains_needed"]``).
 (:mod:`~designkit.families.sliding_mode.measure`): ``reaching_time`` (informational), ``sliding_band`` (the
 invariant: after reaching, ``|s|`` stays within the band the step leaves -- required: it is the run's evidence
 that the loop slides), ``sliding_pole`` (the pole fitted on the sliding segment against ``-c``, informational)
-and ``chattering`` (switching frequency, command variation and amplitude against the step, informational).
+and ``chattering`` (informational: the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`, with the switching frequency of ``s`` and the command's variation).
 """
 
 from __future__ import annotations

@@ -13,7 +13,8 @@ what the run shows.
 
 ``vsc_run`` (order 127) measures the run (:mod:`~designkit.families.vsc.measure`): ``vsc_reaching_time``
 (informational), ``vsc_band`` (required: after reaching ``|sigma|`` stays within the hold band),
-``vsc_sliding_poles``, ``vsc_chattering``, ``vsc_equivalent_control`` and ``vsc_offset`` (informational).
+``vsc_sliding_poles``, ``vsc_chattering`` (the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`), ``vsc_equivalent_control`` and ``vsc_offset`` (informational).
 """
 
 from __future__ import annotations
