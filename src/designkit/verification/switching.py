@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["FLOOR", "HYSTERESIS", "STEP_SHARE", "Switching", "loop_window", "measure", "moving_average",
-           "judge", "of_run", "reversals", "warning"]
+           "input_unit", "judge", "judge_run", "of_run", "reversals", "warning"]
 
 HYSTERESIS = 0.5
 """Share of the switching component's RMS a move must exceed to reverse the direction."""
@@ -253,3 +253,22 @@ def of_run(design: Any, sim: Any, spec: Any, j: int = 0) -> Switching:
     sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
     return measure(sim.input_names[j], sim.time, np.asarray(sim.u_command)[:, j],
                    loop_window(design, spec, duration), sampling)
+
+
+def judge_run(design: Any, sim: Any, spec: Any, unit: str = "") -> tuple[bool, str, list[dict[str, Any]]]:
+    """:func:`judge` on every input of the run: ``(every input passes, words, [Switching.to_dict per input])``;
+    the words name the input when there are several and its unit (the plant's, else ``unit``)."""
+    measured = [of_run(design, sim, spec, j) for j in range(len(sim.input_names))]
+    verdicts = [judge(m, input_unit(design, j) or unit) for j, m in enumerate(measured)]
+    several = len(measured) > 1
+    words = "; ".join(f"{m.name}: {w}" if several else w for m, (_, w) in zip(measured, verdicts, strict=True))
+    return all(ok for ok, _ in verdicts), words, [m.to_dict() for m in measured]
+
+
+def input_unit(design: Any, j: int) -> str:
+    """The unit of the design's plant input ``j`` (``plant.inputs[j].unit``; empty when the plant names none)."""
+    inputs = getattr(getattr(design, "plant", None), "inputs", None)
+    try:
+        return str(inputs[j].unit)
+    except (TypeError, IndexError, AttributeError):
+        return ""

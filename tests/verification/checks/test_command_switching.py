@@ -93,7 +93,7 @@ def test_the_family_chattering_check_judges_physics():
     result = dk.run(dk.load_spec("specs/pid-sm-link.yaml"))
     chatter = next(c for c in result.checks if c.name == "pid_sm_chattering")
     assert chatter.passed is False and chatter.required is False
-    sw = chatter.certificate["switching"]
+    (sw,) = chatter.certificate["switching"]
     u = np.asarray(result.simulation.u_command[:, 0])
     relay = next(g.value for g in result.design.gains.entries if g.name == "M")
     # a relay toggling every step: half the median step-to-step change is M, and so is its switching part's RMS

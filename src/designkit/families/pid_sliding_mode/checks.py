@@ -130,11 +130,10 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         f"and ||s/N||₁ × band = {run.deviation_at_band:.4g} rad [informational]",
         {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
          "l1": info.l1}, required=False)
-    from designkit.verification.switching import judge, of_run
+    from designkit.verification.switching import judge_run
 
     freq = run.switching_frequency
-    physics = of_run(design, ctx.simulation, ctx.spec)
-    calm, words = judge(physics, "N*m")
+    calm, words, physics = judge_run(design, ctx.simulation, ctx.spec, "N*m")
     chatter = Check(
         CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not set by the step",
         freq, None, "1/s",
@@ -144,7 +143,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         f"run {run.relay_ptp_tail:.4g} N*m [informational]",
         {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
          run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail,
-         "switching": physics.to_dict()},
+         "switching": physics},
         required=False)
     return band, precision, chatter
 

@@ -246,10 +246,9 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     x3 = np.asarray(sim.state[:, 2], float)
     ideal = np.interp(t, info.ideal_t, info.ideal_x3)
     dev = float(np.max(np.abs(x3 - ideal)))
-    from designkit.verification.switching import judge, of_run
+    from designkit.verification.switching import judge_run
 
-    physics = of_run(design, sim, ctx.spec)
-    calm, words = judge(physics)
+    calm, words, physics = judge_run(design, sim, ctx.spec)
     return (
         Check(BAND, ok, f"|slm| <= {band:.4g} rad*s", worst, band - worst, "rad*s",
               f"the largest |slm| over the run is {worst:.4g} rad*s against the band {band:.4g} rad*s: "
@@ -258,7 +257,7 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
         Check("pid_sm_elastic_chattering", calm, "switching part within the equivalent control, rate not set by "
               "the step", rate, None, "1/s",
               f"{words}; slm changes sign {switches} times ({rate:.4g} per s); total variation of u {tv:.4g} "
-              "[informational]", {"switches": switches, "total_variation_u": tv, "switching": physics.to_dict()},
+              "[informational]", {"switches": switches, "total_variation_u": tv, "switching": physics},
               required=False),
         Check("pid_sm_elastic_motion", True, "reported", dev, None, "rad",
               f"the load stays within {dev:.4g} rad of its sliding motion x3 = k2 x1/(s² + s/τ2 + k2) at the "

@@ -177,12 +177,11 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         chatter = Check("chattering", None, "reported", None, None, "1/s", "no sliding phase to measure "
                         "[informational]", cert, required=False)
     else:
-        from designkit.verification.switching import judge, of_run
+        from designkit.verification.switching import judge_run
 
         amp = run.amplitude if run.amplitude is not None else 0.0
         sliding = band.passed is True
-        physics = of_run(design, sim, ctx.spec)
-        calm, words = judge(physics, "N*m")
+        calm, words, physics = judge_run(design, sim, ctx.spec, "N*m")
         chatter = Check(
             "chattering", calm if sliding else None, "switching part within the equivalent control, rate not set by "
             "the step", run.switching_frequency, None, "1/s",
@@ -194,7 +193,7 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
             f"over the last tenth of the sliding time {run.u_ptp_tail or 0.0:.4g} N*m [informational]",
             {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "step_rate": 1 / run.hold,
              "amplitude": amp, "error_band": amp / c, "total_variation": run.total_variation,
-             "u_peak_to_peak_tail": run.u_ptp_tail, "switching": physics.to_dict()}, required=False)
+             "u_peak_to_peak_tail": run.u_ptp_tail, "switching": physics}, required=False)
     return reach, band, pole, chatter
 
 

@@ -17,11 +17,9 @@ from designkit.verification.suite import CheckRule, Context
 
 
 def _unit(design: Any, j: int) -> str:
-    inputs = getattr(getattr(design, "plant", None), "inputs", None)
-    try:
-        return str(inputs[j].unit)
-    except (TypeError, IndexError, AttributeError):
-        return ""
+    from designkit.verification.switching import input_unit
+
+    return input_unit(design, j)
 
 
 def _bound(name: str, limit: float, measured: list, value: Any, unit: str, what: str) -> Any:
