@@ -136,3 +136,21 @@ def test_a_sampled_switching_law_is_set_by_its_sampling_not_the_step():
     assert measured["reversal_rate_per_s"] <= 1000.0
     assert measured["set_by_sampling"] is True and measured["set_by_step"] is False
     assert any("sampling period (0.001 s)" in w for w in result.warnings)
+
+
+def test_robel_switching_designs_are_warned_and_the_linear_ones_are_not():
+    comparison = dk.run(dk.load_spec("specs/robel.yaml"))
+    seen = {}
+    for result in comparison.results:
+        check = next(c for c in result.checks if c.name == "command_switching")
+        measured = check.certificate["inputs"][0]
+        switching = bool(getattr(result.design.law, "discontinuous", False))
+        seen[switching] = seen.get(switching, 0) + 1
+        u = np.asarray(result.simulation.u_command[:, 0])
+        duration = float(result.simulation.time[-1] - result.simulation.time[0])
+        if switching:
+            assert _own_reversals(u) / duration > 1e3  # own count: thousands of reversals a second
+            assert measured["dominates"] and measured["set_by_step"] and check.warnings
+        else:
+            assert not measured["dominates"] and not measured["set_by_step"] and check.warnings == ()
+    assert seen == {True: 2, False: 2}
