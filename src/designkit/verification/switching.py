@@ -208,10 +208,12 @@ def measure(name: str, t: np.ndarray, u: np.ndarray, window: float, sampling_per
 
 def warning(m: Switching, unit: str = "") -> str | None:
     """The page-1 sentence for an input whose switching part dominates or whose reversal rate the step or the
-    sampling sets (None otherwise)."""
+    sampling sets (None otherwise); the unit as the report writes it (``N*m`` -> ``N·m``)."""
     if not (m.dominates or m.step_set or m.sampling_set) or m.reversals == 0:
         return None
-    u = f" {unit}" if unit else ""
+    from designkit.display.numbers import unit as written
+
+    u = f" {written(unit)}" if unit else ""
     parts = [f"The commanded {m.name} switches {m.rate:.3g} times a second ({m.reversals} reversals in "
              f"{m.duration:.3g} s) with a switching component of RMS {m.switching_rms:.3g}{u} (peak "
              f"{m.switching_peak:.3g}{u}) on an averaged control of RMS {m.averaged_rms:.3g}{u} (averaged over "
