@@ -183,6 +183,14 @@ def loop_window(design: Any, spec: Any, duration: float) -> float:
     return max(window, 2 * sampling)
 
 
+def _rms(x: np.ndarray) -> float:
+    """RMS of ``x``, scaled by its peak first (a diverging record near 1e150 does not overflow its square)."""
+    peak = float(np.max(np.abs(x))) if x.size else 0.0
+    if not np.isfinite(peak) or peak == 0:
+        return peak
+    return peak * float(np.sqrt(np.mean((x / peak) ** 2)))
+
+
 def measure(name: str, t: np.ndarray, u: np.ndarray, window: float, sampling_period: float = 0.0) -> Switching:
     """Measure how the command ``u`` (sampled at ``t``, s) switches (module docstring), averaging over ``window``
     (s); ``sampling_period`` (s, 0: continuous) is the controller's."""
@@ -195,8 +203,7 @@ def measure(name: str, t: np.ndarray, u: np.ndarray, window: float, sampling_per
     step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     avg = moving_average(t, u, window)
     s = u - avg
-    s_rms = float(np.sqrt(np.mean(s ** 2))) if s.size else 0.0
-    a_rms = float(np.sqrt(np.mean(avg ** 2))) if avg.size else 0.0
+    s_rms, a_rms = _rms(s), _rms(avg)
     peak = float(np.max(np.abs(s))) if s.size else 0.0
     span = float(np.ptp(u)) if u.size else 0.0
     count = reversals(u, max(HYSTERESIS * s_rms, FLOOR * span)) if span > 0 else 0
