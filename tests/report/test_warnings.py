@@ -32,3 +32,15 @@ def test_non_physical_inertia_of_the_plant_is_a_warning():
     fixed = dk.run(dk.parse_spec(text.replace("robot: puma560}", "robot: puma560, consistent_inertia: raise}")),
                    simulate=False)
     assert not any("not physically consistent" in w for w in fixed.warnings)
+
+
+def test_a_command_switching_at_the_step_is_a_first_page_warning(tmp_path, capsys):
+    code = main(["synth", "specs/pid-sm-link.yaml", "--out", str(tmp_path), "--json", "--no-studies"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["verified"] is True  # a warning, not part of the verdict
+    (text,) = [w for w in out["warnings"] if "numerical choice" in w]
+    assert "The commanded u switches" in text and "dominates" in text
+    html = (tmp_path / "pid-sm-link" / "report.html").read_text()
+    first = html.index('id="warnings"')
+    assert first < html.index('id="compliance"')
+    assert "depends on a numerical choice" in html[first:first + 6000]

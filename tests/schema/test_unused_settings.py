@@ -136,7 +136,8 @@ def test_a_default_value_written_out_is_not_refused():
 # requirements: each is judged by a check that reads it (CheckRule.reads), or refused
 REQUIREMENT_VALUES = {"overshoot": "5", "settling_time": "2.0", "rise_time": "1.0", "steady_state_error": "0.01",
                       "tracking_error": "0.1", "max_control": "100", "settling_band": "0.05", "gain_margin": "6",
-                      "phase_margin": "40", "modulus_margin": "0.5"}
+                      "phase_margin": "40", "modulus_margin": "0.5",
+                      "max_reversal_rate": "1000", "max_command_variation": "1000"}
 
 
 def _reads(kind: str) -> set[str]:

@@ -247,7 +247,8 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
                                   (TASK, "controller.friction_layer", "controller.friction_layer")],
     **{f"requirements.{k}": [(SERVO, f"requirements.{k}", f"requirements.{k}")] for k in (
         "overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control",
-        "settling_band", "gain_margin", "phase_margin", "modulus_margin")},
+        "settling_band", "gain_margin", "phase_margin", "modulus_margin", "max_reversal_rate",
+        "max_command_variation")},
     **{f"simulation.{k}": [(SERVO, f"simulation.{k}", f"simulation.{k}")] for k in (
         "duration", "step", "initial_position", "dt", "delay", "sampling_period")},
     "simulation.nonlinearity.limit": [(SERVO, "simulation.nonlinearity.limit", "simulation.nonlinearity.limit")],

@@ -65,6 +65,7 @@ def test_full_order_and_json():
     checks = run_checks(spec, design, _linear_sim(design))
     assert [c.name for c in checks] == CORE + ROBUST + MARGINS + ["designed_loop",
         "overshoot", "settling_time", "rise_time", "steady_state_error", "max_control", "command_chatter",
+        "command_switching",
     ]
     assert all(c.passed is True for c in checks), [(c.name, c.detail) for c in checks if not c.passed]
     json.dumps([c.to_dict() for c in checks])  # certificates are JSON-serialisable
@@ -115,7 +116,7 @@ def test_every_check_rule_is_offered_by_some_family():
 
     offered = {c for f in FAMILIES.values() for c in f.check_names}
     universal = {name for name, rule in GENERIC.items() if rule.universal}  # offered for every family
-    assert universal == {"command_chatter", "finite_run"}
+    assert universal == {"command_chatter", "command_switching", "finite_run"}
     assert offered | universal >= set(GENERIC)
 
 

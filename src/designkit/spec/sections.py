@@ -55,7 +55,10 @@ class Requirements(Section):
     fraction of the step, strictly between 0 and 1); and the classical margins of the loop broken at
     every plant input (the ``loop_margins`` check, which they make part of the verdict):
     gain_margin (dB, 0 to 100), phase_margin (deg, 0 to 180), modulus_margin (the smallest
-    ``|1 + L(jw)|``, 0 to 1).
+    ``|1 + L(jw)|``, 0 to 1); and how the command may switch (the ``command_switching`` check,
+    :mod:`designkit.verification.switching`): max_reversal_rate (reversals of every commanded input per
+    second of the run, 1/s, 0 to 1e9), max_command_variation (total variation of every commanded input per
+    second of the run, the input's unit per second, N*m/s or V/s; above 0, at most 1e12).
     """
 
     overshoot: Ranged(0, 1000, "%", base=NonNegativeFinite) | None = None
@@ -68,6 +71,8 @@ class Requirements(Section):
     gain_margin: Ranged(0, 100, "dB", base=NonNegativeFinite) | None = None
     phase_margin: Ranged(0, 180, "deg", base=NonNegativeFinite) | None = None
     modulus_margin: Ranged(0, 1, "", base=NonNegativeFinite) | None = None
+    max_reversal_rate: Ranged(0, 1e9, "1/s", base=NonNegativeFinite) | None = None
+    max_command_variation: Ranged(0, 1e12, "unit/s", low_open=True, base=PositiveFinite) | None = None
 
 
 # ----------------------------------------------------------------------------- nonlinear elements

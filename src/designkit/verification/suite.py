@@ -33,6 +33,10 @@ coupling           120   per-joint ``loops``                     intercoupling l
 designed_loop      125   a linear loop and a run                 the simulated loop is the designed one
 time_domain        130   a simulation and ``requirements``       overshoot, settling, rise, error, peak control
 torque_limits      140   a simulation and ``plant.limits``       commanded torques within the actuator limits
+command_chatter    145   a run of a non-switching law            a command jumping back and forth, and why
+command_switching  146   a run (every law)                       switching vs averaged control, reversal rate
+                                                                 vs the step; ``max_reversal_rate``,
+                                                                 ``max_command_variation``
 box_runs           150   a run and ``plant.uncertainty``         the family's own run at the box's corners and
                                                                  samples: every check passes at each
 ================== ===== ======================================= ==============================================

@@ -143,7 +143,10 @@ def test_chattering_scales_with_the_step(link_result):
         k = m.reach[0]
         assert _sign_changes(s[k:]) == m.switches  # the count, independently
         assert m.switching_frequency <= 1 / r.simulation.settings["dt"]
-        assert check(r, "chattering").passed is True and check(r, "sliding_band").passed is True
+        assert check(r, "sliding_band").passed is True
+        # a chattering that scales with the step is judged as physics: its rate is the step's, not the loop's
+        chatter = check(r, "chattering")
+        assert chatter.passed is False and chatter.required is False and "integration step" in chatter.detail
 
 
 def test_boundary_layer_stops_the_switching_and_leaves_the_layer_error():

@@ -33,9 +33,11 @@ def test_link_example_verifies_with_the_gains_in_the_json(capsys):
     assert sm["measured_pole"] == pytest.approx(-5.0, rel=1e-2)
     assert 0 < sm["reaching_time"] < 1.0 and sm["chattering_amplitude"] <= sm["band_run"] <= sm["band_target"]
     statuses = {c["name"]: c["status"] for c in data["checks"]}
-    assert statuses == {name: "PASS" for name in (
+    assert statuses == {**{name: "PASS" for name in (
         "sliding_existence", "sliding_reaching", "sliding_perturbation", "reaching_time", "sliding_band",
-        "sliding_pole", "chattering", "overshoot", "settling_time", "steady_state_error")}
+        "sliding_pole", "overshoot", "settling_time", "steady_state_error", "command_switching")},
+        "chattering": "FAIL"}  # informational: the relay reverses at a rate the integration step sets
+    assert any("numerical choice" in w for w in data["warnings"])
 
 
 def test_weak_switching_example_fails_and_says_by_how_much(capsys):

@@ -13,7 +13,8 @@
 
 ``pid_sm_run`` (order 127) measures the run (:mod:`~designkit.families.pid_sliding_mode.measure`):
 ``pid_sm_in_band`` (required: after reaching, ``|slm|`` stays in the band), ``pid_sm_precision`` and
-``pid_sm_chattering`` (informational).
+``pid_sm_chattering`` (informational: the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`).
 """
 
 from __future__ import annotations
@@ -129,16 +130,20 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         f"and ||s/N||₁ × band = {run.deviation_at_band:.4g} rad [informational]",
         {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
          "l1": info.l1}, required=False)
+    from designkit.verification.switching import judge_run
+
     freq = run.switching_frequency
+    calm, words, physics = judge_run(design, ctx.simulation, ctx.spec, "N*m")
     chatter = Check(
-        CHATTERING, True if ok else None, "reported", freq, None, "1/s",
-        f"after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
-        f"({0.0 if freq is None else freq:.4g} per s, at most {1 / run.hold:.4g} per s with a {run.hold:.3g} s "
-        f"hold); total variation of u {run.total_variation:.4g} N*m, of the switching part "
-        f"{run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of the run "
-        f"{run.relay_ptp_tail:.4g} N*m [informational]",
+        CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not set by the step",
+        freq, None, "1/s",
+        f"{words}; after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
+        f"({0.0 if freq is None else freq:.4g} per s); total variation of u {run.total_variation:.4g} N*m, of the "
+        f"switching part {run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of the "
+        f"run {run.relay_ptp_tail:.4g} N*m [informational]",
         {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
-         run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail},
+         run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail,
+         "switching": physics},
         required=False)
     return band, precision, chatter
 

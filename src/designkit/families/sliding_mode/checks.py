@@ -17,7 +17,8 @@ with and without the design margin (``certificate["gains_needed"]``).
 (:mod:`~designkit.families.sliding_mode.measure`): ``reaching_time`` (informational), ``sliding_band`` (the
 invariant: after reaching, ``|s|`` stays within the band the step leaves -- required: it is the run's evidence
 that the loop slides), ``sliding_pole`` (the pole fitted on the sliding segment against ``-c``, informational)
-and ``chattering`` (switching frequency, command variation and amplitude against the step, informational).
+and ``chattering`` (informational: the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`, with the switching frequency of ``s`` and the command's variation).
 """
 
 from __future__ import annotations
@@ -176,19 +177,23 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         chatter = Check("chattering", None, "reported", None, None, "1/s", "no sliding phase to measure "
                         "[informational]", cert, required=False)
     else:
+        from designkit.verification.switching import judge_run
+
         amp = run.amplitude if run.amplitude is not None else 0.0
         sliding = band.passed is True
+        calm, words, physics = judge_run(design, sim, ctx.spec, "N*m")
         chatter = Check(
-            "chattering", True if sliding else None, "reported (against the step)", run.switching_frequency, None,
-            "1/s", ("" if sliding else "the run leaves the band, so this is not only chattering: ") +
-            f"after reaching s changes sign {run.switches} times in {run.sliding_time:.4g} s "
-            f"({run.switching_frequency:.4g} per s, at most {1 / run.hold:.4g} per s with a {run.hold:.3g} s hold); "
+            "chattering", calm if sliding else None, "switching part within the equivalent control, rate not set by "
+            "the step", run.switching_frequency, None, "1/s",
+            ("" if sliding else "the run leaves the band, so this is not only chattering: ") +
+            f"{words}; after reaching s changes sign {run.switches} times in {run.sliding_time:.4g} s "
+            f"({run.switching_frequency:.4g} per s); "
             f"chattering amplitude max|s| = {amp:.4g} rad/s (error at most {amp / c:.3g} rad), total variation of u "
             f"{run.total_variation:.4g} N*m ({run.total_variation / run.sliding_time:.4g} N*m/s), u peak-to-peak "
             f"over the last tenth of the sliding time {run.u_ptp_tail or 0.0:.4g} N*m [informational]",
             {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "step_rate": 1 / run.hold,
              "amplitude": amp, "error_band": amp / c, "total_variation": run.total_variation,
-             "u_peak_to_peak_tail": run.u_ptp_tail}, required=False)
+             "u_peak_to_peak_tail": run.u_ptp_tail, "switching": physics}, required=False)
     return reach, band, pole, chatter
 
 

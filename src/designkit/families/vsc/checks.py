@@ -13,7 +13,8 @@ what the run shows.
 
 ``vsc_run`` (order 127) measures the run (:mod:`~designkit.families.vsc.measure`): ``vsc_reaching_time``
 (informational), ``vsc_band`` (required: after reaching ``|sigma|`` stays within the hold band),
-``vsc_sliding_poles``, ``vsc_chattering``, ``vsc_equivalent_control`` and ``vsc_offset`` (informational).
+``vsc_sliding_poles``, ``vsc_chattering`` (the command's switching judged as physics by
+:func:`designkit.verification.switching.judge`), ``vsc_equivalent_control`` and ``vsc_offset`` (informational).
 """
 
 from __future__ import annotations
@@ -187,11 +188,16 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                          f"against {_poles(want)} 1/s{at} ({100 * err:.3g} % off) [informational]",
                          {**cert, "poles": [[z.real, z.imag] for z in got],
                           "expected": [[z.real, z.imag] for z in want]}, required=False))
-    out.append(Check("vsc_chattering", True, "reported", run.switching_frequency, None, "1/s",
-                     f"after reaching sigma changes sign {run.switches} times in {run.sliding_time:.4g} s "
-                     f"({run.switching_frequency or 0:.4g} per s, at most {1 / run.hold:.4g} per s); total variation "
-                     f"of u {run.total_variation:.4g} [informational]",
-                     {"switches": run.switches, "total_variation": run.total_variation}, required=False))
+    from designkit.verification.switching import judge_run
+
+    calm, words, physics = judge_run(design, ctx.simulation, ctx.spec)
+    out.append(Check("vsc_chattering", calm, "switching part within the equivalent control, rate not set by the "
+                     "step", run.switching_frequency, None, "1/s",
+                     f"{words}; after reaching sigma changes sign {run.switches} times in {run.sliding_time:.4g} s "
+                     f"({run.switching_frequency or 0:.4g} per s); total variation of u {run.total_variation:.4g} "
+                     "[informational]",
+                     {"switches": run.switches, "total_variation": run.total_variation,
+                      "switching": physics}, required=False))
     if run.ueq_fraction is not None:
         okf = run.ueq_fraction >= UEQ_FRACTION
         out.append(Check("vsc_equivalent_control", okf, f"u_eq in [min(u+, u-), max(u+, u-)] on at least "

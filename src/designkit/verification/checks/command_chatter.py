@@ -3,7 +3,7 @@
 See :mod:`designkit.verification.chatter` for the criterion and the attribution.  PASS: no input
 chatters.  FAIL (informational): an input chatters; the detail and ``warnings`` say which, how fast and
 how much, and from what.  It is not offered for a switching law (``Law.discontinuous``), which chatters by
-design: its family measures the chattering band against what it designed.
+design: its family judges that switching as physics, and ``command_switching`` measures every law's command.
 """
 
 from __future__ import annotations
