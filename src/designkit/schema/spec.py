@@ -24,6 +24,7 @@ from designkit.spec.plants import DHLink, ElasticJointPlantSpec, LinkPlantSpec, 
 from designkit.spec.sections import (
     AntiWindup,
     DeadZone,
+    Implementation,
     Noise,
     Numerics,
     Perturbation,
@@ -42,10 +43,10 @@ from designkit.spec.sections import (
 from designkit.synthesis.family import SETTINGS
 
 __all__ = [
-    "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "LinkPlantSpec", "Noise", "Numerics",
-    "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory", "Relay",
-    "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Studies", "Trajectory",
-    "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "assembled", "check_conjugates",
+    "AntiWindup", "Controller", "DHLink", "DeadZone", "ElasticJointPlantSpec", "Implementation", "LinkPlantSpec",
+    "Noise", "Numerics", "Perturbation", "PlantSpec", "PoleRequirementsController", "Quantizer", "QuinticTrajectory",
+    "Relay", "Requirements", "RobotPlantSpec", "Saturation", "Simulation", "SineTrajectory", "Spec", "Studies",
+    "Trajectory", "TrapezoidalTrajectory", "Uncertainty", "ViaPointsTrajectory", "assembled", "check_conjugates",
     "controller_models", "given_settings",
 ]
 
@@ -71,6 +72,7 @@ class Spec(Section):
     controller: Controller
     requirements: Requirements | None = None
     simulation: Simulation = Simulation()
+    implementation: Implementation | None = None
     numerics: Numerics = Numerics()
     studies: Studies | None = None
 

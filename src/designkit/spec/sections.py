@@ -22,10 +22,10 @@ from designkit.spec.fields import NonNegativeFinite, PositiveFinite, Section
 from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
 
 __all__ = [
-    "AntiWindup", "CircleTrajectory", "DeadZone", "JOINT_TRAJECTORIES", "LineTrajectory", "MultisineTrajectory",
-    "Noise", "Nonlinearity", "Numerics", "Perturbation", "PlantChange", "PrbsReference", "Quantizer",
-    "QuinticTrajectory", "Relay", "Requirements", "STEP_REFERENCES", "Saturation", "Simulation", "SineTrajectory",
-    "SquareReference", "TASK_PATHS", "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
+    "Actuator", "AntiWindup", "CircleTrajectory", "DeadZone", "Implementation", "JOINT_TRAJECTORIES", "LineTrajectory",
+    "MultisineTrajectory", "Noise", "Nonlinearity", "Numerics", "Perturbation", "PlantChange", "PrbsReference",
+    "Quantizer", "QuinticTrajectory", "Relay", "Requirements", "STEP_REFERENCES", "Saturation", "Simulation",
+    "SineTrajectory", "SquareReference", "TASK_PATHS", "Trajectory", "TrapezoidalTrajectory", "ViaPointsTrajectory",
 ]
 
 
@@ -333,6 +333,33 @@ class Simulation(Section):
             return None
         values = value if isinstance(value, list | tuple) else [value]
         return key if all(float(v) == 0.0 for v in values) else None
+
+
+class Actuator(Section):
+    """The actuator between the commanded and the applied input, on every input: a saturation at ``limit``
+    (the input's unit, N*m or V, per input; 1e-6 to 1e6) followed by a first-order lag of ``bandwidth``
+    (its corner frequency, rad/s, per input; 1e-3 to 1e9): ``u_a' = bandwidth (clip(u, -limit, limit) - u_a)``.
+    Either may be left out (no saturation, or no lag)."""
+
+    limit: RangedPerJoint(*_TORQUE) | None = None
+    bandwidth: RangedPerJoint(1e-3, 1e9, "rad/s") | None = None
+
+
+class Implementation(Section):
+    """The controller as it will run: what the verdict is on when it is given.
+
+    sampling_period (s, 1e-6 to 1e3): the law computed once per period and its command held in between;
+    delay (s, 0 or 1e-6 to 1e3): the computation delay between the sample and the command reaching the
+    actuator; quantization (the measured signals' resolution, in each state's unit, one for every measured
+    state or one per state; 1e-12 to 100): ``y = step round(x / step)``; actuator: a saturation and a
+    first-order lag on each input (:class:`Actuator`). Each must be shorter than the run; a sampling period
+    and a delay are bounded by the run's duration when the simulation is built.
+    """
+
+    sampling_period: Ranged(*_HOLD, base=PositiveFinite) | None = None
+    delay: Ranged(*_HOLD, zero=True, base=NonNegativeFinite) = 0.0
+    quantization: RangedPerJoint(1e-12, 100, "state units") | None = None
+    actuator: Actuator | None = None
 
 
 class Numerics(Section):
