@@ -112,6 +112,20 @@ def test_a_layer_removes_the_chatter_of_the_joint_held_still():
     assert 0 < err_smooth[0] < FC[0] / (m11 * 100.0)
 
 
+def test_a_chattering_input_is_warned_of_once(monkeypatch):
+    """command_switching leaves to command_chatter (which names the source) the inputs that check warns of: with
+    every input made to look switching-dominated, only the inputs that do not chatter are warned of by it."""
+    import designkit.verification.switching as switching
+
+    monkeypatch.setattr(switching, "warning", lambda m, unit: f"planted: {m.name} switches")
+    exact = run(_spec(0.0))
+    chatter = next(c for c in exact.checks if c.name == "command_chatter")
+    warned = {w.split()[1] for w in next(c for c in exact.checks if c.name == "command_switching").warnings}
+    chattering = {i["input"] for i in chatter.certificate["inputs"] if i["chatters"]}
+    calm = {i["input"] for i in chatter.certificate["inputs"] if not i["chatters"]}
+    assert chattering and warned == calm
+
+
 @pytest.mark.parametrize(("value", "message"), [
     ("-0.1", "controller.friction_layer: "),
     ("1e-9", "controller.friction_layer: "),

@@ -3,7 +3,9 @@
 See :mod:`designkit.verification.switching` for the measurements.  Without a requirement the check is
 informational (PASS): its certificate holds each input's switching amplitude against its averaged control, its
 reversal rate against the integration step and the sampling rate, and its total variation; ``warnings`` (page 1
-and ``--json``) say when the switching part dominates or the step (or the sampling) sets the rate.  With
+and ``--json``) say when the switching part dominates or the step (or the sampling) sets the rate (an input of a
+law that is not a switching law whose chattering ``command_chatter`` already warns of, with its source, is not
+warned of twice).  With
 ``requirements.max_reversal_rate`` (1/s) or ``requirements.max_command_variation`` (the input's unit per second)
 it returns the checks ``max_reversal_rate`` and ``max_command_variation``, part of the verdict: the largest value
 over the inputs within the bound.
@@ -32,13 +34,32 @@ def _bound(name: str, limit: float, measured: list, value: Any, unit: str, what:
                  {"inputs": [m.to_dict() for m in measured]})
 
 
+def _told_by_chatter(design: Any, ctx: Context) -> set[int]:
+    """The inputs whose chattering the ``command_chatter`` check already warns of, with its source: that check runs
+    on a law that is not a switching law, and one warning per input is enough."""
+    law = ctx.law if ctx.law is not None else design.law
+    if getattr(law, "discontinuous", False):
+        return set()
+    from designkit.verification.chatter import input_chatter
+
+    sim = ctx.simulation
+    told = set()
+    for j, name in enumerate(sim.input_names):
+        speed = sim.state[:, sim.velocities[j]] if j < len(sim.velocities) else None
+        if input_chatter(name, sim.time, sim.u_command[:, j], speed, sim.reference).chatters:
+            told.add(j)
+    return told
+
+
 def _run(design: Any, ctx: Context) -> tuple:
     from designkit.verification.check import Check
     from designkit.verification.switching import of_run, warning
 
     sim = ctx.simulation
     measured = [of_run(design, sim, ctx.spec, j) for j in range(len(sim.input_names))]
-    warnings = tuple(w for j, m in enumerate(measured) if (w := warning(m, _unit(design, j))) is not None)
+    told = _told_by_chatter(design, ctx)
+    warnings = tuple(w for j, m in enumerate(measured)
+                     if j not in told and (w := warning(m, _unit(design, j))) is not None)
     worst = max(measured, key=lambda m: m.rate)
     cert = {"inputs": [m.to_dict() for m in measured],
             "criterion": "switching part dominates: RMS of u - u_avg above the RMS of u_avg (u_avg the moving "
