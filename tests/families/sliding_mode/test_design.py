@@ -58,6 +58,15 @@ def test_a_given_gain_is_kept_and_the_others_designed():
     assert lp.fixed == ("M", "alpha")
 
 
+def test_a_gain_fixed_at_the_smallest_normal_number_is_kept_without_an_underflow():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        lp = design_gains(C, BOX, XI, MARGIN, E_MAX, fixed={"beta": 2.3e-308})
+    assert lp.beta == pytest.approx(2.3e-308, rel=1e-6, abs=0) and "beta" in lp.fixed
+
+
 def test_torque_rows_bound_the_command_or_are_dropped():
     kept = design_gains(C, BOX, XI, MARGIN, E_MAX, u_max=20.0)
     assert kept.torque_rows == "kept"

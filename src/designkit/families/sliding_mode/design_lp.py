@@ -116,6 +116,11 @@ def _margin_rows(c: float, box: Box, xi_bar: float, m: float, fixed: Mapping[str
     return G, h
 
 
+_TINY = 1e-100
+"""A bound below which a gain is not rescaled by it: a gain fixed at 1e-308 would scale its rows to numbers whose
+squares underflow (and the row norms to 0)."""
+
+
 def _solve(G: list, h: list, w: np.ndarray, solver: str) -> tuple[np.ndarray | None, str]:
     """The LP in scaled variables ``x_j = scale_j y_j`` (``scale_j`` the largest bound a single-gain row puts on
     gain ``j``) with unit-norm rows, so that the solver's tolerance is relative to every gain (``beta`` can be
@@ -127,7 +132,7 @@ def _solve(G: list, h: list, w: np.ndarray, solver: str) -> tuple[np.ndarray | N
     for j in range(G.shape[1]):
         alone = (G[:, j] != 0) & (np.count_nonzero(G, axis=1) == 1)
         bounds = np.abs(h[alone] / G[alone, j])
-        if bounds.size and bounds.max() > 0:
+        if bounds.size and bounds.max() > _TINY:
             scale[j] = bounds.max()
     Gs = G * scale
     norms = np.linalg.norm(Gs, axis=1)
