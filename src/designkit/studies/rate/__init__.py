@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from pydantic import Field, field_validator
+from pydantic import Field
 
 from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection
@@ -46,14 +46,6 @@ class RateSettings(Section):
     rates: list[Ranged(1e-3, 1e6, "Hz", base=PositiveFinite)] | None = Field(default=None, min_length=1,
                                                                              max_length=MAX_RATES)
 
-    @field_validator("rates")
-    @classmethod
-    def _distinct(cls, v: list[float] | None) -> list[float] | None:
-        for i, r in enumerate(v or ()):
-            if any(abs(r - s) <= 1e-12 * r for s in (v or ())[:i]):
-                raise ValueError(f"[{i}]: {r:g} Hz is listed twice")
-        return v
-
 
 def _duration(spec: Any) -> tuple[float, str]:
     """The run's duration (s) and where it comes from: ``simulation.duration``, else the default rule estimated from
@@ -66,12 +58,14 @@ def _duration(spec: Any) -> tuple[float, str]:
 
 
 def _validate(settings: RateSettings, family: Any, spec: Any) -> None:
-    """Each rate's period shorter than the run (a family that does not switch takes the settings and is not
-    studied: a comparison gives one ``studies`` section to all its controllers)."""
+    """Each rate given once, its period shorter than the run (a family that does not switch takes the settings and
+    is not studied: a comparison gives one ``studies`` section to all its controllers)."""
     if not settings.rates:
         return
     duration, source = _duration(spec)
     for i, r in enumerate(settings.rates):
+        if any(abs(r - s) <= 1e-12 * r for s in settings.rates[:i]):
+            raise ValueError(f"rates[{i}]: {r:g} Hz is listed twice")
         if 1.0 / r >= duration:
             raise ValueError(f"rates[{i}]: {r:g} Hz samples every {1.0 / r:.4g} s, not shorter than the run "
                              f"({source}: {duration:.4g} s); give a rate above {1.0 / duration:.4g} Hz")
