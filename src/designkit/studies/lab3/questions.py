@@ -291,8 +291,8 @@ def reliability_question(switching: tuple[Member, ...], rates: dict[str, Any], e
         diverged = [_hz(r.value) for r in rows if r.outcome == "diverged"]
         sentences.append(
             f"{m.label} ({m.controller}): {verdict}. Across the rates its steady error (largest |x − xD| over the last "
-            f"tenth of the run) goes from {_from_to(rows, 'steady_error', eu)}, the RMS of its command's switching "
-            f"component from {_from_to(rows, 'chatter_rms', cu)}, its reversals per second from "
+            f"tenth of the reference's last plateau) goes from {_from_to(rows, 'steady_error', eu)}, the RMS of its "
+            f"command's switching component from {_from_to(rows, 'chatter_rms', cu)}, its reversals per second from "
             f"{_from_to(rows, 'reversal_rate', '1/s')}, its RMS command from {_from_to(rows, 'command_rms', cu)}; "
             + (f"it diverges at {', '.join(diverged)}." if diverged else "no run diverges.")
             + (f" Its rate study was reduced: {study.reduced}." if study.reduced else ""))

@@ -79,7 +79,7 @@ def rate_figure(rows: list[Any], eu: str, cu: str, filename: str = "fig-rate-stu
         drawn.append(f"top: the {what} of the command's switching component (the command minus its moving average "
                      "over the loop's time scale)")
     if "steady-error" in keys:
-        drawn.append("bottom: the largest |x − xD| over the last tenth of the run")
+        drawn.append("bottom: the largest |x − xD| over the last tenth of the reference's last plateau")
     marks = []
     if "verified" in keys:
         marks.append("a filled marker where every required check passes")

@@ -1,8 +1,9 @@
 """What the rate study measures on one run of a switching law: the same numbers at every rate, from the run's record.
 
 * **steady error** (``steady_error``, the reference's unit): the largest ``|x - xD|`` over the last
-  :data:`STEADY_SHARE` of the run, the largest over the tracked coordinates -- the band the error stays in at the
-  end, the limit cycle a held relay leaves included;
+  :data:`STEADY_SHARE` of the reference's last plateau (:func:`plateau`: the whole run for a step, the last
+  completed half period of a square wave, the whole run for a reference still moving at the end), the largest over
+  the tracked coordinates -- the band the error stays in at the end, the limit cycle a held relay leaves included;
 * **switching component** (``chatter_rms``, ``chatter_peak``, the command's unit) and **reversal rate**
   (``reversal_rate``, 1/s): :func:`designkit.verification.switching.measure` of each input's command, averaged over
   the loop's window (:func:`~designkit.verification.switching.loop_window`, never shorter than two sampling periods
@@ -23,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["KEYS", "STEADY_SHARE", "measure_run", "units_of"]
+__all__ = ["KEYS", "STEADY_SHARE", "measure_run", "plateau", "units_of"]
 
 STEADY_SHARE = 0.1
 """Share of the run, at its end, over which the steady error is taken."""
@@ -42,9 +43,28 @@ def units_of(run: Any) -> tuple[str, str]:
     return (coords.pop() if len(coords) == 1 else ""), (inputs.pop() if len(inputs) == 1 else "")
 
 
-def _steady(t: np.ndarray, e: np.ndarray) -> float:
-    last = t >= t[-1] - STEADY_SHARE * (t[-1] - t[0])
-    tail = np.abs(e[last])
+PLATEAU_MIN = 10
+"""Fewest samples a stretch of constant reference holds to be a plateau (a jump on the run's very last samples
+leaves a shorter one: the plateau before it is taken)."""
+
+
+def plateau(t: np.ndarray, xd: np.ndarray) -> tuple[int, int]:
+    """``(first, end)`` sample indices of the reference's last plateau: the last stretch of ``xd`` (one column per
+    coordinate) held constant over at least :data:`PLATEAU_MIN` samples -- the one before a jump on the run's last
+    samples --, or the whole run for a reference that moves to the end (or never moves)."""
+    n = t.size
+    starts = np.flatnonzero(np.any(np.diff(xd, axis=0) != 0, axis=1)) + 1
+    bounds = [0, *starts.tolist(), n]
+    for k in (len(bounds) - 2, len(bounds) - 3):
+        if k >= 0 and bounds[k + 1] - bounds[k] >= PLATEAU_MIN:
+            return bounds[k], bounds[k + 1]
+    return 0, n
+
+
+def _steady(t: np.ndarray, e: np.ndarray, xd: np.ndarray) -> float:
+    first, end = plateau(t, xd)
+    tt, ee = t[first:end], e[first:end]
+    tail = np.abs(ee[tt >= tt[-1] - STEADY_SHARE * (tt[-1] - tt[0])])
     return float(np.max(tail)) if np.all(np.isfinite(tail)) else math.inf
 
 
@@ -63,6 +83,7 @@ def measure_run(run: Any) -> dict[str, float]:
     t = np.asarray(sim.time, dtype=float)
     e = np.asarray(sim.tracking_errors, dtype=float).reshape(t.size, -1)
     u = np.asarray(sim.u_command, dtype=float).reshape(t.size, -1)
+    xd = np.asarray(sim.desired, dtype=float).reshape(t.size, -1)
     settings = getattr(sim, "settings", {}) or {}
     period = float(settings.get("sampling_period") or 0.0)
     dt = float(settings.get("dt") or (t[1] - t[0]))
@@ -70,7 +91,7 @@ def measure_run(run: Any) -> dict[str, float]:
     names = tuple(getattr(sim, "input_names", ()) or ()) or tuple(f"u{j + 1}" for j in range(u.shape[1]))
     switching = [measure(names[j], t, u[:, j], window, period) for j in range(u.shape[1])]
     return {
-        "steady_error": _steady(t, e),
+        "steady_error": _steady(t, e, xd),
         "chatter_rms": max(m.switching_rms for m in switching),
         "chatter_peak": max(m.switching_peak for m in switching),
         "reversal_rate": max(m.rate for m in switching),

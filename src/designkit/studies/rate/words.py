@@ -83,8 +83,8 @@ def summary(rows: list[Row], eu: str, cu: str) -> tuple[str, ...]:
         out.append("Diverged: " + "; ".join(f"{rate_text(r.value)} ({r.detail})" for r in diverged) + ".")
     else:
         out.append("No run diverged.")
-    out.append(f"The steady error (the largest |x − xD| over the last tenth of the run) goes from "
-               f"{_span(rows, 'steady_error', eu)}; the command's switching component has an RMS from "
+    out.append(f"The steady error (the largest |x − xD| over the last tenth of the reference's last plateau) goes "
+               f"from {_span(rows, 'steady_error', eu)}; the command's switching component has an RMS from "
                f"{_span(rows, 'chatter_rms', cu)} (peak {_span(rows, 'chatter_peak', cu)}); the reversals per second "
                f"go from {_span(rows, 'reversal_rate', '1/s')}; the control effort (RMS of u over the run) goes from "
                f"{_span(rows, 'command_rms', cu)}.")
