@@ -72,7 +72,7 @@ def test_the_row_is_run_with_the_replaced_step(tmp_path):
     done = STUDIES["rate"].run(StudyContext(result, family("sliding_mode"), RateSettings(rates=[1000.0]), 15.0))
     (row,) = done.entries[0].rows
     assert row.metrics["dt"] == pytest.approx(1e-3 / 34, rel=1e-12)  # 33.3 steps of 3e-5 s: 34 of 2.94e-5 s
-    assert "replaced by 2.941e-05 s (34 steps a period)" in done.section.questions[0].sentences[0]
+    assert "replaced by 2.941 × 10⁻⁵ s (34 steps a period)" in done.section.questions[0].sentences[0]
 
 
 def test_the_last_plateau_of_a_reference():

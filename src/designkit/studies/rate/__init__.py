@@ -28,6 +28,7 @@ from designkit.display.numbers import fmt_number
 from designkit.display.section import Question, ReportSection
 from designkit.spec.fields import PositiveFinite, Section
 from designkit.spec.ranges import Ranged
+from designkit.studies.core.members import amount
 from designkit.studies.core.study import Entry, Row, Study, StudyContext, StudyResult
 from designkit.studies.rate.ladder import DEFAULT_RATES, own_rate, rung_changes, sampling_key
 from designkit.studies.rate.words import holding, rate_text, row_sentences, summary, table
@@ -175,7 +176,7 @@ def _run(ctx: StudyContext) -> StudyResult:
         reduced_parts.append(f"{', '.join(rate_text(r.rate) for r in stopped)} not run: {budget.overrun_words()}")
     reduced = "; ".join(reduced_parts)
     notes = [r.dt_note for r in kept if r.dt_note]
-    dts = sorted({fmt_number(r.metrics.get("dt"), 4) for r in rows if r.metrics.get("dt")})
+    dts = [amount(v, "s", 4) for v in sorted({round(r.metrics["dt"], 15) for r in rows if r.metrics.get("dt")})]
     step = (("; ".join(f"at {rate_text(r.rate)}, {r.dt_note}" for r in kept if r.dt_note) + "; elsewhere the spec's "
              "step, which divides the period") if notes else
             "the spec's simulation.dt, which divides every period" if result.loaded.spec.simulation.dt is not None
@@ -183,7 +184,7 @@ def _run(ctx: StudyContext) -> StudyResult:
                  "sampling period")
     how = (f"{len(rows)} runs of the spec with its command computed once a sampling period and held in between "
            f"({key} set to 1/rate), each through the family's own run and judged by every check it offers. The "
-           f"integration step simulation.dt: {step} (measured: {', '.join(dts) or '—'} s). The spec's own run is "
+           f"integration step simulation.dt: {step} (measured: {', '.join(dts) or '—'}). The spec's own run is "
            f"{own_words} ({rate_text(own)}; the row's factor is the rate over that): "
            f"{outcome_words(*outcome_of(result))}.")
     questions = (

@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from designkit.studies.core.members import amount
+
 __all__ = ["DEFAULT_RATES", "SAMPLING_KEYS", "Rung", "divides", "own_rate", "rung_changes", "sampling_key"]
 
 DEFAULT_RATES = (20_000.0, 10_000.0, 5_000.0, 2_000.0, 1_000.0, 500.0)
@@ -66,9 +68,9 @@ def own_rate(result: Any) -> tuple[float, str]:
     settings = getattr(result.simulation, "settings", {}) or {}
     period = float(settings.get("sampling_period") or 0.0)
     if period > 0:
-        return 1.0 / period, f"sampled every {period:.4g} s"
+        return 1.0 / period, f"sampled every {amount(period, 's', 4)}"
     dt = float(settings.get("dt") or (result.simulation.time[1] - result.simulation.time[0]))
-    return 1.0 / dt, f"held over each integration step of {dt:.4g} s"
+    return 1.0 / dt, f"held over each integration step of {amount(dt, 's', 4)}"
 
 
 def rung_changes(result: Any, key: str, rate: float) -> Rung:
@@ -82,6 +84,6 @@ def rung_changes(result: Any, key: str, rate: float) -> Rung:
         steps = math.ceil(period / float(dt) * (1 - 1e-12))
         new = period / steps
         changes.append(("simulation.dt", new))
-        note = (f"the spec's simulation.dt = {float(dt):.4g} s does not divide the period {period:.4g} s: replaced by "
-                f"{new:.4g} s ({steps} steps a period)")
+        note = (f"the spec's simulation.dt = {amount(float(dt), 's', 4)} does not divide the period "
+                f"{amount(period, 's', 4)}: replaced by {amount(new, 's', 4)} ({steps} steps a period)")
     return Rung(float(rate), period, tuple(changes), note)
