@@ -19,6 +19,10 @@ A spec's ``studies`` section::
 
 is read by :func:`validate` before anything is run: an unknown study, a knob the family does not declare, a value
 outside the knob's declared range, or a budget too small for one variant is refused with its key path.
+
+A comparison study cites a member's own study with :func:`study_of` (through
+:meth:`~designkit.studies.core.study.StudyContext.study`): it is run once for that member and kept, and the member's
+own studies (:func:`run_studies`, its own report) return it rather than running it again.
 """
 
 from __future__ import annotations
