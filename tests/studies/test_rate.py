@@ -139,8 +139,15 @@ def test_what_the_physics_guarantees_at_every_rate(link):
 
 
 def test_a_tiny_budget_leaves_rates_out_and_says_so(link):
+    from designkit.runner.variants import changed_spec
+    from designkit.studies.rate import rung_cost
+
     rates = [20_000.0, 5_000.0, 1_000.0, 500.0]
-    done = _study(link, rates, budget=0.6)  # fits two runs at the estimate's floor of 0.25 s
+    cost = {r: rung_cost(changed_spec(link.loaded, [("simulation.sampling_period", 1 / r)]).spec, None, 1 / r)
+            for r in rates}
+    assert cost[20_000.0] > cost[500.0] >= 0.25  # a shorter period, more steps; never below the variant's floor
+    budget = cost[20_000.0] + cost[500.0] + 0.5 * min(cost.values())  # the two ends and not a third
+    done = _study(link, rates, budget=budget)
     rows = done.entries[0].rows
     assert sorted(r.value for r in rows) == [500.0, 20_000.0]  # the ends first
     assert done.runs == 2

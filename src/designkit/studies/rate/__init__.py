@@ -13,8 +13,8 @@ The study states the lowest rate at which the verdict still holds (every rate fr
 :attr:`~designkit.studies.core.study.Entry.recommended`), and says only what the runs showed: no trend is assumed.
 
 The rates are run ends first, then the middle (so a ladder cut by the budget still spans it); each rung's cost is
-estimated from its own spec (:func:`~designkit.studies.core.budget.variant_estimate`), and a rung that does not fit
-the study's budget is left out and named.
+estimated from its own spec (:func:`rung_cost`: the variant's estimate, its simulations at a step no longer than
+the sampling period), and a rung that does not fit the study's budget is left out and named.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from designkit.studies.core.study import Entry, Row, Study, StudyContext, StudyR
 from designkit.studies.rate.ladder import DEFAULT_RATES, own_rate, rung_changes, sampling_key
 from designkit.studies.rate.words import holding, rate_text, row_sentences, summary, table
 
-__all__ = ["MAX_RATES", "STUDY", "TITLE", "RateSettings"]
+__all__ = ["MAX_RATES", "STUDY", "TITLE", "RateSettings", "rung_cost"]
 
 TITLE = "Sampling rate of the switching law"
 MAX_RATES = 12
@@ -117,18 +117,34 @@ def _row(result: Any, rung: Any, factor: float) -> Row:
     return dataclasses.replace(row, metrics=made.get("metrics", {}))
 
 
+def rung_cost(spec: Any, base_dir: Any, period: float) -> float:
+    """Seconds a rung is estimated to cost: the variant's estimate (:func:`~designkit.studies.core.budget.
+    variant_estimate`), its simulations scaled up by ``dt / period`` when the sampling ``period`` (s) is shorter than
+    the step the estimate assumes (``dt``, :func:`designkit.schema.budget.steps_of`): the simulator's step divides the
+    period, so it is at most the period."""
+    from designkit.schema.budget import estimate, steps_of
+    from designkit.studies.core.budget import variant_estimate
+
+    one = variant_estimate(spec, base_dir)
+    dt = steps_of(spec).dt
+    if period < dt:
+        sims = sum(t.seconds for t in estimate(spec, base_dir).terms if t.what == "simulations")
+        one += sims * (dt / period - 1.0)
+    return one
+
+
 def _plan(ctx: StudyContext, rungs: list[Any]) -> tuple[list[Any], list[Any], Any]:
     """The rungs the budget fits (ends and middles first), the ones it leaves out, and the budget."""
     from designkit.errors import DesignkitError
     from designkit.runner.run import base_dir
     from designkit.runner.variants import changed_spec
-    from designkit.studies.core.budget import VARIANT_FLOOR, Budget, variant_estimate
+    from designkit.studies.core.budget import VARIANT_FLOOR, Budget
 
     loaded = ctx.result.loaded
     costs = []
     for rung in rungs:
         try:
-            costs.append(variant_estimate(changed_spec(loaded, rung.changes).spec, base_dir(loaded)))
+            costs.append(rung_cost(changed_spec(loaded, rung.changes).spec, base_dir(loaded), rung.period))
         except DesignkitError:  # the loader refuses the rung: it runs to a refused row, at the floor's cost
             costs.append(VARIANT_FLOOR)
     budget = Budget(ctx.budget, max(costs) if costs else ctx.budget)
