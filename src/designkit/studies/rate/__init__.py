@@ -30,7 +30,7 @@ from designkit.spec.fields import PositiveFinite, Section
 from designkit.spec.ranges import Ranged
 from designkit.studies.core.members import amount
 from designkit.studies.core.study import Entry, Row, Study, StudyContext, StudyResult
-from designkit.studies.rate.ladder import DEFAULT_RATES, own_rate, rung_changes, sampling_key
+from designkit.studies.rate.ladder import DEFAULT_RATES, divides, own_rate, rung_changes, sampling_key
 from designkit.studies.rate.words import holding, rate_text, row_sentences, summary, table
 
 __all__ = ["MAX_RATES", "STUDY", "TITLE", "RateSettings", "rung_cost"]
@@ -186,7 +186,7 @@ def _run(ctx: StudyContext) -> StudyResult:
     if left:
         reduced_parts.append(f"{', '.join(rate_text(r.rate) for r, _ in left)} not run: the studies' budget of "
                              f"{fmt_number(ctx.budget, 3)} s fits {len(kept)} of the {len(rungs)} rates at their "
-                             f"estimated cost (about {fmt_number(max(c for _, c in left), 2)} s each for those left "
+                             f"estimated cost (up to {fmt_number(max(c for _, c in left), 2)} s each for those left "
                              "out; raise studies.budget to run them)")
     if stopped:
         reduced_parts.append(f"{', '.join(rate_text(r.rate) for r in stopped)} not run: {budget.overrun_words()}")
@@ -203,6 +203,18 @@ def _run(ctx: StudyContext) -> StudyResult:
            f"integration step simulation.dt: {step} (measured: {', '.join(dts) or '—'}). The spec's own run is "
            f"{own_words} ({rate_text(own)}; the row's factor is the rate over that): "
            f"{outcome_words(*outcome_of(result))}.")
+    clocks = []
+    for r in rows:
+        period, dt = r.metrics.get("sampling_period"), r.metrics.get("dt")
+        if period is None or r.outcome in ("refused", "not run"):
+            continue
+        if abs(period - 1.0 / r.value) > 1e-9 / r.value:
+            clocks.append(f"at {rate_text(r.value)} the run's command was held over {amount(period, 's', 4)}, not "
+                          f"the {amount(1.0 / r.value, 's', 4)} asked: {key} does not set the period of this run")
+        elif dt and not divides(dt, period):
+            clocks.append(f"at {rate_text(r.value)} the run's step {amount(dt, 's', 4)} does not divide the period")
+    if clocks:
+        how += " Beware: " + "; ".join(clocks) + "."
     questions = (
         Question("At which sampling rates does the switching law keep its verdict, and what does the rate do to its "
                  "precision, chattering and effort?", (how, *summary(rows, eu, cu)), (table(rows, eu, cu),)),
