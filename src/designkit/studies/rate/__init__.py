@@ -198,19 +198,20 @@ def _run(ctx: StudyContext) -> StudyResult:
             "the spec's simulation.dt, which divides every period" if result.loaded.spec.simulation.dt is not None
             else "left to the simulator's default, which takes the largest step not above its rule that divides the "
                  "sampling period")
-    how = (f"{len(rows)} runs of the spec with its command computed once a sampling period and held in between "
-           f"({key} set to 1/rate), each through the family's own run and judged by every check it offers. The "
-           f"integration step simulation.dt: {step} (measured: {', '.join(dts) or '—'}). The spec's own run is "
-           f"{own_words} ({rate_text(own)}; the row's factor is the rate over that): "
-           f"{outcome_words(*outcome_of(result))}.")
+    how = (f"{len(rows)} run{'s' if len(rows) != 1 else ''} of the spec with its command computed once a sampling "
+           f"period and held in between ({key} set to 1/rate), each through the family's own run and judged by "
+           f"every check it offers. The integration step simulation.dt: {step} (measured: "
+           f"{', '.join(dts) or '—'}). The spec's own run is {own_words} ({rate_text(own)}; the row's factor is the "
+           f"rate over that): {outcome_words(*outcome_of(result))}.")
     clocks = []
     for r in rows:
         period, dt = r.metrics.get("sampling_period"), r.metrics.get("dt")
         if period is None or r.outcome in ("refused", "not run"):
             continue
         if abs(period - 1.0 / r.value) > 1e-9 / r.value:
-            clocks.append(f"at {rate_text(r.value)} the run's command was held over {amount(period, 's', 4)}, not "
-                          f"the {amount(1.0 / r.value, 's', 4)} asked: {key} does not set the period of this run")
+            held = f"held over {amount(period, 's', 4)}" if period > 0 else "not sampled"
+            clocks.append(f"at {rate_text(r.value)} the run's command was {held}, not held over the "
+                          f"{amount(1.0 / r.value, 's', 4)} asked: {key} does not set the period of this run")
         elif dt and not divides(dt, period):
             clocks.append(f"at {rate_text(r.value)} the run's step {amount(dt, 's', 4)} does not divide the period")
     if clocks:
