@@ -259,6 +259,8 @@ def _from_to(rows: list[Any], key: str, unit_text: str) -> str:
         return _count(v) if unit_text == "1/s" else amount(v, unit_text)
 
     first, last = pts[0], pts[-1]
+    if len(pts) == 1:
+        return f"{text(first[1])} at {_hz(first[0])}"
     return f"{text(first[1])} at {_hz(first[0])} to {text(last[1])} at {_hz(last[0])}"
 
 
@@ -279,10 +281,10 @@ def reliability_question(switching: tuple[Member, ...], rates: dict[str, Any], e
         rows = sorted(entry.rows, key=lambda r: -float(r.value))
         hold = entry.recommended
         if hold is None:
-            verdict = (f"its verdict holds at none of the {len(rows)} rates run, from {_hz(rows[0].value)} down to "
+            verdict = (f"its verdict holds at none of the {len(rows)} rate{'s' if len(rows) != 1 else ''} run, from {_hz(rows[0].value)} down to "
                        f"{_hz(rows[-1].value)} (at {_hz(rows[0].value)}: {_outcome(rows[0])})")
         elif hold.value == float(rows[-1].value):
-            verdict = (f"its verdict holds at every one of the {len(rows)} rates run, from {_hz(hold.high)} down to "
+            verdict = (f"its verdict holds at every one of the {len(rows)} rate{'s' if len(rows) != 1 else ''} run, from {_hz(hold.high)} down to "
                        f"{_hz(hold.value)}")
         else:
             below = next(r for r in rows if float(r.value) < hold.value)
@@ -290,10 +292,10 @@ def reliability_question(switching: tuple[Member, ...], rates: dict[str, Any], e
                        f"{_hz(hold.high)} down to it passes); at {_hz(below.value)}: {_outcome(below)}")
         diverged = [_hz(r.value) for r in rows if r.outcome == "diverged"]
         sentences.append(
-            f"{m.label} ({m.controller}): {verdict}. Across the rates its steady error (largest |x − xD| over the last "
-            f"tenth of the reference's last plateau) goes from {_from_to(rows, 'steady_error', eu)}, the RMS of its "
-            f"command's switching component from {_from_to(rows, 'chatter_rms', cu)}, its reversals per second from "
-            f"{_from_to(rows, 'reversal_rate', '1/s')}, its RMS command from {_from_to(rows, 'command_rms', cu)}; "
+            f"{m.label} ({m.controller}): {verdict}. From the highest rate to the lowest: its steady error (largest "
+            f"|x − xD| over the last tenth of the reference's last plateau) {_from_to(rows, 'steady_error', eu)}, the "
+            f"RMS of its command's switching component {_from_to(rows, 'chatter_rms', cu)}, its reversals per second "
+            f"{_from_to(rows, 'reversal_rate', '1/s')}, its RMS command {_from_to(rows, 'command_rms', cu)}; "
             + (f"it diverges at {', '.join(diverged)}." if diverged else "no run diverges.")
             + (f" Its rate study was reduced: {study.reduced}." if study.reduced else ""))
         for r in rows:

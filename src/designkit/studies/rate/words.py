@@ -41,7 +41,7 @@ def holding(rows: list[Row]) -> Recommended | None:
 
 
 def _span(rows: list[Row], key: str, unit_text: str) -> str:
-    """``"a at R1 to b at R2"`` from the highest to the lowest rate with a finite value."""
+    """``"a at R1 to b at R2"`` from the highest to the lowest rate with a finite value (``"a at R1"`` for one)."""
     pts = [(float(r.value), r.metrics.get(key)) for r in sorted(rows, key=lambda r: -float(r.value))]
     pts = [(f, v) for f, v in pts if v is not None and math.isfinite(v)]
     if not pts:
@@ -83,11 +83,11 @@ def summary(rows: list[Row], eu: str, cu: str) -> tuple[str, ...]:
         out.append("Diverged: " + "; ".join(f"{rate_text(r.value)} ({r.detail})" for r in diverged) + ".")
     else:
         out.append("No run diverged.")
-    out.append(f"The steady error (the largest |x − xD| over the last tenth of the reference's last plateau) goes "
-               f"from {_span(rows, 'steady_error', eu)}; the command's switching component has an RMS from "
-               f"{_span(rows, 'chatter_rms', cu)} (peak {_span(rows, 'chatter_peak', cu)}); the reversals per second "
-               f"go from {_span(rows, 'reversal_rate', '1/s')}; the control effort (RMS of u over the run) goes from "
-               f"{_span(rows, 'command_rms', cu)}.")
+    out.append(f"From the highest rate run to the lowest: the steady error (the largest |x − xD| over the last tenth "
+               f"of the reference's last plateau) {_span(rows, 'steady_error', eu)}; the RMS of the command's "
+               f"switching component {_span(rows, 'chatter_rms', cu)} (its peak {_span(rows, 'chatter_peak', cu)}); "
+               f"the reversals per second {_span(rows, 'reversal_rate', '1/s')}; the control effort (RMS of u over "
+               f"the run) {_span(rows, 'command_rms', cu)}.")
     return tuple(out)
 
 
