@@ -280,11 +280,12 @@ def reliability_question(switching: tuple[Member, ...], rates: dict[str, Any], e
         entry = study.entries[0]
         rows = sorted(entry.rows, key=lambda r: -float(r.value))
         hold = entry.recommended
+        count = f"{len(rows)} rate{'s' if len(rows) != 1 else ''}"
         if hold is None:
-            verdict = (f"its verdict holds at none of the {len(rows)} rate{'s' if len(rows) != 1 else ''} run, from {_hz(rows[0].value)} down to "
+            verdict = (f"its verdict holds at none of the {count} run, from {_hz(rows[0].value)} down to "
                        f"{_hz(rows[-1].value)} (at {_hz(rows[0].value)}: {_outcome(rows[0])})")
         elif hold.value == float(rows[-1].value):
-            verdict = (f"its verdict holds at every one of the {len(rows)} rate{'s' if len(rows) != 1 else ''} run, from {_hz(hold.high)} down to "
+            verdict = (f"its verdict holds at every one of the {count} run, from {_hz(hold.high)} down to "
                        f"{_hz(hold.value)}")
         else:
             below = next(r for r in rows if float(r.value) < hold.value)
