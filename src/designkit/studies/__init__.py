@@ -19,11 +19,16 @@ A spec's ``studies`` section::
 
 is read by :func:`validate` before anything is run: an unknown study, a knob the family does not declare, a value
 outside the knob's declared range, or a budget too small for one variant is refused with its key path.
+
+A comparison study cites a member's own study with :func:`study_of` (through
+:meth:`~designkit.studies.core.study.StudyContext.study`): it is run once for that member and kept, and the member's
+own studies (:func:`run_studies`, its own report) return it rather than running it again.
 """
 
 from __future__ import annotations
 
 import time
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -32,8 +37,8 @@ from designkit.discovery import Registry
 from designkit.errors import SpecError
 from designkit.studies.core.study import Study, StudyContext, StudyResult
 
-__all__ = ["DEFAULT_BUDGET", "STUDIES", "StudyFix", "in_report_order", "run_studies", "study_fixes", "study_settings",
-           "validate"]
+__all__ = ["DEFAULT_BUDGET", "STUDIES", "StudyFix", "in_report_order", "run_studies", "study_fixes", "study_of",
+           "study_settings", "validate"]
 
 DEFAULT_BUDGET = 15.0
 """Seconds of work each study may spend on its variants when the spec's ``studies.budget`` is not given."""
@@ -136,21 +141,59 @@ def run_studies(result: Any) -> tuple[StudyResult, ...]:
     comparison = hasattr(result, "results") and hasattr(result, "labels")
     spec = result.loaded.spec
     fam = None if comparison else family(result.design.kind)
+    asked = {} if comparison else _ASKED.get(result, {})
     out: list[StudyResult] = []
     for study in in_report_order():
+        if study.name in asked:  # run already for a comparison study that cites it (study_of): the same result
+            if asked[study.name] is not None:
+                out.append(asked[study.name])
+            continue
         if study.comparison != comparison or not study.applies(result, fam):
             continue
-        start = time.perf_counter()
-        ctx = StudyContext(result, fam, study_settings(spec, study.name) if not comparison else None,
-                           budget_of(spec), tuple(out))
-        done = study.run(ctx)
+        done = _run_one(study, result, fam, spec, tuple(out), comparison)
         if done is not None:
-            if not done.seconds:
-                import dataclasses
-
-                done = dataclasses.replace(done, seconds=time.perf_counter() - start)
             out.append(done)
     return tuple(out)
+
+
+def _run_one(study: Study, result: Any, fam: Any, spec: Any, earlier: tuple[StudyResult, ...],
+             comparison: bool) -> StudyResult | None:
+    start = time.perf_counter()
+    ctx = StudyContext(result, fam, study_settings(spec, study.name) if not comparison else None, budget_of(spec),
+                       earlier)
+    done = study.run(ctx)
+    if done is not None and not done.seconds:
+        import dataclasses
+
+        done = dataclasses.replace(done, seconds=time.perf_counter() - start)
+    return done
+
+
+_ASKED: weakref.WeakKeyDictionary[Any, dict[str, StudyResult | None]] = weakref.WeakKeyDictionary()
+"""One-controller run -> the studies :func:`study_of` ran on it (None: it does not apply), which
+:func:`run_studies` then returns rather than running them again."""
+
+
+def study_of(result: Any, name: str) -> StudyResult | None:
+    """Study ``name`` of the one-controller run ``result`` (a comparison's member): the result its own studies carry
+    (``result.studies``, its own report), run once -- alone when they have not been run, and then kept for them
+    (:func:`run_studies` returns it rather than running it again).  None when the study does not apply.
+
+    A study run alone sees no earlier study (:attr:`StudyContext.earlier` empty): this is for a study that cites
+    none.
+    """
+    done = getattr(result, "__dict__", {}).get("studies")
+    if done is not None:
+        return next((st for st in done if st.name == name), None)
+    asked = _ASKED.setdefault(result, {})
+    if name not in asked:
+        from designkit.families import family
+
+        study = STUDIES[name]
+        fam = family(result.design.kind)
+        asked[name] = (_run_one(study, result, fam, result.loaded.spec, (), False)
+                       if not study.comparison and study.applies(result, fam) else None)
+    return asked[name]
 
 
 @dataclass(frozen=True)

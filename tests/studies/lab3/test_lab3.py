@@ -210,3 +210,47 @@ def test_every_member_sentence_says_what_its_checks_say(comparison, lab_text):
         if m.has("switching"):
             assert m.verdict in lab_text  # why, how and with what success
         assert f"{m.label}'s own run is {status_words(check_lines(m.run.checks))}" in lab_text  # robustness
+
+
+def test_reliability_cites_each_switching_members_own_rate_study(comparison, lab):
+    from designkit.studies import study_of
+
+    q = next(q for q in lab.section.questions if "reliable" in q.question)
+    table = q.tables[0]
+    assert {line[0] for line in table.rows} == {"pid-sliding-mode", "sliding-regulator"}  # the switching members
+    text = " ".join(q.sentences)
+    for label in ("pid-sliding-mode", "sliding-regulator"):
+        rate = study_of(comparison[label], "rate")  # the member's own study: the one cited, not run again
+        assert rate is study_of(comparison[label], "rate")
+        rows = sorted(rate.entries[0].rows, key=lambda r: -r.value)
+        lines = [line for line in table.rows if line[0] == label]
+        assert len(lines) == len(rows) == 6
+        for line, row in zip(lines, rows, strict=True):
+            assert line[2] == (row.outcome if not row.detail else f"{row.outcome}: {row.detail}")
+            assert line[3] == amount(row.metrics["steady_error"], "rad", 3)
+        lowest = None  # going down from the highest rate, the last before the first that does not pass
+        for row in rows:
+            if row.outcome != "verified":
+                break
+            lowest = row.value
+        if lowest is None:
+            assert f"{label} (" in text and "its verdict holds at none of the 6 rates run" in text
+        elif lowest == rows[-1].value:
+            assert "its verdict holds at every one of the 6 rates run, from 20 kHz down to 500 Hz" in text
+        else:
+            assert f"the lowest rate at which its verdict still holds is {fmt_number(lowest / 1000, 4)} kHz" in text \
+                or f"the lowest rate at which its verdict still holds is {fmt_number(lowest, 4)} Hz" in text
+
+
+def test_the_sliding_regulator_keeps_its_load_offset_at_20_khz(comparison):
+    """At 20 kHz the sampled law is close to the continuous one: on its surface with the load, the steady error is the
+    reduced system's static offset (solved here by numpy), up to the ripple of the switching."""
+    from designkit.studies import study_of
+
+    p = elastic_link()
+    c = np.asarray(comparison["sliding-regulator"].design.data.c)
+    k2 = p.KR * p.R2**2 / p.J2
+    _, x3 = np.linalg.solve(np.array([[c[0], c[2]], [k2, -k2]]), [0.0, -p.R2 / p.J2 * W])
+    row = next(r for r in study_of(comparison["sliding-regulator"], "rate").entries[0].rows if r.value == 20_000.0)
+    assert row.outcome != "diverged"
+    assert row.metrics["steady_error"] == pytest.approx(abs(x3), rel=0.05)

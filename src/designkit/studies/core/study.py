@@ -193,8 +193,14 @@ class StudyContext:
             budget.record(row.cpu)
         return rows
 
-    def study(self, name: str) -> Any:
-        """The result of the earlier study ``name``, or None."""
+    def study(self, name: str, run: Any = None) -> Any:
+        """The result of the earlier study ``name``, or None; with ``run`` (a comparison's member, its own
+        one-controller run), that run's own study ``name`` -- what its own report lays out, run once
+        (:func:`designkit.studies.study_of`) -- or None when it does not apply."""
+        if run is not None:
+            from designkit.studies import study_of
+
+            return study_of(run, name)
         return next((s for s in self.earlier if s.name == name), None)
 
     def new_budget(self) -> Any:

@@ -14,7 +14,10 @@ number measured on a run it made or on a member's own run:
   integrated (the law's declarations);
 * **the comparison, the perturbation sensitivity, the response time and the control level** -- the table, the runs
   without the load against the family's predicted offset, the chattering (:mod:`~designkit.studies.lab3.measures`);
-* **robustness** -- each designed law at every corner of ``plant.uncertainty``, with its checks there.
+* **robustness** -- each designed law at every corner of ``plant.uncertainty``, with its checks there;
+* **reliability** -- each switching member with its command sampled at a ladder of rates: its own rate study
+  (:mod:`designkit.studies.rate`, run once for the member and laid out in its own report), cited through
+  :meth:`~designkit.studies.core.study.StudyContext.study`.
 """
 
 from __future__ import annotations
@@ -74,6 +77,7 @@ def _run(ctx: StudyContext) -> StudyResult:
         q.response_question(found),
         q.level_question(found, chat, cu),
         q.robustness_question(found, box, box_words, eu, cu),
+        q.reliability_question(switching, {m.label: ctx.study("rate", m.run) for m in switching}, eu, cu),
     )
     intro = ("The experiment's questions, answered from the controllers' own runs of the shared task and from runs of "
              "each with one thing changed (one of its settings, the load removed, a corner of the parameter box), "

@@ -14,8 +14,8 @@ from designkit.studies.core.metrics import values
 from designkit.studies.lab3.measures import Chatter
 from designkit.studies.lab3.runs import LoadEffect
 
-__all__ = ["compare_question", "importance_question", "level_question", "perturbation_question", "response_question",
-           "robustness_question", "structure_question", "why_question"]
+__all__ = ["compare_question", "importance_question", "level_question", "perturbation_question", "reliability_question",
+           "response_question", "robustness_question", "structure_question", "why_question"]
 
 
 def _outcome(row: Any) -> str:
@@ -234,3 +234,78 @@ def robustness_question(found: tuple[Member, ...], runs: dict[str, list[tuple[di
                   ("controller", "verified", "bounded", "overshoot", "settling time", "steady-state error", "peak |u|"),
                   tuple(rows))
     return Question("How robust is each to parameter changes (and how stable)?", tuple(sentences), (table,))
+
+
+def _hz(rate: float) -> str:
+    return f"{fmt_number(rate / 1000.0, 4)} kHz" if rate >= 1000.0 else f"{fmt_number(rate, 4)} Hz"
+
+
+def _count(value: float | None) -> str:
+    """A count per second, whole from 10 on."""
+    if value is None or not math.isfinite(value):
+        return "—"
+    return f"{value:.0f}" if value >= 10 else fmt_number(value, 3)
+
+
+def _from_to(rows: list[Any], key: str, unit_text: str) -> str:
+    """``"a at R1 to b at R2"`` over ``rows`` (decreasing rate) with a finite value of ``key`` (a count per second
+    when ``unit_text`` is ``"1/s"``)."""
+    pts = [(float(r.value), r.metrics.get(key)) for r in rows]
+    pts = [(f, v) for f, v in pts if v is not None and math.isfinite(v)]
+    if not pts:
+        return "undefined"
+
+    def text(v: float) -> str:
+        return _count(v) if unit_text == "1/s" else amount(v, unit_text)
+
+    first, last = pts[0], pts[-1]
+    if len(pts) == 1:
+        return f"{text(first[1])} at {_hz(first[0])}"
+    return f"{text(first[1])} at {_hz(first[0])} to {text(last[1])} at {_hz(last[0])}"
+
+
+def reliability_question(switching: tuple[Member, ...], rates: dict[str, Any], eu: str, cu: str) -> Question:
+    """Each switching member's rate study (its own, cited, not run again): the lowest sampling rate at which its
+    verdict still holds, and its precision, chattering and effort across the rates."""
+    intro = ("Reliability is read here as whether the verdict survives the command being computed as an "
+             "implementation computes it: once a sampling period, held in between. Each switching controller's own "
+             "rate study (in its own report) ran it at a ladder of sampling rates through its family's own run and "
+             "checks; its rows are cited here.")
+    sentences, lines = [intro], []
+    for m in switching:
+        study = rates.get(m.label)
+        if study is None or not study.entries or not study.entries[0].rows:
+            sentences.append(f"{m.label}: no rate was run (the rate study does not apply to its run).")
+            continue
+        entry = study.entries[0]
+        rows = sorted(entry.rows, key=lambda r: -float(r.value))
+        hold = entry.recommended
+        count = f"{len(rows)} rate{'s' if len(rows) != 1 else ''}"
+        if hold is None:
+            verdict = (f"its verdict holds at none of the {count} run, from {_hz(rows[0].value)} down to "
+                       f"{_hz(rows[-1].value)} (at {_hz(rows[0].value)}: {_outcome(rows[0])})")
+        elif hold.value == float(rows[-1].value):
+            verdict = (f"its verdict holds at every one of the {count} run, from {_hz(hold.high)} down to "
+                       f"{_hz(hold.value)}")
+        else:
+            below = next(r for r in rows if float(r.value) < hold.value)
+            verdict = (f"the lowest rate at which its verdict still holds is {_hz(hold.value)} (every rate from "
+                       f"{_hz(hold.high)} down to it passes); at {_hz(below.value)}: {_outcome(below)}")
+        diverged = [_hz(r.value) for r in rows if r.outcome == "diverged"]
+        sentences.append(
+            f"{m.label} ({m.controller}): {verdict}. From the highest rate to the lowest: its steady error (largest "
+            f"|x − xD| over the last tenth of the reference's last plateau) {_from_to(rows, 'steady_error', eu)}, the "
+            f"RMS of its command's switching component {_from_to(rows, 'chatter_rms', cu)}, its reversals per second "
+            f"{_from_to(rows, 'reversal_rate', '1/s')}, its RMS command {_from_to(rows, 'command_rms', cu)}; "
+            + (f"it diverges at {', '.join(diverged)}." if diverged else "no run diverges.")
+            + (f" Its rate study was reduced: {study.reduced}." if study.reduced else ""))
+        for r in rows:
+            v = r.metrics
+            lines.append((m.label, _hz(r.value), _outcome(r), amount(v.get("steady_error"), eu, 3),
+                          amount(v.get("chatter_rms"), cu), _count(v.get("reversal_rate")),
+                          amount(v.get("command_rms"), cu)))
+    table = Table("Each switching controller at each sampling rate (its rate study's rows)",
+                  ("controller", "rate", "checks", "steady error", "switching RMS", "reversals (1/s)", "RMS command"),
+                  tuple(lines))
+    return Question("How reliable is each switching controller when its command is sampled?", tuple(sentences),
+                    (table,) if lines else ())
