@@ -153,7 +153,12 @@ def check_controllable(spec: object, model: LinearModel, box: dict[str, tuple[fl
     ratio = controllability_ratio(A, B)
     if ratio < CONTROLLABILITY_TOL:
         plant = spec.plant  # type: ignore[attr-defined]
-        if A.shape[0] != 4:
+        if plant.kind == "transfer_function":
+            raise SpecError("plant.num", f"shares a root with plant.den (a pole-zero cancellation): the realisation "
+                            f"is not controllable (Hadamard ratio {ratio:.3g}): {consequence}")
+        if plant.kind == "state_space":
+            raise SpecError("plant.B", f"(A, B) is not controllable (Hadamard ratio {ratio:.3g}): {consequence}")
+        if plant.kind != "elastic_joint":
             raise SpecError("plant", f"the plant is not controllable (Hadamard ratio {ratio:.3g})")
         given = [k for k in COUPLING if getattr(plant, k, None) is not None] or ["KR"]
         raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "

@@ -1,8 +1,9 @@
 """Linear state regulator by pole placement (ROBEL, figure 5.2): the ``state_regulator`` family.
 
 Plant ``x' = A x + B u + D d``: the elastic joint (``x = [R1 theta_m, R1 theta_m', R2 theta_l, R2 theta_l']``,
-spring-side coordinates, the load position ``x3`` controlled) or the link (``[x1, x2]``), linearised at rest by
-CasADi from the plant's own ODE.  Law::
+spring-side coordinates, the load position ``x3`` controlled), the link (``[x1, x2]``), or any single-input
+``transfer_function`` or ``state_space`` plant (its first output controlled, :mod:`designkit.models.linear_plant`),
+linearised at rest by CasADi from the plant's own ODE.  The law reads the full state: there is no observer.  Law::
 
     u = -K x + N xD,      K = e P(A) (Ackermann),      N = -1 / (C (A - B K)^-1 B)
 
@@ -63,6 +64,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
     data = StateRegulatorData(K=tuple(K.tolist()), N=N, open_loop_poles=tuple(complex(p) for p in open_loop),
                               position_index=position, load_offset_per_unit=offset,
                               load_offset_unit=f"{units[position]} per {d_unit}")
+    notes: tuple[str, ...] = ()
+    if plant.kind in ("transfer_function", "state_space"):
+        names = ", ".join(s.name for s in plant.states)
+        notes = (f"The regulator measures the full state ({names}) of the plant realised in "
+                 f"{plant.realisation.form}: no observer estimates it.",)
     formulas = (
         "u = −K x + N xD; K = e P(A) (Ackermann), e the last row of [B AB … A^(n−1)B]^−1, P(s) = Π (s − p_j)",
         f"N = −1/(C (A − BK)^−1 B) = {N:.6g} (unit static gain of the controlled position)",
@@ -70,7 +76,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         "(no integral action)",
     )
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=(), reference="step",
-               formulas=formulas, data=data)
+               formulas=formulas, notes=notes, data=data)
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
 
@@ -94,7 +100,7 @@ def json_summary(result: Any) -> dict[str, Any]:
 FAMILY = Family(
     kind=KIND,
     spec=StateRegulatorSpec,
-    plants=("elastic_joint", "link"),
+    plants=("elastic_joint", "link", "transfer_function", "state_space"),
     uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,

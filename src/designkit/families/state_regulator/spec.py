@@ -2,7 +2,8 @@
 
 Fields:
 
-* ``poles`` (1/s): the ``n`` closed-loop poles of ``x' = (A - B K) x`` (4 on the elastic joint, 2 on the link),
+* ``poles`` (1/s): the ``n`` closed-loop poles of ``x' = (A - B K) x`` (4 on the elastic joint, 2 on the link, the
+  order of a ``transfer_function`` or ``state_space`` plant),
   each in the open left half plane (a pole with ``Re p >= 0`` is refused at ``controller.poles[k]``), complex ones
   in conjugate pairs, within the ranges of every pole list (:func:`~designkit.spec.ranges.check_poles`).
 """
@@ -14,6 +15,7 @@ from typing import Any, Literal
 from pydantic import Field, field_validator
 
 from designkit.spec.fields import Pole, Section, check_conjugates
+from designkit.spec.plants import linear_order
 from designkit.spec.ranges import check_poles
 
 KIND = "state_regulator"
@@ -43,7 +45,10 @@ class StateRegulatorSpec(Section):
 
 def validate(spec: Any) -> None:
     """Cross-section rules (``ValueError("key.path: message")``)."""
-    n = STATES[spec.plant.kind]
+    n = STATES.get(spec.plant.kind) or linear_order(spec.plant)
+    if spec.plant.kind == "state_space" and len(spec.plant.B[0]) != 1:
+        raise ValueError(f"plant.B: the state regulator places the poles of a single-input plant (Ackermann's "
+                         f"formula); this plant has {len(spec.plant.B[0])} inputs")
     if len(spec.controller.poles) != n:
         raise ValueError(f"controller.poles: the {spec.plant.kind} plant has {n} states, so the state feedback "
                          f"places {n} poles; got {len(spec.controller.poles)}")
