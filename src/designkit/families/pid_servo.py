@@ -1,6 +1,8 @@
 """PID position servo of one link (notes section 3.2, fig. 2.1): the ``pid_servo`` family.
 
-Plant: the simplified link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)``.  Law, with the
+Plant: the simplified link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)`` (also the elastic joint, on its rigid
+approximation, and any single-input linear plant of order 2 -- ``transfer_function`` or ``state_space`` -- placed
+through the closed-loop characteristic polynomial, :mod:`designkit.synthesis.linear_servo`).  Law, with the
 integral ``x3' = x1 - xD``::
 
     u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD
@@ -29,6 +31,7 @@ from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob, Metric, gain_knobs
 from designkit.synthesis.law import Law
+from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law
 from designkit.synthesis.pid import GAIN_INFO
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 from designkit.synthesis.servo_loop import servo_design, servo_law
@@ -61,9 +64,16 @@ class PidServoSpec(PoleRequirementsController):
         return self
 
 
+LINEAR = ("transfer_function", "state_space")
+"""The general linear plant kinds, designed by :mod:`designkit.synthesis.linear_servo`."""
+
+
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD``, ``x3' = x1 - xD`` (N*m;
-    :func:`~designkit.synthesis.servo_loop.servo_law`)."""
+    :func:`~designkit.synthesis.servo_loop.servo_law`); on a linear plant the rate is ``c A x``
+    (:func:`~designkit.synthesis.linear_servo.linear_servo_law`)."""
+    if design.plant.kind in LINEAR:
+        return linear_servo_law(design, anti_windup)
     return servo_law(design, anti_windup)
 
 
@@ -164,6 +174,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         zero = poles[2].real
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
+    if plant.kind in LINEAR:
+        return linear_servo_design(plant, poles, zero, kind=KIND, notes=notes, extra=extra)
     if plant.kind == "elastic_joint":
         from designkit.synthesis.state_space import check_controllable, linear_model
 
@@ -204,7 +216,7 @@ def load_offset(result: Any) -> float | None:
 FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
-    plants=("link", "elastic_joint"),
+    plants=("link", "elastic_joint", *LINEAR),
     uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,

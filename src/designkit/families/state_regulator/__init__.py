@@ -31,6 +31,7 @@ from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
+from designkit.synthesis.linear_servo import plant_zeros
 from designkit.synthesis.pole_placement import ackermann
 from designkit.synthesis.state_space import check_controllable, linear_model
 
@@ -75,7 +76,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         f"a constant load w leaves x − xD = −C (A − BK)^−1 D w = {offset:.4g} {units[position]} per {d_unit} "
         "(no integral action)",
     )
-    d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=(), reference="step",
+    zeros = plant_zeros(A, B[:, 0], np.eye(A.shape[0])[position])
+    d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=zeros, reference="step",
                formulas=formulas, notes=notes, data=data)
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
 
