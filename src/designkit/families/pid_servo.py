@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import field_validator, model_validator
 
 from designkit.spec.controllers import PoleRequirementsController
@@ -66,6 +67,32 @@ class PidServoSpec(PoleRequirementsController):
 
 LINEAR = ("transfer_function", "state_space")
 """The general linear plant kinds, designed by :mod:`designkit.synthesis.linear_servo`."""
+
+
+def law_lines(design: Any) -> tuple[str, ...]:
+    """The law in the linear plant's signal names (``()`` on the link and the elastic joint: the family's own)."""
+    plant = design.plant
+    if plant.kind not in LINEAR:
+        return ()
+    y = plant.states[plant.positions[0]].name
+    u = plant.inputs[0].name
+    return (f"{u} = −K1 ({y} − xD) − K2 r x − K3 ∫({y} − xD) dt + K3 K4 xD,   r x = c A x "
+            f"(= {y}' when the relative degree is 2)",)
+
+
+def loop_line(design: Any) -> str | None:
+    """The loop at the plant input of a linear plant of relative degree 2 in closed form, ``""`` at relative degree 1
+    (the rate row then reads part of the input), None on the other plants (the family's own line)."""
+    plant = design.plant
+    if plant.kind not in LINEAR:
+        return None
+    A, B, _, _ = plant.matrices()
+    c = np.eye(A.shape[0])[plant.positions[0]]
+    if abs(float(c @ B[:, 0])) > 1e-12 * (1.0 + float(np.abs(B).max())):
+        return ""
+    written = (plant.equations()[0].split("=", 1)[1].strip() if plant.kind == "transfer_function"
+               else "c (sI − A)⁻¹ b")
+    return f"L(s) = (K2 s² + K1 s + K3) P(s) / s,   P(s) = {written}"
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -227,6 +254,8 @@ FAMILY = Family(
         label="PID position servo",
         law=("u = -K1 (x1 - xD) - K2 x2 - K3 ∫(x1 - xD) dt + K3 K4 xD",),
         loop_transfer="L(s) = Km (K2 s² + K1 s + K3) / (s² (τ s + 1))",
+        law_of=law_lines,
+        loop_transfer_of=loop_line,
         summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
                 "closed-loop poles and the zero of x1/xD.",
     ),
