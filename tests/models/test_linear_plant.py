@@ -59,7 +59,8 @@ def test_transfer_function_realisation_is_observable_canonical_with_the_output_a
 
 def test_a_transfer_function_and_its_state_space_realisation_give_the_same_step_response():
     num, den = [4.0, 1.0], [1.0, 2.5, 3.0, 0.5]
-    A, B, C, D = control.tf2ss(num, den).A, control.tf2ss(num, den).B, control.tf2ss(num, den).C, control.tf2ss(num, den).D
+    sys = control.tf2ss(num, den)
+    A, B, C, D = sys.A, sys.B, sys.C, sys.D
     tf_plant = transfer_function_plant(num, den)
     ss_plant = state_space_plant(A.tolist(), B.tolist(), C.tolist(), D.tolist())
     step = control.step_response(control.tf(num, den), T).outputs

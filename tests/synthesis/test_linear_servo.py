@@ -48,7 +48,7 @@ def test_second_order_transfer_function_of_relative_degree_two():
     assert np.allclose(_sorted(np.roots(char)), [-60, -25, -20], rtol=1e-9)
     assert np.allclose(_sorted(d.closed_loop.poles), [-60, -25, -20], rtol=1e-9)
     # the zero of y/xD: (K1 + K3 K4) s + K3 = 0
-    assert -K3 / (K1 + K3 * K4) == pytest.approx(-15.0, rel=1e-12)
+    assert pytest.approx(-15.0, rel=1e-12) == -K3 / (K1 + K3 * K4)
     # the link's closed forms (designkit.synthesis.pid, notes 3.2) give the same gains on Km, tau
     from designkit.synthesis.pid import servo_pid_gains
 

@@ -180,8 +180,8 @@ class LinearPlant(PlantBase):
     def disturbances(self) -> tuple[Signal, ...]:
         """One input-equivalent disturbance per input (same unit, entering through ``B``)."""
         ins = self.realisation.inputs
-        return tuple(Signal("xi" if len(ins) == 1 else f"xi{k + 1}", s.unit, f"input-equivalent disturbance on {s.name}")
-                     for k, s in enumerate(ins))
+        return tuple(Signal("xi" if len(ins) == 1 else f"xi{k + 1}", s.unit,
+                            f"input-equivalent disturbance on {s.name}") for k, s in enumerate(ins))
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -300,7 +300,8 @@ def _signals(names: Sequence[str] | None, default: Sequence[str], key: str, unit
         raise ModelError(key, f"names must differ, got {list(names)}")
     for k, nm in enumerate(names):
         if not isinstance(nm, str) or not _NAME.match(nm):
-            raise ModelError(f"{key}[{k}]", f"a signal name is a letter or _ followed by letters, digits, _; got {nm!r}")
+            raise ModelError(f"{key}[{k}]", f"a signal name is a letter or _ followed by letters, digits, _; "
+                                            f"got {nm!r}")
     return tuple(Signal(nm, units.get(nm, default_unit[k]), f"{meaning} {k + 1}" if len(names) > 1 else meaning)
                  for k, nm in enumerate(names))
 

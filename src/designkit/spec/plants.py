@@ -258,7 +258,7 @@ class ElasticJointPlantSpec(Section):
         return {k: v for k, v in self.model_dump(exclude={"kind", "uncertainty"}).items() if v is not None}
 
 
-COEFFICIENT = Range(-1e12, 1e12, "(SI, per its row and column)")
+COEFFICIENT = Range(-1e12, 1e12, "(in the entry's SI unit)")
 """A numeric entry of a linear plant's polynomial or matrix."""
 
 Entry = Ranged(COEFFICIENT.low, COEFFICIENT.high, COEFFICIENT.unit, base=Finite) | Annotated[str, Field(max_length=200)]

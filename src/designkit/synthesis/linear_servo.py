@@ -83,7 +83,8 @@ def characteristic_map(A: np.ndarray, b: np.ndarray, c: np.ndarray, r: np.ndarra
 
 
 def plant_zeros(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[complex, ...]:
-    """The finite zeros (1/s) of ``c (sI - A)^-1 b`` (roots of the numerator, :meth:`LinearSystem.transfer_coefficients`)."""
+    """The finite zeros (1/s) of ``c (sI - A)^-1 b``: the roots of its numerator
+    (:meth:`~designkit.models.linear_system.LinearSystem.transfer_coefficients`)."""
     from designkit.models.linear_system import LinearSystem
 
     n = np.asarray(A).shape[0]
