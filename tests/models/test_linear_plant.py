@@ -48,13 +48,24 @@ def test_transfer_function_ode_follows_python_controls_forced_response():
     assert np.max(np.abs(y - ref)) < 1e-6 * (1 + np.max(np.abs(ref)))
 
 
-def test_transfer_function_realisation_is_observable_canonical_with_the_output_as_first_state():
+def test_transfer_function_realisation_is_observability_canonical_with_the_output_and_its_rate_as_states():
     plant = transfer_function_plant(["b"], [1, "a", 0], {"a": 3.0, "b": 5.0})
     A, B, C, D = plant.matrices()
-    # x1' = -a x1 + x2, x2' = b u: written out by hand for a = 3, b = 5
-    assert np.array_equal(A, [[-3.0, 1.0], [0.0, 0.0]]) and np.array_equal(B.ravel(), [0.0, 5.0])
-    assert np.array_equal(C, [[1.0, 0.0]]) and plant.positions == (0,) and plant.velocities == ()
+    # x1' = x2, x2' = -a x2 + b u (the link's form): written out by hand for a = 3, b = 5
+    assert np.array_equal(A, [[0.0, 1.0], [0.0, -3.0]]) and np.array_equal(B.ravel(), [0.0, 5.0])
+    assert np.array_equal(C, [[1.0, 0.0]]) and plant.positions == (0,) and plant.velocities == (1,)
     assert [s.unit for s in plant.states] == ["rad", "rad/s"]
+
+
+def test_the_rate_state_is_the_outputs_derivative_for_every_parameter_value():
+    # relative degree 2: x2 = y' exactly, so the first row of A is [0, 1, 0] and B[0] = 0 at any parameters
+    plant = transfer_function_plant(["k", "k*z"], [1, "a", "b", "c"], {"k": 2.0, "z": 3.0, "a": 6.0, "b": 11.0,
+                                                                       "c": 6.0})
+    for values in ({}, {"k": -1.0, "a": 0.5}, {"z": 0.0, "c": -2.0, "b": 0.1}):
+        A, B, C, _ = plant.with_params(**values).matrices()
+        assert np.array_equal(A[0], [0.0, 1.0, 0.0]) and B[0, 0] == 0.0
+    # relative degree 1: the input reaches y' directly, no state is the rate
+    assert transfer_function_plant([1, 2], [1, 3, 2]).velocities == ()
 
 
 def test_a_transfer_function_and_its_state_space_realisation_give_the_same_step_response():

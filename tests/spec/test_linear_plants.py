@@ -86,3 +86,30 @@ def test_schema_lists_the_linear_plant_kinds(capsys):
     schema = json.loads(capsys.readouterr().out)
     text = json.dumps(schema)
     assert '"transfer_function"' in text and '"state_space"' in text
+
+
+def test_a_plant_change_moves_the_entries_that_name_the_parameter():
+    """From t = 0 the true motor has twice the designed inertia: the simulated step equals python-control's step of
+    ``num (K1 + K3 K4) s + K3 num`` over ``s den + num (K2 s^2 + K1 s + K3)`` at the true inertia."""
+    from designkit.pipeline import run
+
+    text = ("name: plant-change\nplant: {kind: transfer_function, num: [Kt], den: [J, B, 0], "
+            "parameters: {Kt: 0.05, J: 2.0e-4, B: 1.0e-3}}\n"
+            "controller: {kind: pid_servo, poles: [-20, -25, -60], zero: -15}\n"
+            "simulation: {duration: 1.0, plant_change: {time: 0.0, values: {J: 4.0e-4}}}\n")
+    result = run(parse_spec(text))
+    K1, K2, K3, K4 = (float(result.design.gains[k]) for k in ("K1", "K2", "K3", "K4"))
+    num, den = [0.05], [4.0e-4, 1.0e-3, 0.0]
+    closed = control.tf(np.polymul(num, [K1 + K3 * K4, K3]),
+                        np.polyadd(np.polymul([1.0, 0.0], den), np.polymul(num, [K2, K1, K3])))
+    sim = result.simulation
+    t = np.asarray(sim.time)
+    ref = control.step_response(closed, t).outputs
+    y = np.asarray(sim.state)[:, result.plant.positions[0]]
+    step = np.asarray(sim.reference)[:, 0, 0]
+    assert np.allclose(step[t > 0], step[-1])  # one step, held
+    assert np.max(np.abs(y - step[-1] * ref)) < 1e-4 * abs(step[-1])
+    # the designed (nominal) loop differs by much more: the change is in the simulated plant
+    nominal = control.tf(np.polymul(num, [K1 + K3 * K4, K3]),
+                         np.polyadd(np.polymul([1.0, 0.0], [2.0e-4, 1.0e-3, 0.0]), np.polymul(num, [K2, K1, K3])))
+    assert np.max(np.abs(y - step[-1] * control.step_response(nominal, t).outputs)) > 1e-2 * abs(step[-1])

@@ -9,19 +9,23 @@ simplified link's.
 realisation makes ``y1`` a state.
 
 * ``transfer_function`` ``G(s) = (b_0 s^m + ... + b_m) / (a_0 s^n + ... + a_n)`` (strictly proper, ``m < n``) is
-  realised in the **observable canonical form** with ``y = x1``: with ``a_k`` and ``b_k`` divided by ``a_0`` and
-  the numerator padded to ``n`` coefficients ``b_1 .. b_n``::
+  realised in the **observability canonical form** (Kailath, *Linear Systems*, 2.1): with ``a_k`` and ``b_k``
+  divided by ``a_0`` and the numerator padded to ``n`` coefficients ``b_1 .. b_n``, the states are the output and
+  its derivatives less the input's share, ``x_(k+1) = x_k' - beta_k (u + xi)``::
 
-      x_k' = -a_k x1 + x_(k+1) + b_k (u + xi)     (k < n),      x_n' = -a_n x1 + b_n (u + xi),      y = x1
+      x_k' = x_(k+1) + beta_k (u + xi)   (k < n),   x_n' = -a_n x1 - ... - a_1 x_n + beta_n (u + xi),   y = x1
 
-  so ``x1`` is the output (position), ``x_k`` has the output's unit per ``s^(k-1)``.
+  with the Markov parameters ``beta_k = b_k - sum_(j<k) a_j beta_(k-j)``.  At relative degree ``r`` the first
+  ``r - 1`` of them vanish, so ``x1 = y``, ``x2 = y'``, ..., ``x_r = y^(r-1)`` *whatever the parameters*: at
+  relative degree 2 or more the plant's velocity is the state ``x2`` (``velocities = (1,)``), and a rate feedback
+  reads the true rate even when the plant's parameters change.  ``x_k`` has the output's unit per ``s^(k-1)``.
 * ``state_space`` keeps the states as written when ``C1`` selects one state (``[0, 1, 0]``).  Otherwise the state
   ``x_k`` with the largest ``|C1_k|`` (at the nominal parameters) is replaced by ``y1`` itself:
   ``z = T x`` with ``T`` the identity whose row ``k`` is ``C1``, so ``A_z = T A T^-1``, ``B_z = T B``,
   ``C_z = C T^-1`` -- the same input-output behaviour, the position a state.  The first output may have no direct
   feedthrough (``D1 = 0``).
 
-No state is the position's rate (``velocities = ()``): a family reads the output's rate as ``C1 A x``.
+Elsewhere no state is the position's rate (``velocities = ()``): a family reads the output's rate as ``C1 A x``.
 """
 
 from __future__ import annotations
@@ -72,6 +76,8 @@ class LinearRealisation:
         The realised signals; ``states[position]`` is the first output.
     position : int
         The state that is the first output.
+    velocity : int or None
+        The state that is its rate for every parameter value (None: none is).
     form : str
         The realisation in words.
     equations : tuple of str
@@ -92,6 +98,7 @@ class LinearRealisation:
     inputs: tuple[Signal, ...]
     outputs: tuple[Signal, ...]
     position: int
+    velocity: int | None
     form: str
     equations: tuple[str, ...]
 
@@ -146,11 +153,11 @@ class LinearPlant(PlantBase):
     Examples
     --------
     >>> plant = transfer_function_plant(["Km"], ["tau", 1, 0], {"Km": 2.0, "tau": 0.5})
-    >>> [s.name for s in plant.states], plant.positions
-    (['x1', 'x2'], (0,))
+    >>> [s.name for s in plant.states], plant.positions, plant.velocities
+    (['x1', 'x2'], (0,), (1,))
     >>> A, B, C, D = plant.matrices()
     >>> A.tolist(), B.ravel().tolist()
-    ([[-2.0, 1.0], [-0.0, 0.0]], [0.0, 4.0])
+    ([[0.0, 1.0], [0.0, -2.0]], [0.0, 4.0])
     """
 
     realisation: LinearRealisation
@@ -195,8 +202,9 @@ class LinearPlant(PlantBase):
 
     @property
     def velocities(self) -> tuple[int, ...]:
-        """None: no state is the output's rate in general (it is ``C1 A x``)."""
-        return ()
+        """The state that is the first output's rate (``x2`` of a transfer function of relative degree 2 or more),
+        else none (the rate is ``C1 A x + C1 B u``)."""
+        return () if self.realisation.velocity is None else (self.realisation.velocity,)
 
     def ode(self) -> ca.Function:
         """``(x, u, d = xi, p) -> A(p) x + B(p) (u + xi)``."""
@@ -346,7 +354,7 @@ def _combination(row: Sequence[Entry], names: Sequence[str]) -> str:
 def transfer_function_plant(num: Sequence[Entry], den: Sequence[Entry], parameters: Mapping[str, float] | None = None,
                             *, units: Mapping[str, str] | None = None, input: str = "u",
                             output: str = "y") -> LinearPlant:
-    """The SISO plant ``y(s)/u(s) = num(s)/den(s)`` in observable canonical form (module docstring).
+    """The SISO plant ``y(s)/u(s) = num(s)/den(s)`` in observability canonical form (module docstring).
 
     Parameters
     ----------
@@ -394,33 +402,49 @@ def transfer_function_plant(num: Sequence[Entry], den: Sequence[Entry], paramete
     if not np.any(av[n + 1:] != 0.0):
         raise ModelError("num", "the transfer function is zero: the input does not reach the output")
     bpad = [ca.SX(0.0)] * (n - 1 - m) + b
+    ak = [a[k] / a[0] for k in range(1, n + 1)]
+    beta: list[ca.SX] = []
+    for k in range(n):  # Markov parameters: beta_k = b_k - sum_(j<k) a_j beta_(k-j)
+        value = bpad[k] / a[0]
+        for j in range(k):
+            value = value - ak[j] * beta[k - 1 - j]
+        beta.append(0.0 if k < n - 1 - m else value)  # exactly 0 below the relative degree
     A = ca.SX.zeros(n, n)
     B = ca.SX.zeros(n, 1)
     for k in range(n):
-        A[k, 0] = -a[k + 1] / a[0]
         if k + 1 < n:
             A[k, k + 1] = 1.0
-        B[k] = bpad[k] / a[0]
+        A[n - 1, k] = -ak[n - 1 - k]
+        B[k] = beta[k]
     C = ca.SX.zeros(1, n)
     C[0, 0] = 1.0
     ins = _signals([input], ["u"], "input", units, ["1"], "input")
     outs = _signals([output], ["y"], "output", units, ["rad"], "output")
     y_unit = outs[0].unit
-    states = tuple(Signal(f"x{k + 1}", y_unit if k == 0 else (f"{y_unit}/s" if k == 1 else f"{y_unit}/s^{k}"),
-                          f"{outs[0].name}, the output" if k == 0 else "observable canonical state")
-                   for k in range(n))
+    relative = n - m
     u, y = ins[0].name, outs[0].name
+
+    def meaning(k: int) -> str:
+        if k < relative:
+            return f"{y}, the output" if k == 0 else f"{y}{chr(39) * k}, the output's derivative {k}"
+        return "observability canonical state"
+
+    states = tuple(Signal(f"x{k + 1}", y_unit if k == 0 else (f"{y_unit}/s" if k == 1 else f"{y_unit}/s^{k}"),
+                          meaning(k)) for k in range(n))
+
     def wrap(text: str) -> str:
         return text if _SIMPLE.match(text) else f"({text})"
 
+    exact = ", ".join(f"x{k + 1} = {y}{chr(39) * k}" for k in range(relative))
     lines = [f"{y}(s)/{u}(s) = {wrap(_polynomial(num))} / {wrap(_polynomial(den))}",
-             f"observable canonical form: {y} = x1; x_k' = -(a_k/a_0) x1 + x_(k+1) + (b_k/a_0) ({u} + ξ)"]
+             f"observability canonical form: {exact}; x_k' = x_(k+1) + β_k ({u} + ξ), "
+             f"x_n' = −Σ (a_j/a_0) x_(n+1−j) + β_n ({u} + ξ), β the Markov parameters"]
     realisation = LinearRealisation(
         kind="transfer_function", names=tuple(q.name for q in params), p=p, A=A, B=B, C=C, D=ca.SX.zeros(1, 1),
         entries=ca.vertcat(*a, *b), paths=tuple([f"den[{k}]" for k in range(len(den))]
                                                 + [f"num[{k}]" for k in range(len(num))]),
-        leading=0, states=states, inputs=ins, outputs=outs, position=0,
-        form="observable canonical form (y = x1)", equations=tuple(lines))
+        leading=0, states=states, inputs=ins, outputs=outs, position=0, velocity=1 if relative >= 2 else None,
+        form=f"observability canonical form ({exact})", equations=tuple(lines))
     realisation.check(nominal)
     return LinearPlant(realisation, params)
 
@@ -516,6 +540,6 @@ def state_space_plant(A: Any, B: Any, C: Any, D: Any = None, parameters: Mapping
     realisation = LinearRealisation(
         kind="state_space", names=tuple(par.name for par in params), p=p, A=A_z, B=B_z, C=C_z, D=Dm,
         entries=entries, paths=paths, leading=None, states=states_out, inputs=ins, outputs=outs, position=k,
-        form=form, equations=tuple(lines))
+        velocity=None, form=form, equations=tuple(lines))
     realisation.check(nominal)
     return LinearPlant(realisation, params)

@@ -300,7 +300,7 @@ class TransferFunctionPlantSpec(_LinearPlantSpec):
     ``parameters`` (``"Km"``, ``"2*a"``, ``"-(a + 1)/tau"``); no leading zero; ``len(num) < len(den)``, the
     denominator of degree 1 to 20.  ``input``, ``output`` name the signals (default ``u``, ``y``); ``units`` gives
     units by name (the output ``rad``, the input and parameters ``1`` by default).  ``dt`` (a sampling period) is
-    refused: the plant is continuous-time.  Realised in observable canonical form, ``y = x1``
+    refused: the plant is continuous-time.  Realised in observability canonical form, ``y = x1``
     (:mod:`designkit.models.linear_plant`).
     """
 
