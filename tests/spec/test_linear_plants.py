@@ -69,8 +69,10 @@ def test_bad_linear_plants_exit_2_naming_the_key(plant, message, tmp_path, capsy
 
 
 @pytest.mark.parametrize(("plant", "controller", "message"), [
-    ("{kind: state_space, A: [[0, 1], [0, 0]], B: [[0, 1], [1, 0]], C: [[1, 0]]}", REG2,
-     "plant.B: the state regulator places the poles of a single-input plant"),
+    ("{kind: state_space, A: [[0, 1, 0], [0, 0, 1], [0, 0, 0]], B: [[0, 0], [1, 0], [0, 1]], C: [[1, 0, 0]]}",
+     "{kind: state_regulator, poles: [-2, -2, -2]}", "controller.poles: "),
+    ("{kind: state_space, A: [[-1, 0], [0, -2]], B: [[1, 2], [0, 0]], C: [[1, 1]]}", REG2,
+     "plant.B: (A, B) is not controllable"),
     (TF, "{kind: state_regulator, poles: [-6, -8, -9]}", "controller.poles: the transfer_function plant has 2 states"),
     ("{kind: transfer_function, num: [1], den: [1, 3, 3, 1]}", "{kind: pid_servo, poles: [-4, -5, -20]}",
      "controller.poles: a PID places three closed-loop poles on a plant of order 2 only; this plant has order 3"),

@@ -83,15 +83,29 @@ def characteristic_map(A: np.ndarray, b: np.ndarray, c: np.ndarray, r: np.ndarra
 
 
 def plant_zeros(A: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[complex, ...]:
-    """The finite zeros (1/s) of ``c (sI - A)^-1 b``: the roots of its numerator
-    (:meth:`~designkit.models.linear_system.LinearSystem.transfer_coefficients`)."""
-    from designkit.models.linear_system import LinearSystem
+    """The finite zeros (1/s) of ``c (sI - A)^-1 b``: the finite generalised eigenvalues of the Rosenbrock pencil
+    ``[[A, b], [c, 0]] - s [[I, 0], [0, 0]]`` (QZ), as many as ``n`` less the relative degree ``r`` (the first
+    ``k`` with ``c A^(k-1) b`` nonzero to ``1e-12`` of ``|c| |A|^(k-1) |b|``), the smallest in modulus."""
+    from scipy.linalg import eigvals
 
-    n = np.asarray(A).shape[0]
-    ls = LinearSystem(A=A, B=np.asarray(b, float).reshape(n, 1), C=np.asarray(c, float).reshape(1, n),
-                      D=np.zeros((1, 1)), states=tuple(f"x{k}" for k in range(n)), inputs=("u",), outputs=("y",))
-    num, _ = ls.transfer_coefficients()
-    return tuple(complex(z) for z in np.roots(num)) if len(num) > 1 else ()
+    A = np.asarray(A, float)
+    n = A.shape[0]
+    b, c = np.asarray(b, float).reshape(n), np.asarray(c, float).reshape(n)
+    r, v, scale = None, b.copy(), float(np.linalg.norm(b) * np.linalg.norm(c))
+    for k in range(1, n + 1):
+        if abs(float(c @ v)) > 1e-12 * max(scale, 1e-300):
+            r = k
+            break
+        v, scale = A @ v, scale * max(float(np.linalg.norm(A, 2)), 1e-300)
+    if r is None or r == n:
+        return ()
+    L = np.block([[A, b[:, None]], [c[None, :], np.zeros((1, 1))]])
+    M = np.zeros_like(L)
+    M[:n, :n] = np.eye(n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.asarray(eigvals(L, M), dtype=complex)
+    z = z[np.isfinite(z)]
+    return tuple(complex(q) for q in sorted(z, key=abs)[: n - r])
 
 
 def _hadamard(M: np.ndarray) -> float:

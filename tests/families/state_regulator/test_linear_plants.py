@@ -67,3 +67,21 @@ def test_third_order_example_is_verified_and_its_plant_is_described(tmp_path, ca
     assert code == 0 and out["verified"] is True
     html = (tmp_path / "state-space-third-order" / "report.html").read_text()
     assert "theta" in html and "measures the full state" in html
+
+
+def test_two_inputs_robust_placement_against_numpy_and_python_control():
+    text = ("name: mimo\nplant: {kind: state_space, A: [[0, 1, 0], [0, 0, 1], [-1, -2, '-a']], "
+            "B: [[0, 0], [1, 0], [0, 1]], C: [[1, 0, 0]], parameters: {a: 3}}\n"
+            "controller: {kind: state_regulator, poles: [-2, -4, -5]}\n")
+    d = synthesize(parse_spec(text))
+    K = np.array([[float(d.gains[f"K{j}_{i}"]) for i in (1, 2, 3)] for j in (1, 2)])
+    N = np.array([float(d.gains["N1"]), float(d.gains["N2"])])
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -2.0, -3.0]])
+    B = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    assert np.allclose(_sorted(np.linalg.eigvals(A - B @ K)), _sorted([-5, -4, -2]), rtol=1e-9)
+    loop = control.ss(A - B @ K, (B @ N)[:, None], [[1.0, 0.0, 0.0]], 0.0)
+    assert control.dcgain(loop) == pytest.approx(1.0, rel=1e-9)
+    assert np.allclose(_sorted(d.zeros), _sorted(control.zeros(loop)), rtol=1e-7)
+    # N is the least-norm choice: orthogonal to the null space of g = C (A - BK)^-1 B
+    g = np.linalg.solve(A - B @ K, B)[0]
+    assert abs(float(np.cross(g, N))) < 1e-12 * np.linalg.norm(g) * np.linalg.norm(N)

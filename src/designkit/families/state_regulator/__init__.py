@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from designkit.errors import SpecError
+
 import casadi as ca
 import numpy as np
 
@@ -32,7 +34,7 @@ from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linear_servo import plant_zeros
-from designkit.synthesis.pole_placement import ackermann
+from designkit.synthesis.pole_placement import place
 from designkit.synthesis.state_space import check_controllable, linear_model
 
 __all__ = ["FAMILY", "KIND", "StateRegulatorSpec", "law", "synthesize"]
@@ -51,18 +53,28 @@ def synthesize(spec: Any, plant: Any) -> Design:
     check_controllable(spec, model, _box(spec, model))
     A, B, D = model.at()
     poles = tuple(complex(p) for p in spec.controller.poles)
-    K = ackermann(A, B, poles)
+    try:
+        K = place(A, B, poles)  # m x n: Ackermann for one input, robust placement for several
+    except ValueError as exc:
+        raise SpecError("controller.poles", str(exc)) from None
+    m = K.shape[0]
     position = int(plant.positions[0])
     N = reference_gain(A, B, K, position)
     offset = load_offset(A, B, D, K, position) if D.shape[1] else 0.0
     units = [s.unit for s in plant.states]
-    u_unit = plant.inputs[0].unit
-    gains = [Gain(f"K{i + 1}", float(K[i]), f"{u_unit}/({units[i]})", f"state feedback on {plant.states[i].name}")
-             for i in range(len(K))]
-    gains.append(Gain("N", N, f"{u_unit}/({units[position]})", "reference gain (unit static gain)"))
+    gains = []
+    for j in range(m):
+        u_unit = plant.inputs[j].unit
+        on = f" to {plant.inputs[j].name}" if m > 1 else ""
+        gains += [Gain(f"K{i + 1}" if m == 1 else f"K{j + 1}_{i + 1}", float(K[j, i]), f"{u_unit}/({units[i]})",
+                       f"state feedback on {plant.states[i].name}{on}") for i in range(K.shape[1])]
+        gains.append(Gain("N" if m == 1 else f"N{j + 1}", float(np.ravel(N)[j]), f"{u_unit}/({units[position]})",
+                          "reference gain (unit static gain)" if m == 1 else
+                          f"reference gain to {plant.inputs[j].name} (least-norm unit static gain)"))
     open_loop = np.linalg.eigvals(A)
     d_unit = plant.disturbances[0].unit if plant.disturbances else ""
-    data = StateRegulatorData(K=tuple(K.tolist()), N=N, open_loop_poles=tuple(complex(p) for p in open_loop),
+    data = StateRegulatorData(K=tuple(K[0].tolist()) if m == 1 else tuple(tuple(row) for row in K.tolist()),
+                              N=N if m == 1 else tuple(float(v) for v in N), open_loop_poles=tuple(complex(p) for p in open_loop),
                               position_index=position, load_offset_per_unit=offset,
                               load_offset_unit=f"{units[position]} per {d_unit}")
     notes: tuple[str, ...] = ()
@@ -71,12 +83,16 @@ def synthesize(spec: Any, plant: Any) -> Design:
         notes = (f"The regulator measures the full state ({names}) of the plant realised in "
                  f"{plant.realisation.form}: no observer estimates it.",)
     formulas = (
-        "u = −K x + N xD; K = e P(A) (Ackermann), e the last row of [B AB … A^(n−1)B]^−1, P(s) = Π (s − p_j)",
-        f"N = −1/(C (A − BK)^−1 B) = {N:.6g} (unit static gain of the controlled position)",
+        "u = −K x + N xD; K = e P(A) (Ackermann), e the last row of [B AB … A^(n−1)B]^−1, P(s) = Π (s − p_j)"
+        if m == 1 else "u = −K x + N xD; K places the poles by the robust method of Kautsky, Nichols and Van Dooren "
+        "(scipy.signal.place_poles)",
+        f"N = −1/(C (A − BK)^−1 B) = {N:.6g} (unit static gain of the controlled position)" if m == 1 else
+        "N = −gᵀ/(g gᵀ), g = C (A − BK)^−1 B: the least-norm N giving the controlled position a unit static gain",
         f"a constant load w leaves x − xD = −C (A − BK)^−1 D w = {offset:.4g} {units[position]} per {d_unit} "
         "(no integral action)",
     )
-    zeros = plant_zeros(A, B[:, 0], np.eye(A.shape[0])[position])
+    # the zeros of x/xD in the closed loop (with one input, the plant's own: state feedback does not move them)
+    zeros = plant_zeros(A - B @ K, B @ np.ravel(N), np.eye(A.shape[0])[position])
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=zeros, reference="step",
                formulas=formulas, notes=notes, data=data)
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
@@ -85,8 +101,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -K x + N xD`` (input units); records nothing of its own (no state, no switching)."""
     info: StateRegulatorData = design.data
-    K, N = np.asarray(info.K, float), float(info.N)
-    return dynamic_law(KIND, design.plant, command=lambda s: -ca.dot(ca.DM(K), s.y) + N * s.qD[0],
+    n = len(design.plant.states)
+    K, N = np.asarray(info.K, float).reshape(-1, n), np.ravel(np.asarray(info.N, float))
+    return dynamic_law(KIND, design.plant, command=lambda s: -ca.mtimes(ca.DM(K), s.y) + ca.DM(N) * s.qD[0],
                        settings={"gains": design.gains.to_json()})
 
 
@@ -94,7 +111,9 @@ def json_summary(result: Any) -> dict[str, Any]:
     """A ``state_regulator`` object: ``K``, ``N``, the requested and open-loop poles (``[re, im]`` in 1/s) and the
     load offset per unit load."""
     info: StateRegulatorData = result.design.data
-    return {KIND: {"K": list(info.K), "N": info.N, "poles": [[p.real, p.imag] for p in result.design.poles],
+    return {KIND: {"K": [list(k) if isinstance(k, tuple) else k for k in info.K],
+                   "N": list(info.N) if isinstance(info.N, tuple) else info.N,
+                   "poles": [[p.real, p.imag] for p in result.design.poles],
                    "open_loop_poles": [[p.real, p.imag] for p in info.open_loop_poles],
                    "load_offset_per_unit": info.load_offset_per_unit, "load_offset_unit": info.load_offset_unit}}
 

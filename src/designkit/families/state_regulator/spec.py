@@ -46,9 +46,6 @@ class StateRegulatorSpec(Section):
 def validate(spec: Any) -> None:
     """Cross-section rules (``ValueError("key.path: message")``)."""
     n = STATES.get(spec.plant.kind) or linear_order(spec.plant)
-    if spec.plant.kind == "state_space" and len(spec.plant.B[0]) != 1:
-        raise ValueError(f"plant.B: the state regulator places the poles of a single-input plant (Ackermann's "
-                         f"formula); this plant has {len(spec.plant.B[0])} inputs")
     if len(spec.controller.poles) != n:
         raise ValueError(f"controller.poles: the {spec.plant.kind} plant has {n} states, so the state feedback "
                          f"places {n} poles; got {len(spec.controller.poles)}")
