@@ -19,11 +19,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from designkit.errors import SpecError
-
 import casadi as ca
 import numpy as np
 
+from designkit.errors import SpecError
 from designkit.families.state_regulator import answers
 from designkit.families.state_regulator.data import StateRegulatorData
 from designkit.families.state_regulator.gains import load_offset, reference_gain
@@ -74,7 +73,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
     open_loop = np.linalg.eigvals(A)
     d_unit = plant.disturbances[0].unit if plant.disturbances else ""
     data = StateRegulatorData(K=tuple(K[0].tolist()) if m == 1 else tuple(tuple(row) for row in K.tolist()),
-                              N=N if m == 1 else tuple(float(v) for v in N), open_loop_poles=tuple(complex(p) for p in open_loop),
+                              N=N if m == 1 else tuple(float(v) for v in N),
+                              open_loop_poles=tuple(complex(p) for p in open_loop),
                               position_index=position, load_offset_per_unit=offset,
                               load_offset_unit=f"{units[position]} per {d_unit}")
     notes: tuple[str, ...] = ()
