@@ -29,7 +29,7 @@ import numpy as np
 
 from designkit.synthesis.state_space import controllability_matrix
 
-__all__ = ["ackermann", "ackermann_row", "error_gains", "place"]
+__all__ = ["ackermann", "ackermann_row", "error_gains", "observer_gain", "place"]
 
 
 def ackermann_row(A: np.ndarray, B: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
@@ -163,3 +163,31 @@ def place(A: np.ndarray, B: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
     from scipy.signal import place_poles
 
     return np.asarray(place_poles(A, B, np.asarray(poles, complex), method="YT").gain_matrix, float)
+
+
+def observer_gain(A: np.ndarray, C: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
+    """``L`` (``n x q``) with ``eig(A - L C) = poles``: a Luenberger observer by duality, ``L = place(A^T, C^T)^T``.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        ``n x n`` (1/s).
+    C : numpy.ndarray
+        ``q x n``: the measured outputs; ``(A, C)`` observable.
+    poles : sequence of complex
+        ``n`` observer poles (1/s), complex ones in conjugate pairs.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``L`` (state units per output unit per second).
+
+    Examples
+    --------
+    >>> A, C = np.array([[0.0, 1.0], [0.0, -2.0]]), np.array([[1.0, 0.0]])
+    >>> L = observer_gain(A, C, [-10.0, -12.0])
+    >>> sorted(round(float(p.real), 9) for p in np.linalg.eigvals(A - L @ C))
+    [-12.0, -10.0]
+    """
+    A, C = np.asarray(A, float), np.atleast_2d(np.asarray(C, float))
+    return place(A.T, C.T, poles).T

@@ -26,10 +26,11 @@ from designkit.errors import SpecError
 from designkit.families.state_regulator import answers
 from designkit.families.state_regulator.data import StateRegulatorData
 from designkit.families.state_regulator.gains import load_offset, reference_gain
+from designkit.families.state_regulator.observer import closed_loop_zeros, design_observer, observer_states
 from designkit.families.state_regulator.spec import KIND, StateRegulatorSpec, validate
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
-from designkit.synthesis.family import Display, Family
+from designkit.synthesis.family import Display, Family, PlantField
 from designkit.synthesis.knobs import Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linear_servo import plant_zeros
@@ -58,6 +59,9 @@ def synthesize(spec: Any, plant: Any) -> Design:
         raise SpecError("controller.poles", str(exc)) from None
     m = K.shape[0]
     position = int(plant.positions[0])
+    obs = None
+    if getattr(spec.controller, "observer_poles", None) is not None:
+        obs = design_observer(plant, A, B, [complex(p) for p in spec.controller.observer_poles])
     N = reference_gain(A, B, K, position)
     offset = load_offset(A, B, D, K, position) if D.shape[1] else 0.0
     units = [s.unit for s in plant.states]
@@ -73,12 +77,21 @@ def synthesize(spec: Any, plant: Any) -> Design:
     open_loop = np.linalg.eigvals(A)
     d_unit = plant.disturbances[0].unit if plant.disturbances else ""
     data = StateRegulatorData(K=tuple(K[0].tolist()) if m == 1 else tuple(tuple(row) for row in K.tolist()),
+                              observer=obs,
                               N=N if m == 1 else tuple(float(v) for v in N),
                               open_loop_poles=tuple(complex(p) for p in open_loop),
                               position_index=position, load_offset_per_unit=offset,
                               load_offset_unit=f"{units[position]} per {d_unit}")
     notes: tuple[str, ...] = ()
-    if plant.kind in ("transfer_function", "state_space"):
+    if obs is not None:
+        Lm = np.asarray(obs.L)
+        gains += [Gain(f"L{i + 1}_{j + 1}", float(Lm[i, j]), f"({units[i]})/(({plant.outputs[j].unit})*s)",
+                       f"observer gain from output {plant.outputs[j].name} to {plant.states[i].name}")
+                  for j in range(Lm.shape[1]) for i in range(Lm.shape[0])]
+        notes = (f"The regulator feeds back the estimate x̂ of a Luenberger observer reading the outputs "
+                 f"{', '.join(obs.outputs)}: x̂' = A x̂ + B u + L (y − C x̂), L placing the observer poles; the loop "
+                 "has the poles of A − BK and of A − LC (separation), the latter cancelled in y/xD.",)
+    elif plant.kind in ("transfer_function", "state_space"):
         names = ", ".join(s.name for s in plant.states)
         notes = (f"The regulator measures the full state ({names}) of the plant realised in "
                  f"{plant.realisation.form}: no observer estimates it.",)
@@ -93,6 +106,11 @@ def synthesize(spec: Any, plant: Any) -> Design:
     )
     # the zeros of x/xD in the closed loop (with one input, the plant's own: state feedback does not move them)
     zeros = plant_zeros(A - B @ K, B @ np.ravel(N), np.eye(A.shape[0])[position])
+    if obs is not None:
+        zeros = closed_loop_zeros(obs, K, np.ravel(N), position)
+        formulas = (*formulas, "x̂' = A x̂ + B u + L (y − C x̂), u = −K x̂ + N xD; Lᵀ places eig(Aᵀ − Cᵀ Lᵀ) "
+                    "(duality)")
+        poles = (*poles, *obs.poles)
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=zeros, reference="step",
                formulas=formulas, notes=notes, data=data)
     return with_closed_loop(d, law(d), [0.0, 0.0, 0.0], field="controller.poles")
@@ -103,6 +121,10 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     info: StateRegulatorData = design.data
     n = len(design.plant.states)
     K, N = np.asarray(info.K, float).reshape(-1, n), np.ravel(np.asarray(info.N, float))
+    if info.observer is not None:
+        states, command = observer_states(info.observer, K, N, [s.name for s in design.plant.states])
+        return dynamic_law(KIND, design.plant, command=command, states=states,
+                           settings={"gains": design.gains.to_json()})
     return dynamic_law(KIND, design.plant, command=lambda s: -ca.mtimes(ca.DM(K), s.y) + ca.DM(N) * s.qD[0],
                        settings={"gains": design.gains.to_json()})
 
@@ -137,6 +159,8 @@ FAMILY = Family(
     ),
     validate=validate,
     json=json_summary,
+    plant_fields=(PlantField("observer_poles", ("transfer_function", "state_space"),
+                             "a Luenberger observer of the state from the plant's outputs y = C x"),),
     knobs=(Knob("poles", "1/s", "closed-loop poles of x' = (A − B K) x: the regulator's speed", 1e-3, 1e6,
                 path="controller.poles"),),
     traits=("state_feedback",),

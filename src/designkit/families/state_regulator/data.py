@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from designkit.synthesis.design import FamilyData
 
@@ -31,6 +32,9 @@ class StateRegulatorData(FamilyData):
         disturbance unit, rad/(N*m)).
     load_offset_unit : str
         That unit in words (``"rad per N*m"``).
+    observer : Observer or None
+        The Luenberger observer the law feeds back through, if the spec asks for one
+        (:mod:`~designkit.families.state_regulator.observer`).
     """
 
     K: tuple[float, ...] | tuple[tuple[float, ...], ...]
@@ -39,3 +43,4 @@ class StateRegulatorData(FamilyData):
     position_index: int
     load_offset_per_unit: float
     load_offset_unit: str
+    observer: Any = None
