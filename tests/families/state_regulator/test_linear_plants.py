@@ -85,3 +85,48 @@ def test_two_inputs_robust_placement_against_numpy_and_python_control():
     # N is the least-norm choice: orthogonal to the null space of g = C (A - BK)^-1 B
     g = np.linalg.solve(A - B @ K, B)[0]
     assert abs(float(np.cross(g, N))) < 1e-12 * np.linalg.norm(g) * np.linalg.norm(N)
+
+
+OBSERVED = ("name: observed\nplant: {kind: state_space, A: [[0, 1, 0], [0, 0, 1], [0, '-wn*wn', '-2*zeta*wn']], "
+            "B: [[0], [0], ['K*wn*wn']], C: [[1, 0, 0]], parameters: {K: 1.0, wn: 40.0, zeta: 0.05}}\n"
+            "controller: {kind: state_regulator, poles: [-10, -12, -15]OBSERVER}\nsimulation: {duration: 1.0}\n")
+
+
+def test_observer_loop_has_the_regulator_and_observer_poles_and_the_same_step():
+    from designkit.pipeline import run
+
+    observed = run(parse_spec(OBSERVED.replace("OBSERVER", ", observer_poles: [-40, -45, -50]")))
+    full = run(parse_spec(OBSERVED.replace("OBSERVER", "")))
+    d = observed.design
+    K = np.array([float(d.gains[f"K{i}"]) for i in (1, 2, 3)])
+    L = np.array([float(d.gains[f"L{i}_1"]) for i in (1, 2, 3)])
+    wn, zeta = 40.0, 0.05
+    A = np.array([[0, 1, 0], [0, 0, 1], [0, -wn**2, -2 * zeta * wn]])
+    B = np.array([0.0, 0.0, wn**2])
+    C = np.array([1.0, 0.0, 0.0])
+    assert np.allclose(_sorted(np.linalg.eigvals(A - np.outer(L, C))), _sorted([-50, -45, -40]), rtol=1e-8)
+    Acl = np.block([[A, -np.outer(B, K)], [np.outer(L, C), A - np.outer(B, K) - np.outer(L, C)]])
+    assert np.allclose(_sorted(np.linalg.eigvals(Acl)), _sorted([-50, -45, -40, -15, -12, -10]), rtol=1e-7)
+    # separation: started at rest with x̂ = x, the estimation error stays 0 on the nominal plant, so the observed
+    # loop's step is the full-state regulator's
+    t_obs, t_full = np.asarray(observed.simulation.time), np.asarray(full.simulation.time)
+    common = np.intersect1d(np.round(t_obs, 9), np.round(t_full, 9))
+    assert common.size > 100
+    y_obs = np.asarray(observed.simulation.state)[np.isin(np.round(t_obs, 9), common), 0]
+    y_full = np.asarray(full.simulation.state)[np.isin(np.round(t_full, 9), common), 0]
+    assert np.max(np.abs(y_obs - y_full)) < 1e-6
+    assert observed.verified
+
+
+@pytest.mark.parametrize(("plant", "controller", "message"), [
+    ("{kind: link, Km: 2.0, tau: 0.5}", "{kind: state_regulator, poles: [-6, -8], observer_poles: [-20, -30]}",
+     "controller.observer_poles: the state_regulator controller reads it on a transfer_function or state_space"),
+    ("{kind: transfer_function, num: [1], den: [1, 1, 0]}",
+     "{kind: state_regulator, poles: [-6, -8], observer_poles: [-20]}", "controller.observer_poles: the observer"),
+    ("{kind: state_space, A: [[-1, 0], [0, -2]], B: [[1], [1]], C: [[1, 0]]}",
+     "{kind: state_regulator, poles: [-6, -8], observer_poles: [-20, -30]}", "plant.C: (A, C) is not observable"),
+])
+def test_observer_refusals(plant, controller, message, tmp_path, capsys):
+    from tests.cli_input import assert_bad_input
+
+    assert_bad_input(tmp_path, capsys, f"name: bad\nplant: {plant}\ncontroller: {controller}\n", message)
