@@ -108,8 +108,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
     zeros = plant_zeros(A - B @ K, B @ np.ravel(N), np.eye(A.shape[0])[position])
     if obs is not None:
         zeros = closed_loop_zeros(obs, K, np.ravel(N), position)
-        formulas = (*formulas, "x̂' = A x̂ + B u + L (y − C x̂), u = −K x̂ + N xD; Lᵀ places eig(Aᵀ − Cᵀ Lᵀ) "
-                    "(duality)")
+        formulas = (*formulas, "L = Kₒᵀ, Kₒ placing eig(Aᵀ − Cᵀ Kₒ) at the observer poles (duality)")
         poles = (*poles, *obs.poles)
     d = Design(kind=KIND, plant=plant, gains=Gains.of(gains), poles=poles, zeros=zeros, reference="step",
                formulas=formulas, notes=notes, data=data)
@@ -140,6 +139,20 @@ def json_summary(result: Any) -> dict[str, Any]:
                    "load_offset_per_unit": info.load_offset_per_unit, "load_offset_unit": info.load_offset_unit}}
 
 
+def law_lines(design: Design) -> tuple[str, ...]:
+    """The law with an observer (``()``: the family's own, on the measured state)."""
+    info = design.data
+    if getattr(info, "observer", None) is None:
+        return ()
+    return ("u = −K x̂ + N xD", "x̂' = A x̂ + B u + L (y − C x̂): K places eig(A − BK), L places eig(A − LC)")
+
+
+def loop_line(design: Design) -> str | None:
+    """With an observer the loop at the plant input is the observer-based compensator's: no closed form is written
+    (``""``); without one the family's own (None)."""
+    return "" if getattr(design.data, "observer", None) is not None else None
+
+
 FAMILY = Family(
     kind=KIND,
     spec=StateRegulatorSpec,
@@ -153,8 +166,11 @@ FAMILY = Family(
         label="Linear state regulator (pole placement)",
         law=("u = −K x + N xD", "K = e P(A) places the n requested poles (Ackermann); N gives unit static gain"),
         loop_transfer="L(s) = K (sI − A)^−1 B",
-        summary="ROBEL figure 5.2: a full state feedback places every closed-loop pole of the elastic joint "
-                "(motor and link positions and speeds); the reference gain makes the link settle on the "
+        law_of=law_lines,
+        loop_transfer_of=loop_line,
+        summary="ROBEL figure 5.2: a state feedback places every closed-loop pole of the plant (on the elastic "
+                "joint its motor and link positions and speeds; on a linear plant its realised states, measured or "
+                "estimated by an observer); the reference gain makes the controlled position settle on the "
                 "reference without load. No integral action: a load torque leaves an offset.",
     ),
     validate=validate,
