@@ -146,7 +146,7 @@ def linear_servo_design(plant: Any, poles: Sequence[complex], zero: float | None
                f"the loop has order {n + 1}: its {n + 1} characteristic coefficients are not set by three gains in "
                "general")
         raise SpecError("controller.poles", f"a PID places three closed-loop poles on a plant of order 2 only; this "
-                        f"plant has order {n}, so {why} (use state_regulator, which places one pole per state)")
+                        f"plant has order {n}, so {why} (a state feedback places one pole per state)")
     b, pos = B[:, 0], plant.positions[0]
     c = np.eye(n)[pos]
     r = c @ A
