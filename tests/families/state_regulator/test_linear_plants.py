@@ -85,7 +85,7 @@ def test_two_inputs_robust_placement_against_numpy_and_python_control():
     assert np.allclose(_sorted(d.zeros), _sorted(control.zeros(loop)), rtol=1e-7)
     # N is the least-norm choice: orthogonal to the null space of g = C (A - BK)^-1 B
     g = np.linalg.solve(A - B @ K, B)[0]
-    assert abs(float(np.cross(g, N))) < 1e-12 * np.linalg.norm(g) * np.linalg.norm(N)
+    assert abs(float(g[0] * N[1] - g[1] * N[0])) < 1e-12 * np.linalg.norm(g) * np.linalg.norm(N)
 
 
 OBSERVED = ("name: observed\nplant: {kind: state_space, A: [[0, 1, 0], [0, 0, 1], [0, '-wn*wn', '-2*zeta*wn']], "
