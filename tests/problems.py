@@ -33,6 +33,12 @@ PLANTS = {
     "two_link": "{kind: robot, robot: planar2r, uncertainty: {m2: [2.5, 3.5], grid: 3}}",
     "puma560": "{kind: robot, robot: puma560}",
     "elastic_joint": "{kind: elastic_joint}",
+    # the link Km/(s (tau s + 1)) as a transfer function and as a state-space model measuring 2 x1 (the realisation
+    # then makes y = 2 x1 a state), both with named parameters in their entries
+    "transfer_function": "{kind: transfer_function, num: [Km], den: [tau, 1, 0], parameters: {Km: 2.0, tau: 0.5}, "
+                         "uncertainty: {Km: [1.6, 2.4], tau: [0.4, 0.6], grid: 5}}",
+    "state_space": "{kind: state_space, A: [[0, 1], [0, '-1/tau']], B: [[0], ['Km/tau']], C: [[2, 0]], "
+                   "parameters: {Km: 2.0, tau: 0.5}, uncertainty: {Km: [1.6, 2.4], tau: [0.4, 0.6], grid: 5}}",
 }
 """The canonical plants every layer's tests reuse (the SIMNOG arm is designkit's planar2r)."""
 
@@ -41,6 +47,8 @@ CASES = {
         "link": ("{kind: pid_servo, poles: [-4, -5, -20], zero: -3}", "{duration: 3.0}"),
         # the link-position PID from the rigid approximation (specs/robel.yaml's controller (i))
         "elastic_joint": ("{kind: pid_servo, poles: [-4, -5, -6], zero: -5.5}", "{duration: 4.0}"),
+        "transfer_function": ("{kind: pid_servo, poles: [-4, -5, -20], zero: -3}", "{duration: 3.0}"),
+        "state_space": ("{kind: pid_servo, poles: [-4, -5, -20], zero: -3}", "{duration: 3.0}"),
     },
     "pid_tracking": {
         "link": ("{kind: pid_tracking, poles: [-10, -12, -15]}",

@@ -163,6 +163,16 @@ simulation: {duration: 4.0, step: 1.0, initial_position: 0.0, dt: 0.001, delay: 
              perturbation: {value: 1.0, time: 1.0}, anti_windup: {kind: saturation, value: 25}}
 numerics: {rtol: 1.0e-8, atol: 1.0e-10}
 """
+LINEAR_TF = """\
+name: ranges-transfer-function
+plant: {kind: transfer_function, num: [1, 2], den: [1, 1, 0], parameters: {a: 1.0}}
+controller: {kind: state_regulator, poles: [-6, -8]}
+"""
+LINEAR_SS = """\
+name: ranges-state-space
+plant: {kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0], [0, 1]], D: [[0], [0]]}
+controller: {kind: state_regulator, poles: [-6, -8]}
+"""
 SERVO_DERIVED = SERVO.replace("poles: [-4.4, -5.5, -20.2], zero: -3.3", "third_pole_factor: 5, design_margin: 0.1")
 
 
@@ -203,7 +213,14 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "plant.uncertainty.grid": [(SERVO, "plant.uncertainty.grid", "plant.uncertainty.grid")],
     "plant.uncertainty.samples": [(SERVO, "plant.uncertainty.samples", "plant.uncertainty.samples")],
     "plant.uncertainty.seed": [(SERVO, "plant.uncertainty.seed", "plant.uncertainty.seed")],
-    "plant.parameters.<name>": [(ROBOT, "plant.parameters.m2", "plant.parameters.m2")],
+    "plant.parameters.<name>": [(ROBOT, "plant.parameters.m2", "plant.parameters.m2"),
+                                (LINEAR_TF, "plant.parameters.a", "plant.parameters.a")],
+    "plant.num[]": [(LINEAR_TF, "plant.num.1", "plant.num[1]")],
+    "plant.den[]": [(LINEAR_TF, "plant.den.2", "plant.den[2]")],
+    "plant.A[][]": [(LINEAR_SS, "plant.A.1.0", "plant.A[1][0]")],
+    "plant.B[][]": [(LINEAR_SS, "plant.B.0.0", "plant.B[0][0]")],
+    "plant.C[][]": [(LINEAR_SS, "plant.C.1.1", "plant.C[1][1]")],
+    "plant.D[][]": [(LINEAR_SS, "plant.D.1.0", "plant.D[1][0]")],
     "plant.dh[].a": [(ROBOT_DH, "plant.dh.1.a", "plant.dh[1].a")],
     "plant.dh[].alpha": [(ROBOT_DH, "plant.dh.1.alpha", "plant.dh[1].alpha")],
     "plant.dh[].d": [(ROBOT_DH, "plant.dh.0.d", "plant.dh[0].d")],

@@ -1,6 +1,8 @@
 """PID position servo of one link (notes section 3.2, fig. 2.1): the ``pid_servo`` family.
 
-Plant: the simplified link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)``.  Law, with the
+Plant: the simplified link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)`` (also the elastic joint, on its rigid
+approximation, and any single-input linear plant of order 2 -- ``transfer_function`` or ``state_space`` -- placed
+through the closed-loop characteristic polynomial, :mod:`designkit.synthesis.linear_servo`).  Law, with the
 integral ``x3' = x1 - xD``::
 
     u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD
@@ -18,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import field_validator, model_validator
 
 from designkit.spec.controllers import PoleRequirementsController
@@ -29,6 +32,7 @@ from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob, Metric, gain_knobs
 from designkit.synthesis.law import Law
+from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law
 from designkit.synthesis.pid import GAIN_INFO
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 from designkit.synthesis.servo_loop import servo_design, servo_law
@@ -61,9 +65,42 @@ class PidServoSpec(PoleRequirementsController):
         return self
 
 
+LINEAR = ("transfer_function", "state_space")
+"""The general linear plant kinds, designed by :mod:`designkit.synthesis.linear_servo`."""
+
+
+def law_lines(design: Any) -> tuple[str, ...]:
+    """The law in the linear plant's signal names (``()`` on the link and the elastic joint: the family's own)."""
+    plant = design.plant
+    if plant.kind not in LINEAR:
+        return ()
+    y = plant.states[plant.positions[0]].name
+    u = plant.inputs[0].name
+    return (f"{u} = −K1 ({y} − xD) − K2 r x − K3 ∫({y} − xD) dt + K3 K4 xD,   r x = c A x "
+            f"(= {y}' when the relative degree is 2)",)
+
+
+def loop_line(design: Any) -> str | None:
+    """The loop at the plant input of a linear plant of relative degree 2 in closed form, ``""`` at relative degree 1
+    (the rate row then reads part of the input), None on the other plants (the family's own line)."""
+    plant = design.plant
+    if plant.kind not in LINEAR:
+        return None
+    A, B, _, _ = plant.matrices()
+    c = np.eye(A.shape[0])[plant.positions[0]]
+    if abs(float(c @ B[:, 0])) > 1e-12 * (1.0 + float(np.abs(B).max())):
+        return ""
+    written = (plant.equations()[0].split("=", 1)[1].strip() if plant.kind == "transfer_function"
+               else "c (sI − A)⁻¹ b")
+    return f"L(s) = (K2 s² + K1 s + K3) P(s) / s,   P(s) = {written}"
+
+
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -K1 (x1 - xD) - K2 x2 - K3 x3 + K3 K4 xD``, ``x3' = x1 - xD`` (N*m;
-    :func:`~designkit.synthesis.servo_loop.servo_law`)."""
+    :func:`~designkit.synthesis.servo_loop.servo_law`); on a linear plant the rate is ``c A x``
+    (:func:`~designkit.synthesis.linear_servo.linear_servo_law`)."""
+    if design.plant.kind in LINEAR:
+        return linear_servo_law(design, anti_windup)
     return servo_law(design, anti_windup)
 
 
@@ -164,6 +201,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
         zero = poles[2].real
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
+    if plant.kind in LINEAR:
+        return linear_servo_design(plant, poles, zero, kind=KIND, notes=notes, extra=extra)
     if plant.kind == "elastic_joint":
         from designkit.synthesis.state_space import check_controllable, linear_model
 
@@ -204,7 +243,7 @@ def load_offset(result: Any) -> float | None:
 FAMILY = Family(
     kind=KIND,
     spec=PidServoSpec,
-    plants=("link", "elastic_joint"),
+    plants=("link", "elastic_joint", *LINEAR),
     uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="step",
     synthesize=synthesize,
@@ -215,6 +254,8 @@ FAMILY = Family(
         label="PID position servo",
         law=("u = -K1 (x1 - xD) - K2 x2 - K3 ∫(x1 - xD) dt + K3 K4 xD",),
         loop_transfer="L(s) = Km (K2 s² + K1 s + K3) / (s² (τ s + 1))",
+        law_of=law_lines,
+        loop_transfer_of=loop_line,
         summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
                 "closed-loop poles and the zero of x1/xD.",
     ),

@@ -172,6 +172,7 @@ def equations(design: Any, display: Any, plant: Any) -> tuple[Equation, ...]:
             continue  # the law, already shown in the family's notation
         kind = "Closed loop" if re.fullmatch(r"[\w']+/[\w']+", head) else "Design formula"  # x1/xD = ...
         eqs.append(equation(kind, line))
-    if display.loop_transfer:
-        eqs.append(equation("Loop transfer (Bode plot)", display.loop_transfer, _LOOP_NOTE))
+    loop = display.loop_line(design)
+    if loop:
+        eqs.append(equation("Loop transfer (Bode plot)", loop, _LOOP_NOTE))
     return tuple(eqs)

@@ -14,7 +14,13 @@ from typing import Any
 
 from designkit.errors import ModelError, SpecError
 from designkit.models.plant import PlantBase
-from designkit.spec.plants import ElasticJointPlantSpec, LinkPlantSpec, RobotPlantSpec
+from designkit.spec.plants import (
+    ElasticJointPlantSpec,
+    LinkPlantSpec,
+    RobotPlantSpec,
+    StateSpacePlantSpec,
+    TransferFunctionPlantSpec,
+)
 
 __all__ = ["BUILDERS", "check_uncertainty", "plant_from_spec"]
 
@@ -80,10 +86,26 @@ def _robot_model(section: RobotPlantSpec, base_dir: Path | None) -> PlantBase:
         raise ModelError("urdf", str(exc)) from None
 
 
+def _transfer_function(section: TransferFunctionPlantSpec, base_dir: Path | None) -> PlantBase:
+    from designkit.models.linear_plant import transfer_function_plant
+
+    return transfer_function_plant(section.num, section.den, section.parameters, units=section.units,
+                                   input=section.input, output=section.output)
+
+
+def _state_space(section: StateSpacePlantSpec, base_dir: Path | None) -> PlantBase:
+    from designkit.models.linear_plant import state_space_plant
+
+    return state_space_plant(section.A, section.B, section.C, section.D, section.parameters, states=section.states,
+                             inputs=section.inputs, outputs=section.outputs, units=section.units)
+
+
 BUILDERS: dict[str, Callable[[Any, Path | None], PlantBase]] = {
     "link": _link,
     "robot": _robot,
     "elastic_joint": _elastic,
+    "transfer_function": _transfer_function,
+    "state_space": _state_space,
 }
 """Plant kind -> builder ``(section, base_dir) -> Plant``."""
 

@@ -4,7 +4,12 @@
 * ``robot``: a serial manipulator -- a built-in robot by name (``robot: planar2r`` with
   ``parameters`` overriding its defaults), a DH table (``dh:``) or a URDF file (``urdf:``, a
   path relative to the spec file); ``friction`` and ``motor_inertia`` options;
-* ``elastic_joint``: the ROBEL elastic joint (omitted parameters take the built-in defaults).
+* ``elastic_joint``: the ROBEL elastic joint (omitted parameters take the built-in defaults);
+* ``transfer_function``: a SISO ``num(s)/den(s)`` (coefficients highest power first);
+* ``state_space``: ``x' = A x + B u``, ``y = C x + D u`` with named states, inputs and outputs.
+
+The two linear kinds take ``parameters`` (name -> value) that their entries may name (``"b"``, ``"-a"``,
+``"2*a"``: :mod:`designkit.models.expression`); :mod:`designkit.models.linear_plant` says how they are realised.
 
 Every kind takes an optional ``uncertainty``: intervals ``[low, high]`` of named plant
 parameters (``{Km: [1.5, 2.5], tau: [0.4, 0.6]}``, ``{m2: [2.5, 3.5]}``) over which robustness is
@@ -29,6 +34,7 @@ from designkit.spec.fields import Finite, NonNegativeFinite, PositiveFinite, Sec
 from designkit.spec.ranges import (
     ANGLE,
     PARAMETER,
+    Range,
     Ranged,
     RangedInt,
     RangedPerJoint,
@@ -37,7 +43,7 @@ from designkit.spec.ranges import (
 )
 
 __all__ = ["DHLink", "ElasticJointPlantSpec", "Limits", "LinkPlantSpec", "Payload", "PlantSpec", "RobotPlantSpec",
-           "Uncertainty"]
+           "StateSpacePlantSpec", "TransferFunctionPlantSpec", "Uncertainty", "linear_order"]
 
 
 class Uncertainty(Section):
@@ -252,5 +258,88 @@ class ElasticJointPlantSpec(Section):
         return {k: v for k, v in self.model_dump(exclude={"kind", "uncertainty"}).items() if v is not None}
 
 
-PlantSpec = Annotated[LinkPlantSpec | RobotPlantSpec | ElasticJointPlantSpec, Field(discriminator="kind")]
+COEFFICIENT = Range(-1e12, 1e12, "(in the entry's SI unit)")
+"""A numeric entry of a linear plant's polynomial or matrix."""
+
+Entry = Ranged(COEFFICIENT.low, COEFFICIENT.high, COEFFICIENT.unit, base=Finite) | Annotated[str, Field(max_length=200)]
+"""A number, or a text over the plant's parameters (``"2*a"``; :mod:`designkit.models.expression`)."""
+
+SignalName = Annotated[str, Field(max_length=100)]
+
+
+def _continuous(dt: float | None) -> None:
+    if dt is None:
+        return
+    if dt <= 0:
+        raise ValueError(f"dt: must be positive (a sampling period in s), got {dt:g}")
+    raise ValueError("dt: discrete-time plants are not accepted: the simulation integrates continuous-time models; "
+                     "give the continuous-time model and omit dt")
+
+
+class _LinearPlantSpec(Section):
+    """What the two linear plant kinds share: ``parameters`` their entries name, ``units``, ``dt``, ``uncertainty``."""
+
+    parameters: dict[str, Ranged(PARAMETER.low, PARAMETER.high, PARAMETER.unit, base=Finite)] = Field(
+        default_factory=dict, max_length=100)
+    units: dict[str, Annotated[str, Field(max_length=40)]] = Field(default_factory=dict, max_length=200)
+    dt: Finite | None = None
+    uncertainty: Uncertainty | None = None
+
+    @model_validator(mode="after")
+    def _linear(self) -> _LinearPlantSpec:
+        _continuous(self.dt)
+        if self.uncertainty is not None:
+            self.uncertainty.check_ranges(type(self))
+        return self
+
+
+class TransferFunctionPlantSpec(_LinearPlantSpec):
+    """A SISO plant ``output(s)/input(s) = num(s)/den(s)``, continuous-time, strictly proper.
+
+    ``num``, ``den``: coefficients, highest power of ``s`` first, each a number (within 1e12) or a text over
+    ``parameters`` (``"Km"``, ``"2*a"``, ``"-(a + 1)/tau"``); no leading zero; ``len(num) < len(den)``, the
+    denominator of degree 1 to 20.  ``input``, ``output`` name the signals (default ``u``, ``y``); ``units`` gives
+    units by name (the output ``rad``, the input and parameters ``1`` by default).  ``dt`` (a sampling period) is
+    refused: the plant is continuous-time.  Realised in observability canonical form, ``y = x1``
+    (:mod:`designkit.models.linear_plant`).
+    """
+
+    kind: Literal["transfer_function"]
+    num: list[Entry] = Field(min_length=1, max_length=21)
+    den: list[Entry] = Field(min_length=1, max_length=21)
+    input: SignalName = "u"
+    output: SignalName = "y"
+
+
+class StateSpacePlantSpec(_LinearPlantSpec):
+    """A plant ``x' = A x + B u``, ``y = C x + D u``, continuous-time.
+
+    ``A`` (n x n, n at most 20), ``B`` (n x m), ``C`` (q x n), ``D`` (q x m, default zero): lists of rows whose
+    entries are numbers (within 1e12) or texts over ``parameters``.  ``states``, ``inputs``, ``outputs`` name the
+    signals (defaults ``x1..``, ``u``/``u1..``, ``y``/``y1..``); ``units`` gives units by name.  The first output is
+    the tracked position: it must measure something and have no direct feedthrough (``D[0] = 0``).  ``dt`` is
+    refused: the plant is continuous-time.
+    """
+
+    kind: Literal["state_space"]
+    A: list[list[Entry]] = Field(min_length=1, max_length=20)
+    B: list[list[Entry]] = Field(min_length=1, max_length=20)
+    C: list[list[Entry]] = Field(min_length=1, max_length=20)
+    D: list[list[Entry]] | None = Field(default=None, max_length=20)
+    states: list[SignalName] | None = Field(default=None, max_length=20)
+    inputs: list[SignalName] | None = Field(default=None, max_length=20)
+    outputs: list[SignalName] | None = Field(default=None, max_length=20)
+
+
+def linear_order(section: Any) -> int | None:
+    """The number of states of a ``transfer_function`` or ``state_space`` section (None for another kind)."""
+    if section.kind == "transfer_function":
+        return len(section.den) - 1
+    if section.kind == "state_space":
+        return len(section.A)
+    return None
+
+
+PlantSpec = Annotated[LinkPlantSpec | RobotPlantSpec | ElasticJointPlantSpec | TransferFunctionPlantSpec
+                      | StateSpacePlantSpec, Field(discriminator="kind")]
 """The ``plant`` section: one of the plant kinds above."""

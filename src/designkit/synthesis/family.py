@@ -87,6 +87,9 @@ class Display:
     law_of : callable or None
         ``design -> tuple of str``: the law of a design when it depends on the design (a family with one form per
         plant kind); :meth:`law_lines` falls back to ``law``.
+    loop_transfer_of : callable or None
+        ``design -> str or None``: the loop transfer of a design when it depends on the design; ``None`` from it
+        falls back to ``loop_transfer`` (:meth:`loop_line`).
     """
 
     label: str
@@ -94,6 +97,12 @@ class Display:
     loop_transfer: str = ""
     summary: str = ""
     law_of: Callable[[Any], tuple[str, ...]] | None = None
+    loop_transfer_of: Callable[[Any], str | None] | None = None
+
+    def loop_line(self, design: Any) -> str:
+        """The loop transfer the report writes for ``design`` (``""``: none in closed form)."""
+        line = self.loop_transfer_of(design) if self.loop_transfer_of is not None and design is not None else None
+        return self.loop_transfer if line is None else line
 
     def law_lines(self, design: Any) -> tuple[str, ...]:
         """The law as the report writes it for ``design``: ``law_of(design)`` when given and not empty, else

@@ -12,6 +12,10 @@ input); the tests pin ``K`` against python-control's ``acker`` and ``place``.
 The same row ``e P(A)`` with the ``n - 1`` poles of a sliding motion is a sliding surface ``c`` (``c B = 1``):
 :func:`ackermann_row` computes it for any number of poles up to ``n``.
 
+**Several inputs.**  For ``m > 1`` inputs :func:`place` uses the robust method of Kautsky, Nichols and Van Dooren
+(``scipy.signal.place_poles``, Tits-Yang variant): among the many ``K`` placing the poles it picks one whose closed-loop
+eigenvectors are well conditioned; a pole may be repeated at most ``rank B`` times.
+
 **Second-order error.**  A model-based law that makes each coordinate's error obey ``e'' + K2 e' + K1 e = 0``
 places the poles ``p1, p2`` (a real pair or a conjugate pair) with ``K1 = p1 p2`` and ``K2 = -(p1 + p2)``
 (:func:`error_gains`).
@@ -25,7 +29,7 @@ import numpy as np
 
 from designkit.synthesis.state_space import controllability_matrix
 
-__all__ = ["ackermann", "ackermann_row", "error_gains"]
+__all__ = ["ackermann", "ackermann_row", "error_gains", "observer_gain", "place"]
 
 
 def ackermann_row(A: np.ndarray, B: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
@@ -115,3 +119,75 @@ def error_gains(pairs: Sequence[tuple[complex, complex]]) -> tuple[tuple[float, 
     K1 = tuple(float((p1 * p2).real) for p1, p2 in pairs)
     K2 = tuple(float((-(p1 + p2)).real) for p1, p2 in pairs)
     return K1, K2
+
+
+def place(A: np.ndarray, B: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
+    """``K`` (``m x n``) with ``eig(A - B K) = poles``: Ackermann's formula for one input, SciPy's robust placement
+    (module docstring) for several.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        ``n x n`` (state units per state unit per second).
+    B : numpy.ndarray
+        ``n x m`` (state units per second per input unit); ``(A, B)`` controllable.
+    poles : sequence of complex
+        ``n`` poles (1/s), complex ones in conjugate pairs.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K``, ``m x n`` (input units per state unit).
+
+    Raises
+    ------
+    ValueError
+        Not ``n`` poles, or (several inputs) a pole repeated more than ``rank B`` times.
+
+    Examples
+    --------
+    >>> A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -2.0, -3.0]])
+    >>> B = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> K = place(A, B, [-2.0, -3.0, -4.0])
+    >>> sorted(round(float(p.real), 9) for p in np.linalg.eigvals(A - B @ K))
+    [-4.0, -3.0, -2.0]
+    """
+    A, B = np.asarray(A, float), np.asarray(B, float)
+    if B.ndim == 1:
+        B = B[:, None]
+    if B.shape[1] == 1:
+        return ackermann(A, B, poles)[None, :]
+    n = A.shape[0]
+    if len(poles) != n:
+        raise ValueError(f"needs {n} poles for {n} states, got {len(poles)}")
+    from scipy.signal import place_poles
+
+    return np.asarray(place_poles(A, B, np.asarray(poles, complex), method="YT").gain_matrix, float)
+
+
+def observer_gain(A: np.ndarray, C: np.ndarray, poles: Sequence[complex]) -> np.ndarray:
+    """``L`` (``n x q``) with ``eig(A - L C) = poles``: a Luenberger observer by duality, ``L = place(A^T, C^T)^T``.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        ``n x n`` (1/s).
+    C : numpy.ndarray
+        ``q x n``: the measured outputs; ``(A, C)`` observable.
+    poles : sequence of complex
+        ``n`` observer poles (1/s), complex ones in conjugate pairs.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``L`` (state units per output unit per second).
+
+    Examples
+    --------
+    >>> A, C = np.array([[0.0, 1.0], [0.0, -2.0]]), np.array([[1.0, 0.0]])
+    >>> L = observer_gain(A, C, [-10.0, -12.0])
+    >>> sorted(round(float(p.real), 9) for p in np.linalg.eigvals(A - L @ C))
+    [-12.0, -10.0]
+    """
+    A, C = np.asarray(A, float), np.atleast_2d(np.asarray(C, float))
+    return place(A.T, C.T, poles).T

@@ -97,7 +97,7 @@ def linear_model(plant: object) -> LinearModel:
 
 
 def controllability_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """``W = [B, AB, ..., A^(n-1) B]`` (single input).
+    """``W = [B, AB, ..., A^(n-1) B]`` (``n x n m``; ``n x n`` for a single input).
 
     Parameters
     ----------
@@ -112,17 +112,25 @@ def controllability_matrix(A: np.ndarray, B: np.ndarray) -> np.ndarray:
         ``n x n``; column ``k`` in state units per second^(k+1) per input unit.
     """
     n = A.shape[0]
-    cols = [np.asarray(B, float).reshape(n)]
+    B = np.asarray(B, float).reshape(n, -1)
+    blocks = [B]
     for _ in range(n - 1):
-        cols.append(A @ cols[-1])
-    return np.column_stack(cols)
+        blocks.append(A @ blocks[-1])
+    return np.hstack(blocks)
 
 
 def controllability_ratio(A: np.ndarray, B: np.ndarray) -> float:
     """Hadamard's ratio ``|det W| / prod ||W_k||`` of :func:`controllability_matrix`, in ``[0, 1]``
-    (dimensionless; 0: uncontrollable)."""
+    (dimensionless; 0: uncontrollable); with several inputs (``W`` wider than tall) the ratio of the ``n``-th to
+    the first singular value of ``W`` with unit columns, also 0 exactly when ``rank W < n``."""
     W = controllability_matrix(A, B)
     norms = np.linalg.norm(W, axis=0)
+    if W.shape[1] > W.shape[0]:  # several inputs: the n-th singular value of the column-scaled W over the first
+        kept = norms > 0
+        if not np.any(kept):
+            return 0.0
+        sv = np.linalg.svd(W[:, kept] / norms[kept], compute_uv=False)
+        return float(sv[W.shape[0] - 1] / sv[0]) if sv.size >= W.shape[0] else 0.0
     if np.any(norms == 0):
         return 0.0
     return float(abs(np.linalg.det(W / norms)))
@@ -153,7 +161,12 @@ def check_controllable(spec: object, model: LinearModel, box: dict[str, tuple[fl
     ratio = controllability_ratio(A, B)
     if ratio < CONTROLLABILITY_TOL:
         plant = spec.plant  # type: ignore[attr-defined]
-        if A.shape[0] != 4:
+        if plant.kind == "transfer_function":
+            raise SpecError("plant.num", f"shares a root with plant.den (a pole-zero cancellation): the realisation "
+                            f"is not controllable (Hadamard ratio {ratio:.3g}): {consequence}")
+        if plant.kind == "state_space":
+            raise SpecError("plant.B", f"(A, B) is not controllable (Hadamard ratio {ratio:.3g}): {consequence}")
+        if plant.kind != "elastic_joint":
             raise SpecError("plant", f"the plant is not controllable (Hadamard ratio {ratio:.3g})")
         given = [k for k in COUPLING if getattr(plant, k, None) is not None] or ["KR"]
         raise SpecError(f"plant.{given[0]}", f"makes the plant uncontrollable: the motor reaches the link only "

@@ -72,13 +72,15 @@ def compare(result: Any) -> tuple[tuple[MetricPair, ...], Any]:
     lin = _metrics_of(lin_run, band) if lin_run is not None else None
     units = sorted(set(sim.coordinate_units)) if sim.task_space else ["rad"]
     unit = "/".join(units)
+    plant = getattr(result, "plant", None)
+    command = "/".join(sorted({s.unit for s in plant.inputs})).replace("*", "·") if plant is not None else "N·m"
     if sim.kind == "trajectory":
         rows = [("max tracking error", unit, "max_tracking_error"), ("settling time", "s", "settling_time"),
-                ("final tracking error", unit, "steady_state_error"), ("peak |u| commanded", "N·m", "peak_u_command")]
+                ("final tracking error", unit, "steady_state_error"), ("peak |u| commanded", command, "peak_u_command")]
     else:
         rows = [("overshoot", "%", "overshoot"), ("settling time", "s", "settling_time"),
                 ("rise time", "s", "rise_time"), ("steady-state error", unit, "steady_state_error"),
-                ("peak |u| commanded", "N·m", "peak_u_command")]
+                ("peak |u| commanded", command, "peak_u_command")]
     digits = {"steady_state_error": 3}
     out = []
     for label, u, key in rows:

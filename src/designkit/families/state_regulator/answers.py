@@ -22,8 +22,11 @@ def strategy(result: Any) -> tuple[str, ...]:
     if not isinstance(info, StateRegulatorData):
         return ()
     poles = fmt_poles(result.design.poles)
-    return (f"u = −K x + N xD: K places the closed-loop poles {poles} 1/s of x' = (A − B K) x by Ackermann's "
-            f"formula on the plant linearised at rest, N = {fmt_number(info.N, 4)} gives the controlled position "
+    n_text = (fmt_number(info.N, 4) if not isinstance(info.N, tuple)
+              else "(" + ", ".join(fmt_number(v, 4) for v in info.N) + ")")
+    how = "Ackermann's formula" if not isinstance(info.N, tuple) else "robust placement (several inputs)"
+    return (f"u = −K x + N xD: K places the closed-loop poles {poles} 1/s of x' = (A − B K) x by {how} "
+            f"on the plant linearised at rest, N = {n_text} gives the controlled position "
             "a unit static gain; no integral action, so a constant load leaves an offset.",)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from designkit.synthesis.design import FamilyData
 
@@ -16,11 +17,12 @@ class StateRegulatorData(FamilyData):
 
     Attributes
     ----------
-    K : tuple of float
+    K : tuple of float, or tuple of tuples
         The state feedback of ``u = -K x + N xD`` (input unit per state unit: N*m/rad, N*m*s/rad on the elastic
-        joint's and the link's states).
-    N : float
-        The reference gain giving the controlled position a unit static gain (input unit per position unit).
+        joint's and the link's states); one row per input when the plant has several.
+    N : float or tuple of float
+        The reference gain giving the controlled position a unit static gain (input unit per position unit); one
+        per input when the plant has several.
     open_loop_poles : tuple of complex
         The eigenvalues of the nominal plant's ``A`` (1/s).
     position_index : int
@@ -30,11 +32,15 @@ class StateRegulatorData(FamilyData):
         disturbance unit, rad/(N*m)).
     load_offset_unit : str
         That unit in words (``"rad per N*m"``).
+    observer : Observer or None
+        The Luenberger observer the law feeds back through, if the spec asks for one
+        (:mod:`~designkit.families.state_regulator.observer`).
     """
 
-    K: tuple[float, ...]
-    N: float
+    K: tuple[float, ...] | tuple[tuple[float, ...], ...]
+    N: float | tuple[float, ...]
     open_loop_poles: tuple[complex, ...]
     position_index: int
     load_offset_per_unit: float
     load_offset_unit: str
+    observer: Any = None

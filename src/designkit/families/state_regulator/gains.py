@@ -17,14 +17,26 @@ import numpy as np
 __all__ = ["load_offset", "reference_gain"]
 
 
-def reference_gain(A: np.ndarray, B: np.ndarray, K: np.ndarray, position: int) -> float:
-    """``N = -1/(C (A - B K)^-1 B)``, ``C`` selecting state ``position``: unit static gain from ``xD``."""
-    Acl = np.asarray(A, float) - np.outer(np.asarray(B, float).reshape(-1), K)
-    return float(-1.0 / np.linalg.solve(Acl, np.asarray(B, float).reshape(-1))[position])
+def _closed(A: np.ndarray, B: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    A = np.asarray(A, float)
+    B = np.asarray(B, float).reshape(A.shape[0], -1)
+    return A - B @ np.asarray(K, float).reshape(B.shape[1], A.shape[0]), B
+
+
+def reference_gain(A: np.ndarray, B: np.ndarray, K: np.ndarray, position: int) -> float | np.ndarray:
+    """``N = -1/(C (A - B K)^-1 B)``, ``C`` selecting state ``position``: unit static gain from ``xD``.
+
+    With several inputs ``g = C (A - B K)^-1 B`` is a row and ``N = -g^T / (g g^T)``, the least-norm ``N`` with
+    ``-g N = 1`` (one entry per input); one input gives a float."""
+    Acl, B = _closed(A, B, K)
+    g = np.linalg.solve(Acl, B)[position]
+    if g.size == 1:
+        return float(-1.0 / g[0])
+    return -g / float(g @ g)
 
 
 def load_offset(A: np.ndarray, B: np.ndarray, D: np.ndarray, K: np.ndarray, position: int) -> float:
     """Steady-state position error per unit of constant disturbance: ``-C (A - B K)^-1 D`` (state unit per
-    disturbance unit)."""
-    Acl = np.asarray(A, float) - np.outer(np.asarray(B, float).reshape(-1), K)
+    disturbance unit; the first disturbance)."""
+    Acl, _ = _closed(A, B, K)
     return float(-np.linalg.solve(Acl, np.asarray(D, float)[:, 0])[position])

@@ -70,7 +70,7 @@ def bode_figure(result: Any, check: Any) -> Figure | None:
     if not check.data.get("channels"):
         return None
     display = getattr(result, "display", None)  # the family's Display (PipelineResult.display)
-    transfer = display.loop_transfer if display is not None else ""
+    transfer = display.loop_line(getattr(result, "design", None)) if display is not None else ""
     svg, keys, _ = render_tagged(_draw_bode, check.data)
     return Figure("Loop Bode plot at the plant input", _loop_caption(keys, len(check.data["channels"]), transfer),
                   svg, "fig-loop-bode.svg", (check.name,))
