@@ -137,9 +137,9 @@ class ChatterPredicted:
 
 
 def predict(loop: Loop, amplitude: float, timing: Timing, s_unit: str, u_unit: str,
-            output_unit: str = "") -> ChatterPredicted:
+            name: str = "s") -> ChatterPredicted:
     """The chatter the relay of ``amplitude`` (the input's unit) sustains on ``loop`` as the run holds it
-    (module docstring); the lag enters the loop when the spec states one."""
+    (module docstring); the lag enters the loop when the spec states one; ``name`` is the switching variable's."""
     m = float(amplitude)
     lagged = loop.with_lag(timing.bandwidth) if timing.bandwidth else loop
     lag_words = f" behind the actuator lag of {timing.bandwidth:.4g} rad/s" if timing.bandwidth else ""
@@ -159,7 +159,7 @@ def predict(loop: Loop, amplitude: float, timing: Timing, s_unit: str, u_unit: s
             "sampled", orbit.frequency, orbit.amplitude, cmd, peak(orbit, "output"), orbit.half_period,
             f"sampled every {timing.period:.3g} s{delay}{lag_words}, the relay's exact orbit (the smallest "
             f"consistent one, {orbit.tried} shorter ones inconsistent) holds {orbit.half_period} sample"
-            f"{'s' if orbit.half_period > 1 else ''} at each sign: {orbit.frequency:.4g} Hz, |s| up to "
+            f"{'s' if orbit.half_period > 1 else ''} at each sign: {orbit.frequency:.4g} Hz, |{name}| up to "
             f"{orbit.amplitude:.3g} {s_unit}, the command switching by ±{cmd:.3g} {u_unit}")
     if timing.bandwidth or timing.delay > 0:
         exact = continuous_orbit(lagged, m, delay=timing.delay)
@@ -167,13 +167,13 @@ def predict(loop: Loop, amplitude: float, timing: Timing, s_unit: str, u_unit: s
             cmd = peak(exact, "actuator") if timing.bandwidth else m
             return ChatterPredicted("continuous", exact.frequency, exact.amplitude, cmd, peak(exact, "output"), None,
                                     f"the continuous relay loop{lag_words} has the exact orbit of "
-                                    f"{exact.frequency:.4g} Hz, |s| up to {exact.amplitude:.3g} {s_unit}, the "
+                                    f"{exact.frequency:.4g} Hz, |{name}| up to {exact.amplitude:.3g} {s_unit}, the "
                                     f"command switching by ±{cmd:.3g} {u_unit}")
         cycle = describing_function(lagged, m, delay=timing.delay)
         if cycle is not None:
             return ChatterPredicted("describing", cycle.hertz, cycle.amplitude, cycle.command, None, None,
                                     f"the describing function of the relay{lag_words} balances at "
-                                    f"{cycle.hertz:.4g} Hz with s of amplitude {cycle.amplitude:.3g} {s_unit} "
+                                    f"{cycle.hertz:.4g} Hz with {name} of amplitude {cycle.amplitude:.3g} {s_unit} "
                                     f"(the command's fundamental 4M/π = {cycle.command:.3g} {u_unit})")
     return ChatterPredicted("none", None, None, None, None, None, no_cycle_words(timing.step))
 
@@ -223,20 +223,21 @@ def measure(t: np.ndarray, s: np.ndarray, u: np.ndarray) -> ChatterMeasured | No
 
 
 def words(pred: ChatterPredicted, meas: ChatterMeasured | None, amplitude: float, s_unit: str, u_unit: str,
-          compared: bool = True) -> str:
-    """Predicted against measured in words (the relay ``amplitude`` in the input's unit, for the bias share)."""
+          compared: bool = True, name: str = "s") -> str:
+    """Predicted against measured in words (the relay ``amplitude`` in the input's unit, for the bias share;
+    ``name`` the switching variable's)."""
     if meas is None:
         return f"predicted: {pred.sentence}; no settled window to measure"
-    seen = (f"measured over {meas.start:.3g}–{meas.stop:.3g} s: {meas.frequency:.4g} Hz (sign changes of s over "
-            f"two), s swinging by ±{meas.s_amplitude:.3g} {s_unit}, the command by ±{meas.command:.3g} {u_unit} "
-            f"about the equivalent control {meas.equivalent:.3g} {u_unit}")
+    seen = (f"measured over {meas.start:.3g}–{meas.stop:.3g} s: {meas.frequency:.4g} Hz (sign changes of {name} "
+            f"over two), {name} swinging by ±{meas.s_amplitude:.3g} {s_unit}, the command by ±{meas.command:.3g} "
+            f"{u_unit} about the equivalent control {meas.equivalent:.3g} {u_unit}")
     if not compared:
         return f"predicted: {pred.sentence}; {seen} (the run does not contain the actuator lag: not compared)"
     if pred.kind == "none" or pred.frequency is None:
         return f"predicted: {pred.sentence}; {seen}"
     r = min(abs(meas.equivalent) / amplitude, 1.0) if amplitude > 0 else 0.0
     bias = ""
-    if r > 1e-3 and pred.s_amplitude is not None:
+    if 1e-3 < r < 1 and pred.s_amplitude is not None:
         bias = (f"; with the equivalent control taking r = {r:.3g} of M the first-order estimate is "
                 f"{pred.frequency * (1 - r):.4g} Hz and ±{pred.s_amplitude * (1 + r):.3g} {s_unit}")
     ratio = meas.frequency / pred.frequency

@@ -83,7 +83,7 @@ def chatter(design: Any, sim: Any, spec: Any, run: Any) -> Chatter:
     km, tau = (float(design.plant.parameter(n).value) for n in ("Km", "tau"))
     c, m = float(design.gains["c"]), float(design.gains["M"])
     timing = timing_of(spec, sim)
-    pred = predict(loop_of(km, tau, c), m, timing, "rad/s", "N·m", "rad")
+    pred = predict(loop_of(km, tau, c), m, timing, "rad/s", "N·m")
     win = _window(run)
     meas = None
     if win is not None:
