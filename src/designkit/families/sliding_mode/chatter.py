@@ -7,14 +7,16 @@ layer that brings it under ``requirements.max_chatter_amplitude``.
 
     s = b (p + c) / (p (p + a)) v,    state (e, x2),  A = [[0, 1], [0, -a]],  B = [0, b],  C = [c, 1],
 
-its output the error ``e`` (rad).  The structure term ``-psi e`` is left out: while the loop chatters ``e``
-moves by at most ``|s|/c`` per second, so ``psi e`` is a slowly varying bias of the relay, like the perturbation;
+its output the error ``e`` (rad).  The structure term splits into a smooth part and a switch:
+``psi e = (alpha + beta)/2 e + (alpha - beta)/2 |e| sign(s)``.  ``e`` moves at the sliding line's rate ``c``, far
+slower than the chatter, so the smooth part is a slowly varying bias of the relay, like the perturbation;
 together they are the equivalent control ``u_eq``, which makes the orbit asymmetric
-(:mod:`designkit.verification.chatter_prediction`).  The structure switch is itself a relay on ``s``:
-``psi e = (alpha + beta)/2 e + (alpha - beta)/2 |e| sign(s)``, of amplitude ``(alpha - beta)|e|/2``, which
-vanishes as ``e`` settles; the settled chatter is the relay ``M``'s, and the boundary layer must also hold the
-structure switch's orbit as sliding starts (:func:`layer`).  The prediction is on the design's nominal ``(Km, tau)``;
-the boundary layer that removes the chatter is sized on the box's corners (the smallest critical gain).
+(:mod:`designkit.verification.chatter_prediction`).  The switch adds ``(alpha - beta)|e|/2`` to the relay's
+amplitude, which vanishes as ``e`` settles: the prediction takes the relay's amplitude on the measured window,
+``M + (alpha - beta)/2 mean|e|`` (the loop is linear: the orbit scales with the amplitude), and the boundary layer
+must also hold the structure switch's orbit as sliding starts (:func:`layer`).  The prediction is on the design's
+nominal ``(Km, tau)``; the boundary layer that removes the chatter is sized on the box's corners (the smallest
+critical gain).
 
 **Measured** on the last tenth of the sliding time of the last reference segment that slides (the settled
 chatter; the reaching phase and the perturbation's step are left out).
@@ -25,6 +27,8 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from designkit.verification.chatter_prediction import (
     ChatterMeasured,
@@ -83,19 +87,23 @@ def chatter(design: Any, sim: Any, spec: Any, run: Any) -> Chatter:
     km, tau = (float(design.plant.parameter(n).value) for n in ("Km", "tau"))
     c, m = float(design.gains["c"]), float(design.gains["M"])
     timing = timing_of(spec, sim)
-    pred = predict(loop_of(km, tau, c), m, timing, "rad/s", "N·m")
     win = _window(run)
-    meas = None
+    meas, structure = None, 0.0
     if win is not None:
         d = run.data
         a, b = win
         meas = measure_chatter(d["time"][a:b], d["s"][a:b], d["u"][a:b])
+        half = (float(design.gains["alpha"]) - float(design.gains["beta"])) / 2
+        structure = half * float(np.mean(np.abs(d["e"][a:b])))
+    pred = predict(loop_of(km, tau, c), m + structure, timing, "rad/s", "N·m")
     compared = timing.bandwidth is None or timing.lag_in_run
     layer_words = "" if design.data.boundary_layer is None else (
         f"; with the boundary layer ε = {design.data.boundary_layer:.4g} rad/s the relay is the gain "
         f"M/ε = {m / design.data.boundary_layer:.4g} N·m/(rad/s) inside it, which the prediction (of the relay) "
         "does not describe")
-    return Chatter(pred, meas, timing, compared, words(pred, meas, m, "rad/s", "N·m", compared) + layer_words)
+    said = (f"the relay's amplitude on the window M + (α − β)/2 mean|e| = {m:.3g} + {structure:.3g} N·m; "
+            + words(pred, meas, m + structure, "rad/s", "N·m", compared))
+    return Chatter(pred, meas, timing, compared, said + layer_words)
 
 
 STRUCTURE_MARGIN = 1.25
