@@ -86,6 +86,11 @@ def test_measure_counts_of_our_own():
     s = -u + 0.5
     m = measure(t, s, u)
     assert m.command == pytest.approx(1.0) and m.equivalent == pytest.approx(np.mean(u))
+    assert m.s_amplitude == pytest.approx(1.0)
+    # a drift across the window does not enter the half swing: +-1 about a mean drifting by 0.5 (half the
+    # peak-to-peak would be 1.25)
+    drift = np.where(s > 0, 1.0, -1.0) + 0.5 * t
+    assert measure(t, drift, u).s_amplitude == pytest.approx(1.0, abs=0.01)
     changes = int(np.count_nonzero(np.diff(np.sign(s)) != 0))
     assert m.frequency == pytest.approx(changes / 2 / (t[-1] - t[0]))
 

@@ -19,7 +19,8 @@ minority side keeps its ``k`` samples and the other side lengthens to ``k (1 + r
 falls to ``f (1 - r)`` and the swing of ``s`` grows to ``A (1 + r)`` (a first-order estimate, stated as such).
 
 The **measurement** (:func:`measure`) is read on a settled window of the run (the family chooses it): the half
-peak-to-peak of ``s`` and of the command, the sign changes of ``s`` per second over two (Hz), and the averaged
+swing of ``s`` (the mean over its half cycles of the largest ``|s|`` in each), the half peak-to-peak of the
+command, the sign changes of ``s`` per second over two (Hz), and the averaged
 command ``u_eq``.
 
 The **chatter amplitude** ``requirements.max_chatter_amplitude`` bounds is the half peak-to-peak of the command
@@ -187,7 +188,8 @@ class ChatterMeasured:
     start, stop : float
         The window (s).
     s_amplitude : float
-        Half the peak-to-peak of ``s`` (the unit of ``s``).
+        The half swing of ``s``: the mean over its complete half cycles (runs of one sign) of the largest
+        ``|s|`` in each (the unit of ``s``); a slow drift of ``s`` across the window does not enter it.
     command : float
         Half the peak-to-peak of the command: the chatter amplitude (the input's unit).
     frequency : float
@@ -210,6 +212,17 @@ class ChatterMeasured:
                 "equivalent_control": self.equivalent}
 
 
+def _half_swing(s: np.ndarray) -> float:
+    """The mean over the complete half cycles (runs of one sign, the first and last cut by the window left out)
+    of the largest ``|s|`` in each; half the peak-to-peak when there are fewer than three runs."""
+    nz = s[s != 0]
+    cuts = np.flatnonzero(np.sign(nz[1:]) != np.sign(nz[:-1])) + 1
+    runs = np.split(nz, cuts)[1:-1]
+    if len(runs) < 1:
+        return float(np.ptp(s)) / 2 if s.size else 0.0
+    return float(np.mean([np.max(np.abs(r)) for r in runs]))
+
+
 def measure(t: np.ndarray, s: np.ndarray, u: np.ndarray) -> ChatterMeasured | None:
     """The chatter on the window the arrays cover (``t`` in s); None on fewer than two samples."""
     t, s, u = (np.asarray(x, float) for x in (t, s, u))
@@ -218,8 +231,8 @@ def measure(t: np.ndarray, s: np.ndarray, u: np.ndarray) -> ChatterMeasured | No
     nz = s[s != 0]
     flips = int(np.count_nonzero(np.sign(nz[1:]) != np.sign(nz[:-1]))) if nz.size > 1 else 0
     span = float(t[-1] - t[0])
-    return ChatterMeasured(float(t[0]), float(t[-1]), float(np.ptp(s)) / 2, float(np.ptp(u)) / 2,
-                           flips / 2 / span, float(np.mean(u)))
+    return ChatterMeasured(float(t[0]), float(t[-1]), _half_swing(s), float(np.ptp(u)) / 2, flips / 2 / span,
+                           float(np.mean(u)))
 
 
 def words(pred: ChatterPredicted, meas: ChatterMeasured | None, amplitude: float, s_unit: str, u_unit: str,
