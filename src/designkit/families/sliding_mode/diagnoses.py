@@ -23,6 +23,7 @@ from designkit.families.sliding_mode.checks import shortfall_sentence
 from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.measure import measure
 from designkit.synthesis.spec_change import SpecChange
+from designkit.verification.chatter_prediction import timing_of
 
 __all__ = ["diagnose"]
 
@@ -126,6 +127,38 @@ def _while_sliding(result: Any, check: Any, run: Any) -> tuple[str, str] | None:
     return None
 
 
+def _continuous_layer(result: Any, check: Any, limit: float) -> tuple[str, str, tuple[SpecChange, ...]]:
+    """A continuous switch: no finite limit cycle; the layer whose own step is the run's."""
+    from designkit.display.numbers import quantity
+    from designkit.families.sliding_mode import LAYER_STEPS
+
+    info, m = result.design.data, float(result.design.gains["M"])
+    dt = float(result.simulation.settings["dt"])
+    eps = LAYER_STEPS * float(info.sdot_max) * dt
+    cap = ""
+    if info.strip is not None and eps > info.strip / 2:
+        eps = info.strip / 2
+        cap = f" (capped at half the strip where s s' < 0 holds, {eps:.4g} rad/s)"
+    req = result.loaded.spec.requirements
+    need = None if req is None else req.steady_state_error
+    if need is not None and info.xi_bar > 0:
+        # inside the layer |s| -> eps xi/M and |e| -> eps xi/(M c): half the required error at most
+        most = 0.5 * float(info.c) * m * float(need) / float(info.xi_bar)
+        if eps > most:
+            eps = most
+            cap = (f" (narrowed so that the error the layer leaves, ε sup|ξ|/(M c), is half the required "
+                   f"{float(need):g} rad; its step is then ε/(10 ṡ_max) = {eps / (LAYER_STEPS * info.sdot_max):.3g} s)")
+    cause = (f"The continuous-time relay M = {quantity(m, 'N*m')} has no finite limit cycle: held over the integration "
+             f"step {dt:.3g} s, it switches the command by ±{quantity(check.achieved, 'N*m')} against "
+             f"{quantity(limit, 'N*m')}, a chatter the step sets.")
+    fix = (f"A boundary layer ε = {eps:.4g} rad/s (controller.boundary_layer){cap}: at most the layer whose own step "
+           f"ε/(10 ṡ_max) is the run's {dt:.3g} s (ṡ_max = {float(info.sdot_max):.4g} rad/s²), which resolves its "
+           f"linear gain M/ε = {m / eps:.4g} N·m/(rad/s), so the command settles to the equivalent control.")
+    change = SpecChange(f"a boundary layer ε = {eps:.4g} rad/s",
+                        (("controller.boundary_layer", float(f"{eps:.4g}")), ("controller.chattering_band", None)))
+    return cause, fix, (change,)
+
+
 def _chattering(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | None:
     """The boundary layer that removes the chatter the requirement refuses."""
     from designkit.display.numbers import quantity
@@ -135,6 +168,9 @@ def _chattering(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ..
     limit = check.certificate.get("limit")
     if limit is None or sim is None:
         return None
+    timing = timing_of(spec, sim)
+    if timing.period == 0 and timing.delay == 0 and timing.bandwidth is None:
+        return _continuous_layer(result, check, float(limit))
     found = layer(design, sim, spec, measure(design, sim))
     if found is None:
         return None
@@ -147,6 +183,13 @@ def _chattering(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ..
         cap = (f" That layer is wider than half the strip where s s' < 0 holds ({strip / 2:.4g} rad/s), which the "
                "design refuses; the widest allowed is proposed instead.")
         eps = strip / 2
+    req = spec.requirements
+    need = None if req is None else req.steady_state_error
+    info = design.data
+    if need is not None and info.xi_bar > 0 and eps * info.xi_bar / (m * info.c) > float(need):
+        cap += (f" That layer leaves an error ε sup|ξ|/(M c) = {eps * info.xi_bar / (m * info.c):.3g} rad, above the "
+                f"required {float(need):g} rad: with this hold no layer meets both; a shorter sampling period lowers "
+                "the critical gain's bound on ε.")
     measured = check.achieved
     cause = (f"The relay M = {quantity(m, 'N*m')} switches the command by ±{quantity(m, 'N*m')} whatever the "
              f"equivalent control (measured ±{quantity(measured, 'N*m') if measured is not None else 'n/a'}, "
