@@ -104,3 +104,22 @@ def test_requirement_refused_by_a_family_that_does_not_measure_it():
     assert "max_chatter_amplitude" in body
     with pytest.raises(SpecError, match="requirements.max_chatter_amplitude"):
         parse_spec(body)
+
+
+@pytest.mark.slow
+def test_continuous_switch_layer_keeps_the_step_and_the_error():
+    """Without a hold the relay has no finite cycle; the layer proposed keeps the required steady-state error:
+    inside it |e| -> eps sup|xi|/(M c), at most half the requirement."""
+    from designkit.analysis.diagnosis import diagnose
+
+    text = LINK_SPEC.read_text().replace("steady_state_error: 0.005}",
+                                         "steady_state_error: 0.005, max_chatter_amplitude: 0.5}")
+    result = run_text(text)
+    assert check(result, "chattering").passed is False
+    d = diagnose(result)
+    trials = [t for p in d.proposed for t in p.trials if t.remedy.changes[0][0] == "controller.boundary_layer"]
+    assert len(trials) == 1 and trials[0].passed, trials
+    eps = trials[0].remedy.changes[0][1]
+    m, c, xi = float(result.design.gains["M"]), 5.0, 1.0
+    assert eps * xi / (m * c) <= 0.5 * 0.005 * (1 + 1e-3)
+    assert "no finite limit cycle" in next(f for f in d.findings if f.check == "chattering").cause
