@@ -179,3 +179,14 @@ def test_critical_gain_continuous_third_order():
     # Routh on p^3 + 3 p^2 + 2 p + K g: stable for K g < 6
     loop = Loop.transfer([3.0], [1, 3, 2, 0])
     assert critical_gain(loop) == pytest.approx(2.0, rel=1e-9)
+
+
+def test_bad_arguments_are_named():
+    from designkit.errors import SpecError
+
+    with pytest.raises(SpecError, match="^period: "):
+        sampled_orbit(first_order(), M, 0.0)
+    with pytest.raises(SpecError, match="^amplitude: "):
+        sampled_orbits(first_order(), -1.0, 0.1)
+    with pytest.raises(SpecError, match="^num: "):
+        Loop.transfer([1.0, 0.0], [1.0, 1.0])

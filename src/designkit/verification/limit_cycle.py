@@ -80,7 +80,10 @@ class Loop:
 
         a, b, c, d = tf2ss(np.asarray(num, float), np.asarray(den, float))
         if np.any(np.abs(d) > 0):
-            raise ValueError("the transfer must be strictly proper (a relay on a direct feedthrough has no orbit)")
+            from designkit.errors import SpecError
+
+            raise SpecError("num", "the transfer must be strictly proper (a relay on a direct feedthrough has no "
+                            "orbit)")
         return cls.of(a, b, c)
 
     def with_lag(self, bandwidth: float) -> Loop:
@@ -99,6 +102,15 @@ class Loop:
         n = self.a.shape[0]
         out = np.array([self.c @ np.linalg.solve(1j * w * np.eye(n) - self.a, self.b) for w in np.ravel(omega)])
         return out * np.exp(-1j * np.ravel(omega) * delay)
+
+
+def _positive(**values: float) -> None:
+    """Refuse a relay amplitude or a period that is not a positive finite number, naming the argument."""
+    from designkit.errors import SpecError
+
+    for name, value in values.items():
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise SpecError(name, f"must be a positive finite number, got {value!r}")
 
 
 def _hold(a: np.ndarray, b: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -349,6 +361,7 @@ def sampled_orbits(loop: Loop, amplitude: float, period: float, delay: float = 0
     held.  A sampled relay loop often has several (neighbouring ``k``); which one a run settles on depends on
     where it starts.  With an integrator in the loop each orbit is one of a family shifted along the
     integrator's direction (a neutral direction of the map), and the symmetric member is the one given."""
+    _positive(amplitude=amplitude, period=period)
     found = []
     for k in range(1, max_half + 1):
         orbit = _orbit_of(loop, amplitude, period, delay, k)
@@ -362,6 +375,7 @@ def sampled_orbit(loop: Loop, amplitude: float, period: float, delay: float = 0.
     """The consistent symmetric orbit (module docstring) of the smallest ``k`` up to ``max_half`` (its ``tried``
     counts the ``k`` found inconsistent before it), None when there is none; arguments as
     :func:`sampled_orbits`."""
+    _positive(amplitude=amplitude, period=period)
     for k in range(1, max_half + 1):
         orbit = _orbit_of(loop, amplitude, period, delay, k)
         if orbit is not None:
