@@ -14,9 +14,9 @@ Three predictions, each for a symmetric orbit (``x(t + T/2) = -x(t)``, half a pe
   hysteresis ``-1/N(A) = -(pi/(4M)) (sqrt(A^2 - h^2) + j h)``), ``G`` including the delay ``exp(-jwL)``: the
   frequency and the amplitude of ``s`` and of the command at the fundamental.  An approximation (it assumes the
   loop filters the harmonics away), for a continuous loop with a lag or a delay;
-* :func:`continuous_orbit` -- the exact symmetric orbit of the continuous relay loop (Hamel's and Tsypkin's
-  method in state space): the half period ``tau`` at which ``x(tau) = -x(0)`` with ``s`` crossing the switching
-  threshold ``L`` before the input switches; from the matrix exponential (scipy ``expm``);
+* :func:`continuous_orbit` -- the exact symmetric orbit of the continuous relay loop, in state space: the half
+  period ``tau`` at which ``x(tau) = -x(0)``, with ``s`` crossing the switching threshold ``-h`` the delay ``L``
+  before the input switches; from the matrix exponential (scipy ``expm``);
 * :func:`sampled_orbit` -- the exact periodic orbit of the sampled relay loop: ``k`` samples at ``-M`` and
   ``k`` at ``+M`` (period ``2 k Ts``, frequency ``1/(2 k Ts)``), the state at the orbit solved from the linear
   system ``(Phi^k + I) x0 = -(forced response)`` of the discretised loop, the switching signs checked on every
