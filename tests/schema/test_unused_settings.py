@@ -137,7 +137,7 @@ def test_a_default_value_written_out_is_not_refused():
 REQUIREMENT_VALUES = {"overshoot": "5", "settling_time": "2.0", "rise_time": "1.0", "steady_state_error": "0.01",
                       "tracking_error": "0.1", "max_control": "100", "settling_band": "0.05", "gain_margin": "6",
                       "phase_margin": "40", "modulus_margin": "0.5",
-                      "max_reversal_rate": "1000", "max_command_variation": "1000"}
+                      "max_reversal_rate": "1000", "max_command_variation": "1000", "max_chatter_amplitude": "1.0"}
 
 
 def _reads(kind: str) -> set[str]:
@@ -146,11 +146,14 @@ def _reads(kind: str) -> set[str]:
     return {key for rule in resolve(FAMILIES[kind].checks) for key in rule.reads}
 
 
-def test_every_requirement_is_read_by_some_generic_check():
+def test_every_requirement_is_read_by_some_check():
+    """A requirement is read by a generic check, or by a family's own check (``max_chatter_amplitude``, by the
+    switching families' chattering checks)."""
     from designkit.spec.sections import Requirements
     from designkit.verification.suite import generic
 
     read = {key for rule in generic().values() for key in rule.reads}
+    read |= {key for kind in FAMILIES for key in _reads(kind)}
     assert read == {f"requirements.{k}" for k in Requirements.model_fields} == {
         f"requirements.{k}" for k in REQUIREMENT_VALUES}
 

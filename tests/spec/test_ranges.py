@@ -173,6 +173,13 @@ name: ranges-state-space
 plant: {kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0], [0, 1]], D: [[0], [0]]}
 controller: {kind: state_regulator, poles: [-6, -8]}
 """
+SLIDING = """\
+name: ranges-sliding
+plant: {kind: link, Km: 2.0, tau: 0.5, uncertainty: {Km: [1.4, 2.6], tau: [0.35, 0.65]}}
+controller: {kind: sliding_mode, sliding_poles: [-5]}
+requirements: {max_chatter_amplitude: 1.0}
+simulation: {duration: 0.5, perturbation: {value: 1.0, time: 0.2}}
+"""
 SERVO_DERIVED = SERVO.replace("poles: [-4.4, -5.5, -20.2], zero: -3.3", "third_pole_factor: 5, design_margin: 0.1")
 
 
@@ -266,6 +273,8 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
         "overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control",
         "settling_band", "gain_margin", "phase_margin", "modulus_margin", "max_reversal_rate",
         "max_command_variation")},
+    "requirements.max_chatter_amplitude": [(SLIDING, "requirements.max_chatter_amplitude",
+                                            "requirements.max_chatter_amplitude")],
     **{f"simulation.{k}": [(SERVO, f"simulation.{k}", f"simulation.{k}")] for k in (
         "duration", "step", "initial_position", "dt", "delay", "sampling_period")},
     "simulation.nonlinearity.limit": [(SERVO, "simulation.nonlinearity.limit", "simulation.nonlinearity.limit")],

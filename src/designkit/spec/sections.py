@@ -58,7 +58,9 @@ class Requirements(Section):
     ``|1 + L(jw)|``, 0 to 1); and how the command may switch (the ``command_switching`` check,
     :mod:`designkit.verification.switching`): max_reversal_rate (reversals of every commanded input per
     second of the run, 1/s, 0 to 1e9), max_command_variation (total variation of every commanded input per
-    second of the run, the input's unit per second, N*m/s or V/s; above 0, at most 1e12).
+    second of the run, the input's unit per second, N*m/s or V/s; above 0, at most 1e12); and
+    max_chatter_amplitude (the switching families' ``chattering`` check: half the peak-to-peak commanded input
+    once the loop has settled into its chatter, the input's unit, N*m or V; above 0, at most 1e6).
     """
 
     overshoot: Ranged(0, 1000, "%", base=NonNegativeFinite) | None = None
@@ -73,6 +75,7 @@ class Requirements(Section):
     modulus_margin: Ranged(0, 1, "", base=NonNegativeFinite) | None = None
     max_reversal_rate: Ranged(0, 1e9, "1/s", base=NonNegativeFinite) | None = None
     max_command_variation: Ranged(0, 1e12, "unit/s", low_open=True, base=PositiveFinite) | None = None
+    max_chatter_amplitude: Ranged(0, 1e6, "N*m or V", low_open=True, base=PositiveFinite) | None = None
 
 
 # ----------------------------------------------------------------------------- nonlinear elements

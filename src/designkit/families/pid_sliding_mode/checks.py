@@ -130,20 +130,22 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         f"and ||s/N||₁ × band = {run.deviation_at_band:.4g} rad [informational]",
         {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
          "l1": info.l1}, required=False)
+    from designkit.families.pid_sliding_mode.chatter import chatter as chatter_of
     from designkit.verification.switching import judge_run
 
     freq = run.switching_frequency
     calm, words, physics = judge_run(design, ctx.simulation, ctx.spec, "N*m")
+    cycle_words, cycle = chatter_of(design, ctx.simulation, ctx.spec, run)
     chatter = Check(
         CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not set by the step",
         freq, None, "1/s",
         f"{words}; after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
         f"({0.0 if freq is None else freq:.4g} per s); total variation of u {run.total_variation:.4g} N*m, of the "
         f"switching part {run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of the "
-        f"run {run.relay_ptp_tail:.4g} N*m [informational]",
+        f"run {run.relay_ptp_tail:.4g} N*m; {cycle_words} [informational]",
         {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
          run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail,
-         "switching": physics},
+         "switching": physics, "limit_cycle": cycle},
         required=False)
     return band, precision, chatter
 

@@ -173,28 +173,49 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                      f"-c = {-c:g} 1/s ({100 * err / c:.3g} % off) [informational]",
                      {**cert, "pole": run.pole, "requested": -c, "relative_error": err / c,
                       "fit_samples": run.fit_samples}, required=False)
-    if run.switching_frequency is None:
-        chatter = Check("chattering", None, "reported", None, None, "1/s", "no sliding phase to measure "
-                        "[informational]", cert, required=False)
-    else:
-        from designkit.verification.switching import judge_run
-
-        amp = run.amplitude if run.amplitude is not None else 0.0
-        sliding = band.passed is True
-        calm, words, physics = judge_run(design, sim, ctx.spec, "N*m")
-        chatter = Check(
-            "chattering", calm if sliding else None, "switching part within the equivalent control, rate not set by "
-            "the step", run.switching_frequency, None, "1/s",
-            ("" if sliding else "the run leaves the band, so this is not only chattering: ") +
-            f"{words}; after reaching s changes sign {run.switches} times in {run.sliding_time:.4g} s "
-            f"({run.switching_frequency:.4g} per s); "
-            f"chattering amplitude max|s| = {amp:.4g} rad/s (error at most {amp / c:.3g} rad), total variation of u "
-            f"{run.total_variation:.4g} N*m ({run.total_variation / run.sliding_time:.4g} N*m/s), u peak-to-peak "
-            f"over the last tenth of the sliding time {run.u_ptp_tail or 0.0:.4g} N*m [informational]",
-            {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "step_rate": 1 / run.hold,
-             "amplitude": amp, "error_band": amp / c, "total_variation": run.total_variation,
-             "u_peak_to_peak_tail": run.u_ptp_tail, "switching": physics}, required=False)
+    chatter = _chatter_check(design, ctx, run, cert, band.passed is True)
     return reach, band, pole, chatter
+
+
+def _chatter_check(design: Any, ctx: Context, run: Any, cert: dict[str, Any], sliding: bool) -> Check:
+    """``chattering``: the command's switching judged as physics, the chatter predicted against measured
+    (:mod:`~designkit.families.sliding_mode.chatter`) and, with ``requirements.max_chatter_amplitude``, the
+    measured chatter amplitude against it (then required)."""
+    from designkit.families.sliding_mode.chatter import chatter as chatter_of
+    from designkit.verification.switching import judge_run
+
+    req = getattr(ctx.spec, "requirements", None)
+    limit = getattr(req, "max_chatter_amplitude", None) if req is not None else None
+    sim = ctx.simulation
+    if run.switching_frequency is None:
+        return Check("chattering", False if limit is not None else None, "reported" if limit is None else
+                     f"chatter amplitude <= {limit:g} N*m", None, None, "1/s" if limit is None else "N*m",
+                     "no sliding phase to measure" + ("" if limit is not None else " [informational]"), cert,
+                     required=limit is not None)
+    amp = run.amplitude if run.amplitude is not None else 0.0
+    calm, words, physics = judge_run(design, sim, ctx.spec, "N*m")
+    cyc = chatter_of(design, sim, ctx.spec, run)
+    measured = (f"after reaching s changes sign {run.switches} times in {run.sliding_time:.4g} s "
+                f"({run.switching_frequency:.4g} per s); chattering amplitude max|s| = {amp:.4g} rad/s (error at "
+                f"most {amp / float(design.data.c):.3g} rad), total variation of u {run.total_variation:.4g} N*m "
+                f"({run.total_variation / run.sliding_time:.4g} N*m/s), u peak-to-peak over the last tenth of the "
+                f"sliding time {run.u_ptp_tail or 0.0:.4g} N*m")
+    full = {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "step_rate": 1 / run.hold,
+            "amplitude": amp, "error_band": amp / float(design.data.c), "total_variation": run.total_variation,
+            "u_peak_to_peak_tail": run.u_ptp_tail, "switching": physics, "limit_cycle": cyc.to_dict()}
+    prefix = "" if sliding else "the run leaves the band, so this is not only chattering: "
+    if limit is None:
+        return Check("chattering", calm if sliding else None, "switching part within the equivalent control, rate "
+                     "not set by the step", run.switching_frequency, None, "1/s",
+                     f"{prefix}{words}; {measured}; {cyc.sentence} [informational]", full, required=False)
+    achieved = cyc.measured.command if cyc.measured is not None else None
+    ok = achieved is not None and achieved <= float(limit)
+    said = ("no settled sliding window to measure the chatter amplitude on" if achieved is None else
+            f"chatter amplitude (half the peak-to-peak command over the settled window) {achieved:.4g} N·m "
+            f"{'within' if ok else 'over'} the limit {float(limit):.4g} N·m")
+    return Check("chattering", ok, f"chatter amplitude <= {float(limit):g} N*m", achieved,
+                 None if achieved is None else float(limit) - achieved, "N*m",
+                 f"{prefix}{said}; {cyc.sentence}; {words}; {measured}", {**full, "limit": float(limit)})
 
 
 RUN_RULE = CheckRule(
@@ -203,5 +224,7 @@ RUN_RULE = CheckRule(
     run=_run_checks, label="Sliding mode in the simulated run",
     labels={"reaching_time": "Reaching time (measured)", "sliding_band": "The run stays in the chattering band",
             "sliding_pole": "Pole on the sliding line (measured)", "chattering": "Chattering (measured)"},
-    glossary=(("band", "|s| ≤ δ: how far from s = 0 the command held over a step can leave s"),),
+    glossary=(("band", "|s| ≤ δ: how far from s = 0 the command held over a step can leave s"),
+              ("chatter amplitude", "half the peak-to-peak command over the last tenth of the sliding time")),
+    reads=("requirements.max_chatter_amplitude",),
 )

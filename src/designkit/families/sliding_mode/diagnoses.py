@@ -6,6 +6,10 @@
 * ``sliding_band`` and the time-domain checks when the run leaves the sliding line: the failed condition behind it
   (the relay below the perturbation), a reference segment too short for the slow minimal-switching reaching, or a
   command held longer than the step the design chose;
+* ``chattering`` over ``requirements.max_chatter_amplitude``: the relay's chatter predicted on the sampled (or
+  held) link along ``s`` (:mod:`~designkit.families.sliding_mode.chatter`), and the boundary layer whose gain
+  ``M/eps`` is half the loop's smallest critical gain over the box, declared as a change of the spec
+  (``controller.boundary_layer``) that the diagnosis re-simulates;
 * ``settling_time`` and ``steady_state_error`` while the run does slide: the reaching time plus the decay along
   the line at ``c``, and the error the chattering band leaves (``band/c``), with the ``c`` or band that would do.
 """
@@ -18,6 +22,8 @@ from typing import Any
 from designkit.families.sliding_mode.checks import shortfall_sentence
 from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.measure import measure
+from designkit.synthesis.spec_change import SpecChange
+from designkit.verification.chatter_prediction import timing_of
 
 __all__ = ["diagnose"]
 
@@ -121,13 +127,94 @@ def _while_sliding(result: Any, check: Any, run: Any) -> tuple[str, str] | None:
     return None
 
 
-def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
+def _continuous_layer(result: Any, check: Any, limit: float) -> tuple[str, str, tuple[SpecChange, ...]]:
+    """A continuous switch: no finite limit cycle; the layer whose own step is the run's."""
+    from designkit.display.numbers import quantity
+    from designkit.families.sliding_mode import LAYER_STEPS
+
+    info, m = result.design.data, float(result.design.gains["M"])
+    dt = float(result.simulation.settings["dt"])
+    eps = LAYER_STEPS * float(info.sdot_max) * dt
+    cap = ""
+    if info.strip is not None and eps > info.strip / 2:
+        eps = info.strip / 2
+        cap = f" (capped at half the strip where s s' < 0 holds, {eps:.4g} rad/s)"
+    req = result.loaded.spec.requirements
+    need = None if req is None else req.steady_state_error
+    if need is not None and info.xi_bar > 0:
+        # inside the layer |s| -> eps xi/M and |e| -> eps xi/(M c): half the required error at most
+        most = 0.5 * float(info.c) * m * float(need) / float(info.xi_bar)
+        if eps > most:
+            eps = most
+            cap = (f" (narrowed so that the error the layer leaves, ε sup|ξ|/(M c), is half the required "
+                   f"{float(need):g} rad; its step is then ε/(10 ṡ_max) = {eps / (LAYER_STEPS * info.sdot_max):.3g} s)")
+    cause = (f"The continuous-time relay M = {quantity(m, 'N*m')} has no finite limit cycle: held over the integration "
+             f"step {dt:.3g} s, it switches the command by ±{quantity(check.achieved, 'N*m')} against "
+             f"{quantity(limit, 'N*m')}, a chatter the step sets.")
+    fix = (f"A boundary layer ε = {eps:.4g} rad/s (controller.boundary_layer){cap}: at most the layer whose own step "
+           f"ε/(10 ṡ_max) is the run's {dt:.3g} s (ṡ_max = {float(info.sdot_max):.4g} rad/s²), which resolves its "
+           f"linear gain M/ε = {m / eps:.4g} N·m/(rad/s), so the command settles to the equivalent control.")
+    change = SpecChange(f"a boundary layer ε = {eps:.4g} rad/s",
+                        (("controller.boundary_layer", float(f"{eps:.4g}")), ("controller.chattering_band", None)))
+    return cause, fix, (change,)
+
+
+def _chattering(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | None:
+    """The boundary layer that removes the chatter the requirement refuses."""
+    from designkit.display.numbers import quantity
+    from designkit.families.sliding_mode.chatter import STRUCTURE_MARGIN, layer
+
+    design, sim, spec = result.design, result.simulation, result.loaded.spec
+    limit = check.certificate.get("limit")
+    if limit is None or sim is None:
+        return None
+    timing = timing_of(spec, sim)
+    if timing.period == 0 and timing.delay == 0 and timing.bandwidth is None:
+        return _continuous_layer(result, check, float(limit))
+    found = layer(design, sim, spec, measure(design, sim))
+    if found is None:
+        return None
+    eps, k_c, s_psi = found
+    m = float(design.gains["M"])
+    strip = design.data.strip
+    held = sim.settings.get("sampling_period") or sim.settings["dt"]
+    cap = ""
+    if strip is not None and eps > strip / 2:
+        cap = (f" That layer is wider than half the strip where s s' < 0 holds ({strip / 2:.4g} rad/s), which the "
+               "design refuses; the widest allowed is proposed instead.")
+        eps = strip / 2
+    req = spec.requirements
+    need = None if req is None else req.steady_state_error
+    info = design.data
+    if need is not None and info.xi_bar > 0 and eps * info.xi_bar / (m * info.c) > float(need):
+        cap += (f" That layer leaves an error ε sup|ξ|/(M c) = {eps * info.xi_bar / (m * info.c):.3g} rad, above the "
+                f"required {float(need):g} rad: with this hold no layer meets both; a shorter sampling period lowers "
+                "the critical gain's bound on ε.")
+    measured = check.achieved
+    cause = (f"The relay M = {quantity(m, 'N*m')} switches the command by ±{quantity(m, 'N*m')} whatever the "
+             f"equivalent control (measured ±{quantity(measured, 'N*m') if measured is not None else 'n/a'}, "
+             f"against {quantity(limit, 'N*m')}): a sign(s) relay cannot chatter less than M, held over "
+             f"{held:.3g} s.")
+    fix = (f"A boundary layer ε = {eps:.4g} rad/s (controller.boundary_layer): inside the layer the relay is the "
+           f"linear gain M/ε = {m / eps:.4g} N·m/(rad/s), half the smallest critical gain {k_c:.4g} N·m/(rad/s) "
+           f"of the held loop over the box's corners, so the predicted oscillation vanishes and the command settles "
+           f"to the equivalent control; and at least {STRUCTURE_MARGIN:g} times the |s| = {s_psi:.4g} rad/s that the "
+           f"structure switch (a relay of (α − β)|e|/2 on s as sliding starts) reaches on its held orbit, so that "
+           f"it stays inside the layer.{cap}")
+    change = SpecChange(f"a boundary layer ε = {eps:.4g} rad/s",
+                        (("controller.boundary_layer", float(f"{eps:.4g}")), ("controller.chattering_band", None)))
+    return cause, fix, (change,)
+
+
+def diagnose(result: Any, check: Any) -> tuple[str, str] | tuple[str, str, tuple[SpecChange, ...]] | None:
     """``(cause, fix)`` for a failed check of a sliding-mode run (module docstring), or None."""
     if not isinstance(result.design.data, SlidingData) or check.passed is not False:
         return None
     base = check.name.split("[")[0]
     if base in _CERTIFICATES:
         return _certificate(check, float(result.design.data.margin))
+    if base == "chattering":
+        return _chattering(result, check)
     if base not in _RUN or result.simulation is None:
         return None
     run = measure(result.design, result.simulation)

@@ -188,16 +188,18 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                          f"against {_poles(want)} 1/s{at} ({100 * err:.3g} % off) [informational]",
                          {**cert, "poles": [[z.real, z.imag] for z in got],
                           "expected": [[z.real, z.imag] for z in want]}, required=False))
+    from designkit.families.vsc.chatter import chatter
     from designkit.verification.switching import judge_run
 
     calm, words, physics = judge_run(design, ctx.simulation, ctx.spec)
+    cycle_words, cycle = chatter(design, ctx.simulation, ctx.spec, run)
     out.append(Check("vsc_chattering", calm, "switching part within the equivalent control, rate not set by the "
                      "step", run.switching_frequency, None, "1/s",
                      f"{words}; after reaching sigma changes sign {run.switches} times in {run.sliding_time:.4g} s "
-                     f"({run.switching_frequency or 0:.4g} per s); total variation of u {run.total_variation:.4g} "
-                     "[informational]",
+                     f"({run.switching_frequency or 0:.4g} per s); total variation of u {run.total_variation:.4g}; "
+                     f"{cycle_words} [informational]",
                      {"switches": run.switches, "total_variation": run.total_variation,
-                      "switching": physics}, required=False))
+                      "switching": physics, "limit_cycle": cycle}, required=False))
     if run.ueq_fraction is not None:
         okf = run.ueq_fraction >= UEQ_FRACTION
         out.append(Check("vsc_equivalent_control", okf, f"u_eq in [min(u+, u-), max(u+, u-)] on at least "
