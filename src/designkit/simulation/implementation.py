@@ -209,7 +209,7 @@ def _rate(period: float) -> str:
 def _time(t: float) -> str:
     """``0.2 ms`` for 2e-4 s."""
     for scale, name in ((1.0, "s"), (1e-3, "ms"), (1e-6, "µs")):
-        if t >= scale:
+        if t >= 0.1 * scale:
             return f"{t / scale:.4g} {name}"
     return f"{t * 1e9:.4g} ns"
 
