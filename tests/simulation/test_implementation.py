@@ -172,8 +172,8 @@ def test_the_settings_say_what_the_verdict_is_on():
     impl = {"sampling_period": 1e-3, "delay": 2e-4, "quantization": 1e-4, "actuator": {"limit": 5, "bandwidth": 300}}
     res = build(_spec(impl, duration=1.0), design_of(_spec())).settings["implementation"]
     assert res == ("as implemented: sampled at 1 kHz (every 1 ms, the command held between samples), 0.2 ms "
-                   "computation delay, measurements quantised to x1: 0.0001 rad, x2: 0.0001 rad/s, actuator limited to ±5 N*m with a "
-                   "300 rad/s first-order lag (time constant 3.333 ms)")
+                   "computation delay, measurements quantised to x1: 0.0001 rad, x2: 0.0001 rad/s, actuator limited "
+                   "to ±5 N*m with a 300 rad/s first-order lag (time constant 3.333 ms)")
 
 
 # ----------------------------------------------------------------------------- a switching law without the section
@@ -186,7 +186,7 @@ def test_a_switching_law_without_implementation_says_it_is_a_continuous_time_swi
     words = sim.settings["scope"]
     assert "continuous-time switch" in words and "implementation" not in sim.settings
     rate = 1.0 / sim.settings["dt"]
-    shown = float(words.split("switching up to ")[1].split(" ")[0]) * (1e3 if " kHz" in words else 1.0)
+    shown = float(words.split("integration step, at ")[1].split(" ")[0]) * (1e3 if " kHz" in words else 1.0)
     assert shown == pytest.approx(rate, rel=1e-3)
     linear = build(_spec(None, duration=1.0), design_of(_spec())).settings
     assert "scope" not in linear and "implementation" not in linear  # a continuous law has no such note

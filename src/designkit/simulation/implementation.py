@@ -250,9 +250,9 @@ def switching_scope(law: Any, dt: float, sampling: float) -> str:
         return (f"the switching law was simulated sampled at {_rate(sampling)}; no implementation section: the "
                 "verdict holds for that sampling, without computation delay, quantisation or actuator")
     return (f"the verdict holds for a continuous-time switch: the switching law was simulated with its command "
-            f"held over each integration step, switching up to {_rate(dt)} (1/dt, dt = {_time(dt)}); a controller "
-            "that samples it more slowly, with a delay or through an actuator is another loop (give the "
-            "implementation section to judge it)")
+            f"updated at every integration step, at {_rate(dt)} (1/dt, dt = {_time(dt)}); a controller that samples "
+            "it more slowly, with a delay or through an actuator is another loop (give the implementation section to "
+            "judge it)")
 
 
 def lag_rates(impl: Implemented | None) -> list[float]:
