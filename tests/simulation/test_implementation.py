@@ -125,6 +125,19 @@ def test_the_actuator_saturates_before_its_lag():
     assert abs(res.position[-1] - 1.0) < 5e-3
 
 
+def test_the_nonlinear_element_acts_before_the_actuator():
+    """``simulation.nonlinearity`` (a saturation at 3 N*m) first, then the actuator (limit 5, lag 200 rad/s): the lag
+    rises towards the element's 3, not the actuator's 5."""
+    bw = 200.0
+    spec = _spec({"actuator": {"limit": 5.0, "bandwidth": bw}}, duration=2.0,
+                 nonlinearity={"kind": "saturation", "limit": 3.0})
+    res = simulate(spec, design_of(_spec()))
+    t, u_a = np.asarray(res.time), res.u_applied[:, 0]
+    k = np.arange(int(0.02 / res.settings["dt"]))  # the command stays far above 3 N*m over the first 20 ms
+    assert np.all(res.u_command[k, 0] > 3.0)
+    np.testing.assert_allclose(u_a[k], 3.0 * (1 - np.exp(-bw * t[k])), rtol=0, atol=1e-6)
+
+
 # ----------------------------------------------------------------------------- (c) quantised measurements
 
 

@@ -7,6 +7,12 @@ the spec's anti-windup), the nonlinear element, the noise and the perturbation, 
 (:mod:`designkit.simulation.timing`) and the step (:mod:`designkit.simulation.step`, where the
 signal chain is described).  :meth:`Simulator.run` evaluates it.
 
+With ``spec.implementation`` the loop is the controller as implemented (:mod:`designkit.simulation.implementation`):
+its sampling period and computation delay drive the sampling and the delay line, its quantisation the measurement
+the law reads, and its actuator (saturation, first-order lag) stands between the command and the true plant; the
+settings then say in words what the verdict is on (``settings["implementation"]``), and a switching law run without
+the section says that its verdict holds for a continuous-time switch (``settings["scope"]``).
+
 Where the run starts: the plant at rest at the reference's start (``simulation.initial_position``),
 the controller at :func:`~designkit.synthesis.closed_loop.rest_state` -- the states a law names in
 ``rest_start`` (integrals, reference models) solved so that the loop is at rest at the reference
@@ -275,7 +281,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     Parameters
     ----------
     spec : Spec
-        Its ``simulation`` (and ``requirements.settling_time`` for the default duration) and
+        Its ``simulation``, ``implementation`` (and ``requirements.settling_time`` for the default duration) and
         ``numerics`` sections are used.
     design : Design
         The controller; ``design.plant`` is the nominal plant its model terms use.
@@ -297,7 +303,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         On a per-joint list of the wrong length, ``simulation.dt`` incompatible with the sampling
         period, the delay, the poles or the law's largest step, or a run beyond the step bound
         (naming ``simulation.dt``, ``simulation.duration`` or an explicit ``numerics.integrator: rk4`` on
-        a stiff loop; see :mod:`designkit.simulation.timing`).
+        a stiff loop; see :mod:`designkit.simulation.timing`); an ``implementation`` whose sampling period or delay
+        conflicts with ``simulation``'s or the law's, is not shorter than the run, or whose per-state or per-input
+        list has the wrong length (naming its key).
     ValueError
         ``design`` has no law and none is given.
     """

@@ -2,7 +2,8 @@
 
 Signal chain over the step ``[t_k, t_k + dt]``::
 
-    y = x + n_k                        measurement, Gaussian noise n_k held over the step
+    y = x + n_k                        measurement, Gaussian noise n_k held over the step (quantised when the
+                                       spec gives implementation.quantization: ``measure``)
     u_c = law.command(y, xc, m, r) + F(y, xc, m, r, v_k)
                                        controller plus the trial's feedforward v_k (F = law.feedforward,
                                        v_k itself when the law declares none); sampled or discontinuous:
@@ -12,7 +13,9 @@ Signal chain over the step ``[t_k, t_k + dt]``::
                                        update, compute; the signals are recorded on the same memory)
     v = element(u_c, e)                nonlinear element per input (saturation, dead zone, relay, quantizer)
     u_a(t) = v(t - delay)              delay line of ``delay/dt`` steps
-    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative
+    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative;
+                                       behind an actuator (implementation.actuator) the plant is the actuated one
+                                       (:mod:`designkit.simulation.implementation`)
 
 State and per-step input layouts (computed from the plant, the law and the element, never fixed)::
 

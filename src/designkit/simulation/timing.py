@@ -27,8 +27,10 @@ Defaults:
   ``max(CAPPED_STEPS * dt, horizon + 10 / |Re p|med + delay)`` when that fits the budget; the
   settings then say that the run does not reach steady state.
 
-The sampling period is ``simulation.sampling_period`` or the one the control law declares
-(:func:`sampling_of`, which refuses the two in conflict).  A user ``dt`` must divide the sampling
+The sampling period is ``implementation.sampling_period``, ``simulation.sampling_period`` or the one the control
+law declares (:func:`sampling_of`, which refuses them in conflict), the delay ``implementation.delay`` or
+``simulation.delay`` (:func:`delay_of`); an implementation's period or delay not shorter than the run is refused
+naming its key.  A user ``dt`` must divide the sampling
 period and the delay into whole numbers of steps and satisfy ``dt * rate <= MAX_DT_RATE``, else
 :class:`SpecError` on ``simulation.dt``.  Any run longer than :data:`MAX_STEPS` steps is refused
 (a resource bound) naming the field to change: ``simulation.dt`` when the user set it,
