@@ -53,6 +53,8 @@ BUILD_ERRORS = [
      "implementation.actuator.limit", "one per input (1), got 2"),
     (LINK + "simulation: {duration: 3.0}\nimplementation: {actuator: {bandwidth: [10.0, 20.0]}}\n",
      "implementation.actuator.bandwidth", "one per input (1), got 2"),
+    (LINK + "simulation: {duration: 3.0}\nimplementation: {delay: 1.0e-4, actuator: {bandwidth: 1.0e+6}}\n",
+     "implementation.actuator.bandwidth", "1e+06 rad/s sets the integration step"),
 ]
 
 MODEL_ERRORS = [

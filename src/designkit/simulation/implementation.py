@@ -38,8 +38,8 @@ import numpy as np
 from designkit.errors import SpecError
 from designkit.models.plant import Signal
 
-__all__ = ["Implemented", "actuated", "implemented_of", "lag_rates", "measure_function", "measuring_law",
-           "switching_scope", "words"]
+__all__ = ["Implemented", "actuated", "implemented_of", "lag_rates", "lag_step_error", "measure_function",
+           "measuring_law", "switching_scope", "words"]
 
 
 @dataclass(frozen=True)
@@ -253,6 +253,16 @@ def switching_scope(law: Any, dt: float, sampling: float) -> str:
             f"updated at every integration step, at {_rate(dt)} (1/dt, dt = {_time(dt)}); a controller that samples "
             "it more slowly, with a delay or through an actuator is another loop (give the implementation section to "
             "judge it)")
+
+
+def lag_step_error(exc: SpecError, impl: Implemented | None, fast: float) -> SpecError:
+    """The resource-bound refusal ``exc`` named after ``implementation.actuator.bandwidth`` when the actuator's lag,
+    faster than every other rate of the loop (``fast``, 1/s), set the step; ``exc`` itself otherwise."""
+    if impl is None or not impl.bandwidth or exc.path != "simulation.duration" or max(impl.bandwidth) <= fast:
+        return exc
+    return SpecError("implementation.actuator.bandwidth", f"{max(impl.bandwidth):g} rad/s sets the integration step "
+                     f"(the loop's other rates reach {fast:.4g} 1/s): {exc.message}; lower the bandwidth or leave it "
+                     "out when the actuator is much faster than the loop")
 
 
 def lag_rates(impl: Implemented | None) -> list[float]:

@@ -77,6 +77,7 @@ from designkit.simulation.implementation import (
     actuated,
     implemented_of,
     lag_rates,
+    lag_step_error,
     measure_function,
     measuring_law,
     switching_scope,
@@ -95,7 +96,7 @@ from designkit.simulation.scenario import (
     plant_change,
 )
 from designkit.simulation.step import layout, step_function
-from designkit.simulation.timing import delay_of, grid, rates_of, resolve, sampling_of
+from designkit.simulation.timing import DT_FACTOR, delay_of, grid, rates_of, resolve, sampling_of
 from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
@@ -337,8 +338,13 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     noisy = sim.noise is not None and bool(np.any(np.asarray(sim.noise.std, dtype=float) > 0))
     regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=delay[0] > 0, noisy=noisy, quantized=quantized)
     held_per_step = sampling[0] == 0 and regime.per_step
-    timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
-                     max_dt_reason=law.max_step_reason, sampling=sampling, delay=delay)
+    try:
+        timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
+                         max_dt_reason=law.max_step_reason, sampling=sampling, delay=delay)
+    except SpecError as exc:
+        others = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
+        law_rate = DT_FACTOR / law.max_step if law.max_step else 0.0
+        raise lag_step_error(exc, impl, max(others.fast, law_rate)) from None
 
     t = grid(timing)
     if motion is None:  # a task-space path is checked on its joint path (the family's motion)
