@@ -424,7 +424,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         "noise": noise_settings,
         "perturbation": pert_settings,
         "plant_change": change_settings,
-        "initial_state": {**{s.name: float(v) for s, v in zip(true_plant.states, x0, strict=True)},
+        "initial_state": {**{s.name: float(v) for s, v in zip(loop_plant.states, x0_loop, strict=True)},
                           **{name: float(v) for name, v in zip(law.state_names, rest.xc, strict=True)}},
         "start": _start_words(law, rest),
         "ignored": ignored,
@@ -450,7 +450,7 @@ def _lag_start(impl: Any, law: Law, x0: np.ndarray, rest: Any, before: np.ndarra
     if impl.limit:
         lim = np.asarray(impl.limit, dtype=float)
         u0 = np.clip(u0, -lim, lim)
-    return np.where(np.isfinite(u0), u0, 0.0)
+    return np.where(np.isfinite(u0), u0, 0.0) + 0.0  # no negative zero in the settings
 
 
 def _scope(spec: Any, impl: Any, law: Law, plant: Any, dt: float, sampling: float, delay: float) -> dict[str, str]:
