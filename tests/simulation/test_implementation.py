@@ -138,6 +138,20 @@ def test_the_nonlinear_element_acts_before_the_actuator():
     np.testing.assert_allclose(u_a[k], 3.0 * (1 - np.exp(-bw * t[k])), rtol=0, atol=1e-6)
 
 
+def test_the_lag_starts_where_the_loop_rests_under_gravity():
+    """The two-link arm held still at (0.3, 0.2) rad against gravity: the lag starts at the holding torque, so the
+    arm stays where it is (a lag started at zero would let it fall for the first milliseconds)."""
+    text = ("name: r\nplant: {kind: robot, robot: planar2r}\n"
+            "controller: {kind: decentralized_pid, poles: [-4, -5, -20], zero: -3}\n"
+            "simulation: {duration: 0.5, step: [0.0, 0.0], initial_position: [0.3, 0.2]}\n"
+            "implementation: {actuator: {bandwidth: 200}}\n")
+    spec = parse_spec(text).spec
+    res = simulate(spec, design_of(spec))
+    assert np.max(np.abs(res.u_applied[0])) > 1.0  # gravity needs a torque
+    assert np.max(np.abs(np.asarray(res.state)[:, :2] - [0.3, 0.2])) < 1e-9
+    np.testing.assert_allclose(res.u_applied[0], res.u_command[0], rtol=1e-12)
+
+
 # ----------------------------------------------------------------------------- (c) quantised measurements
 
 
