@@ -53,6 +53,10 @@ BUILD_ERRORS = [
      "implementation.actuator.limit", "one per input (1), got 2"),
     (LINK + "simulation: {duration: 3.0}\nimplementation: {actuator: {bandwidth: [10.0, 20.0]}}\n",
      "implementation.actuator.bandwidth", "one per input (1), got 2"),
+    (LINK + "simulation: {duration: 3.0}\nimplementation: {sampling_period: 1.0e-6}\n",
+     "implementation.sampling_period", "1e-06 s sets the integration step"),
+    (LINK + "simulation: {duration: 3.0}\nimplementation: {delay: 1.0e-6}\n",
+     "implementation.delay", "3 s needs at least 3000000 steps"),
     (LINK + "simulation: {duration: 3.0}\nimplementation: {delay: 1.0e-4, actuator: {bandwidth: 1.0e+6}}\n",
      "implementation.actuator.bandwidth", "1e+06 rad/s sets the integration step"),
 ]

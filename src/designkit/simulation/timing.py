@@ -495,6 +495,12 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
                       f"delay = {needed:.4g} s); checks that need the steady state (settling time, steady-state error) "
                       "are measured at the end of this run; set simulation.duration to simulate longer")
     steps = duration / dt
+    if not steps <= MAX_STEPS and default_dt:  # an implemented period or delay too short for the run sets the step
+        for key, period in periods.items():
+            if key.startswith("implementation.") and period > 0 and duration / period > MAX_STEPS:
+                raise SpecError(key, f"{period:g} s sets the integration step (the step divides it into whole "
+                                f"steps): {duration:.4g} s needs at least {_count(duration / period)} steps, more "
+                                f"than {MAX_STEPS} (resource bound); lengthen {key} or shorten simulation.duration")
     if not steps <= MAX_STEPS:
         raise _bound_error(spec, duration, dt, steps, integrator=integrator, stiff_hint=bool(rates.stiff()),
                            held=held_per_step, law_step=(max_dt, max_dt_reason) if law_sets_step and max_dt else None)
