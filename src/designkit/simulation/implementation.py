@@ -134,9 +134,12 @@ class _ActuatedPlant:
         self.positions, self.velocities = tuple(plant.positions), tuple(plant.velocities)
 
     def nonsmooth(self) -> tuple[str, ...]:
+        """The plant's terms that are not differentiable at rest (the saturation is continuous: not one of them)."""
         return tuple(self.plant.nonsmooth()) if hasattr(self.plant, "nonsmooth") else ()
 
     def ode(self) -> ca.Function:
+        """``actuated_ode: (x_a, u, d, p) -> x_a'``: the plant driven by the actuator's output, and the lag's
+        ``u_a' = bandwidth (clip(u) - u_a)`` (rad/s times the input's unit)."""
         inner = self.plant.ode()
         nx, nu = len(self.plant.states), len(self.inputs)
         xa = ca.SX.sym("x", len(self.states))
