@@ -138,6 +138,17 @@ class PipelineResult:
                 out.append(consistency.sentences()[0])
         return tuple(dict.fromkeys(out))
 
+    @property
+    def scope(self) -> dict[str, Any]:
+        """What the verdict is on: ``implemented`` (the spec gives ``implementation``, the run is the controller as
+        implemented) and ``words``: the implementation in words (sampling rate, computation delay, quantisation,
+        actuator), or, for a switching law run without the section, that the verdict holds for a continuous-time
+        switch simulated at ``1/dt``; None otherwise."""
+        settings = dict(getattr(self.simulation, "settings", None) or {})
+        words = settings.get("implementation") or settings.get("scope")
+        return {"implemented": getattr(self.loaded.spec, "implementation", None) is not None,
+                "words": str(words) if words else None}
+
     def to_json(self, *, studies: bool = False) -> dict[str, Any]:
         """The JSON object printed by ``designkit verify --json``; with ``studies`` (``synth --json``) also
         ``"studies"`` (:meth:`designkit.studies.core.study.StudyResult.to_json`, one object per study and
@@ -163,6 +174,7 @@ class PipelineResult:
             "warnings": list(self.warnings),
             "checks": [c.to_dict() for c in self.checks],
             "notes": list(d.notes),
+            "scope": self.scope,
             "versions": dict(self.versions),
             **extra,
             **({"studies": [e for st in self.studies for e in st.to_json()], "fixes": self._fixes_json()}

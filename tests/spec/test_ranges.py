@@ -180,6 +180,8 @@ controller: {kind: sliding_mode, sliding_poles: [-5]}
 requirements: {max_chatter_amplitude: 1.0}
 simulation: {duration: 0.5, perturbation: {value: 1.0, time: 0.2}}
 """
+IMPLEMENTED = SERVO + ("implementation: {sampling_period: 0.004, delay: 0.002, quantization: 0.001, "
+                       "actuator: {limit: 20, bandwidth: 300}}\n")
 SERVO_DERIVED = SERVO.replace("poles: [-4.4, -5.5, -20.2], zero: -3.3", "third_pole_factor: 5, design_margin: 0.1")
 
 
@@ -309,6 +311,8 @@ WHERE: dict[str, list[tuple[str, str, str]]] = {
     "simulation.trajectory.center[]": [(TASK, "simulation.trajectory.center.0", "simulation.trajectory.center[0]")],
     "simulation.trajectory.normal[]": [(TASK, "simulation.trajectory.normal.0", "simulation.trajectory.normal[0]")],
     "simulation.trajectory.turns": [(TASK, "simulation.trajectory.turns", "simulation.trajectory.turns")],
+    **{f"implementation.{k}": [(IMPLEMENTED, f"implementation.{k}", f"implementation.{k}")] for k in (
+        "sampling_period", "delay", "quantization", "actuator.limit", "actuator.bandwidth")},
     "numerics.rtol": [(SERVO, "numerics.rtol", "numerics.rtol")],
     "numerics.atol": [(SERVO, "numerics.atol", "numerics.atol")],
     "studies.budget": [(SERVO + "studies: {budget: 30}\n", "studies.budget", "studies.budget")],

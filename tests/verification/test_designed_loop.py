@@ -64,3 +64,18 @@ def test_a_plant_with_coulomb_friction_is_only_checked_at_rest():
     check = designed_loop_check(spec, synthesize(spec))
     assert check.passed is True and "Coulomb friction" in check.detail
     assert check.certificate["small_signal"].startswith("not applicable")
+
+
+def test_an_implemented_controller_is_named_as_left_out_of_the_linear_reference(servo):
+    """The implementation (hold, delay, quantisation, actuator) is part of the verified run; the small-signal run
+    compares the design without it, and the check says so instead of passing silently."""
+    _, design = servo
+    spec = parse_spec(SERVO + "implementation: {sampling_period: 0.005, delay: 0.001, quantization: 1.0e-4, "
+                      "actuator: {limit: 20, bandwidth: 300}}\n").spec
+    check = designed_loop_check(spec, design)
+    assert check.passed is True, check.detail
+    assert check.certificate["largest_relative_difference"] < 1e-6  # the designed loop itself, not the implemented
+    assert "leaves out the controller as implemented (the sampling and hold, the computation delay" in check.detail
+    assert "not of the designed linear loop" in check.certificate["not_in_linear_reference"]
+    plain = designed_loop_check(parse_spec(SERVO).spec, design)
+    assert "not_in_linear_reference" not in plain.certificate and "leaves out" not in plain.detail

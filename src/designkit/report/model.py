@@ -224,6 +224,16 @@ def _studies(result: Any) -> tuple[Any, ...]:
     return tuple(studies)
 
 
+def _scope_sentence(result: Any) -> str:
+    """What the verdict is on, one sentence: the controller as implemented (``implementation``), or, for a switching
+    law run without it, that the verdict holds for a continuous-time switch (the simulator's settings)."""
+    settings = dict(getattr(getattr(result, "simulation", None), "settings", None) or {})
+    if settings.get("implementation"):
+        return sentence_units(f"The verdict is on the controller {settings['implementation']}.")
+    scope = str(settings.get("scope") or "")
+    return sentence_units(scope[:1].upper() + scope[1:] + ".") if scope else ""
+
+
 def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None = None, *,
                        processes: int = 1, studies: bool = True) -> ReportModel:
     """Build the report of a pipeline result (pure: reads ``result``, returns a new value).
@@ -282,7 +292,7 @@ def build_report_model(result: Any, provenance: Sequence[tuple[str, str]] | None
         description=re.sub(r"(?<=\w)\*(?=\w)", "·", " ".join(spec.description.split())),
         verdict=verdict,
         verdict_kind=kind,
-        verdict_summary=verdict_summary(checks),
+        verdict_summary=" ".join(filter(None, (verdict_summary(checks), _scope_sentence(result)))),
         warnings=tuple(getattr(result, "warnings", ())),
         verified=bool(result.verified),
         spec_text=loaded.text,

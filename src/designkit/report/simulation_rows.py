@@ -30,6 +30,7 @@ _SETTINGS: dict[str, tuple[str, str]] = {
     "perturbation": ("Perturbation", ""), "initial_state": ("Initial state", ""),
     "plant_change": ("Plant change during the run", ""), "start": ("How the run starts", ""),
     "ignored": ("Spec settings ignored", ""), "kind": ("Kind", ""),
+    "implementation": ("The verdict is on the controller", ""), "scope": ("What the verdict holds for", ""),
 }
 
 
@@ -66,7 +67,9 @@ def simulation_rows(simulation, plant: Any = None) -> tuple[ParameterRow, ...]:
     t = np.asarray(simulation.time, float)
     if t.size:
         rows.append(ParameterRow("Samples", f"{t.size} over {fmt_number(t[0])} s to {fmt_number(t[-1])} s", ""))
-    for key, value in dict(simulation.settings).items():
+    settings = dict(simulation.settings)
+    first = {k: settings.pop(k) for k in ("implementation", "scope") if k in settings}  # what the verdict is on
+    for key, value in {**first, **settings}.items():
         name, unit_text = _SETTINGS.get(str(key), (human_key(str(key)).capitalize(), ""))
         rows.append(ParameterRow(name, unit(_setting_value(str(key), value, unit_text, plant)), ""))
     return tuple(rows)

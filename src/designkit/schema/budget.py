@@ -273,6 +273,21 @@ class Steps:
     integrator: str = "rk4"
 
 
+def _delay(spec: Any) -> float:
+    """The run's control delay (s): ``implementation.delay`` when positive, else ``simulation.delay``."""
+    impl = getattr(spec, "implementation", None)
+    return float(impl.delay) if impl is not None and impl.delay > 0 else float(spec.simulation.delay)
+
+
+def _lag_rate(spec: Any) -> float:
+    """The fastest actuator lag of ``implementation.actuator.bandwidth`` (rad/s), 0 without one."""
+    actuator = getattr(getattr(spec, "implementation", None), "actuator", None)
+    bw = getattr(actuator, "bandwidth", None)
+    if bw is None:
+        return 0.0
+    return max(float(v) for v in bw) if isinstance(bw, list | tuple) else float(bw)
+
+
 def steps_of(spec: Any) -> Steps:
     """The step count of the spec's nominal run (module docstring), at most :data:`MAX_STEPS`."""
     sim = spec.simulation
@@ -286,9 +301,12 @@ def steps_of(spec: Any) -> Steps:
     if sim.duration is not None:
         duration, duration_key = float(sim.duration), "simulation.duration"
     else:
-        duration, duration_key = horizon + settle + float(sim.delay), ctrl_key if settle > horizon else ref_key
+        duration, duration_key = horizon + settle + _delay(spec), ctrl_key if settle > horizon else ref_key
     rate = max(fast, ref_rate)
     rate_key = ref_key if ref_rate > fast else ctrl_key
+    lag = _lag_rate(spec)
+    if lag > rate:  # the implemented actuator's lag is the fastest time scale the step resolves
+        rate, rate_key = lag, "implementation.actuator.bandwidth"
     numerics = spec.numerics
     integrator = str(getattr(numerics, "integrator", "rk4"))
     moduli = sorted(_moduli(getattr(ctrl, "poles", None) or []))

@@ -21,7 +21,7 @@ from designkit.schema.by_kind import ByKind
 from designkit.schema.spec import Spec, assembled
 from designkit.spec.fields import Section
 from designkit.spec.plants import PlantSpec
-from designkit.spec.sections import Numerics, Requirements, Simulation, Studies
+from designkit.spec.sections import Implementation, Numerics, Requirements, Simulation, Studies
 
 __all__ = ["MAX_CONTROLLERS", "ComparisonSpec", "ControllerEntry", "assembled_comparison", "entry_model",
            "entry_models", "member_name"]
@@ -90,7 +90,7 @@ class ComparisonSpec(Section):
         The plant every controller is designed for and simulated on.
     controllers : list of ControllerEntry
         2 to :data:`MAX_CONTROLLERS` controller sections, each with an optional ``label``.
-    requirements, simulation, numerics
+    requirements, simulation, implementation, numerics
         Shared by every controller (the ``plant_change``, trajectory, perturbation and duration too).
     """
 
@@ -100,6 +100,7 @@ class ComparisonSpec(Section):
     controllers: list[ControllerEntry] = Field(min_length=2, max_length=MAX_CONTROLLERS)
     requirements: Requirements | None = None
     simulation: Simulation = Simulation()
+    implementation: Implementation | None = None
     numerics: Numerics = Numerics()
     studies: Studies | None = None
 
@@ -120,7 +121,7 @@ class ComparisonSpec(Section):
         return Spec.model_validate({
             "name": member_name(self.labels[index]), "description": self.description, "plant": self.plant,
             "controller": controller, "requirements": self.requirements, "simulation": self.simulation,
-            "numerics": self.numerics, "studies": self.studies,
+            "implementation": self.implementation, "numerics": self.numerics, "studies": self.studies,
         })
 
     def members(self) -> tuple[tuple[str, Spec], ...]:

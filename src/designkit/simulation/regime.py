@@ -73,7 +73,7 @@ def _identity_projection(law: Any) -> bool:
 
 
 def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bool = False,
-              plant: Any = None, probe: Any = None) -> Regime:
+              plant: Any = None, probe: Any = None, quantized: bool = False) -> Regime:
     """The :class:`Regime` of ``law`` with ``element``.
 
     Parameters
@@ -94,14 +94,19 @@ def regime_of(law: Any, element: Any, *, sampled: bool, delayed: bool, noisy: bo
         cancels those terms.
     probe : (callable, ndarray), optional
         The closed loop's right-hand side ``f(s) -> s_dot`` and the start ``s0``, for :func:`cancelled`.
+    quantized : bool
+        The measurements are quantised (``implementation.quantization``): the law reads them once per step and is
+        held over it, as a discontinuous law.
     """
-    held_law = sampled or bool(law.discontinuous)
+    held_law = sampled or bool(law.discontinuous) or quantized
     per_step = held_law or delayed or not element.continuous
     reasons = []
     if sampled:
         reasons.append("the controller is sampled")
     elif law.discontinuous:
         reasons.append("the law is discontinuous (held over each step)")
+    elif quantized:
+        reasons.append("the measurements are quantised (read once per step, the law held over it)")
     if delayed:
         reasons.append("the control is delayed (a delay line of whole steps)")
     if not element.continuous:

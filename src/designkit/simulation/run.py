@@ -7,6 +7,12 @@ the spec's anti-windup), the nonlinear element, the noise and the perturbation, 
 (:mod:`designkit.simulation.timing`) and the step (:mod:`designkit.simulation.step`, where the
 signal chain is described).  :meth:`Simulator.run` evaluates it.
 
+With ``spec.implementation`` the loop is the controller as implemented (:mod:`designkit.simulation.implementation`):
+its sampling period and computation delay drive the sampling and the delay line, its quantisation the measurement
+the law reads, and its actuator (saturation, first-order lag) stands between the command and the true plant; the
+settings then say in words what the verdict is on (``settings["implementation"]``), and a switching law run without
+the section says that its verdict holds for a continuous-time switch (``settings["scope"]``).
+
 Where the run starts: the plant at rest at the reference's start (``simulation.initial_position``),
 the controller at :func:`~designkit.synthesis.closed_loop.rest_state` -- the states a law names in
 ``rest_start`` (integrals, reference models) solved so that the loop is at rest at the reference
@@ -67,6 +73,16 @@ from designkit.simulation.dopri5 import ATOL as DOPRI5_ATOL
 from designkit.simulation.dopri5 import FLAGS as DOPRI5_FLAGS
 from designkit.simulation.dopri5 import RTOL as DOPRI5_RTOL
 from designkit.simulation.dopri5 import build_dopri5
+from designkit.simulation.implementation import (
+    actuated,
+    implemented_of,
+    lag_rates,
+    lag_step_error,
+    measure_function,
+    measuring_law,
+    switching_scope,
+)
+from designkit.simulation.implementation import words as implementation_words
 from designkit.simulation.integrate import flat_inputs, run_steps
 from designkit.simulation.nonlinear import element_for
 from designkit.simulation.reference import Reference, reference_of
@@ -80,7 +96,7 @@ from designkit.simulation.scenario import (
     plant_change,
 )
 from designkit.simulation.step import layout, step_function
-from designkit.simulation.timing import grid, rates_of, resolve, sampling_of
+from designkit.simulation.timing import DT_FACTOR, delay_of, grid, rates_of, resolve, sampling_of
 from designkit.synthesis.closed_loop import linearize, rest_state
 from designkit.synthesis.design import Design, freeze
 from designkit.synthesis.law import Law
@@ -152,6 +168,7 @@ class Simulator:
     change: Any = None
     dopri5: Any = None
     cvodes: Any = None
+    implementation: Any = None
     _flat: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -216,8 +233,17 @@ class Simulator:
                 "stiff for the step; the records are NaN from there")})
         p, law = plant, self.law
         rec.setflags(write=False)  # the result keeps views of the records instead of copies
-        cuts = np.cumsum([0, *layout(p, law, _NoElement, 0).record_sizes])
+        impl = self.implementation
+        extra = impl.n_lag if impl is not None else 0
+        sizes = layout(p, law, _NoElement, 0).record_sizes
+        sizes[0] += extra  # the actuator's lag states follow the plant's, in the state and the measurement
+        sizes[4] += extra
+        cuts = np.cumsum([0, *sizes])
         x, xc, u_c, u_a, y, d, sig = (rec[a:b].T for a, b in zip(cuts[:-1], cuts[1:], strict=True))
+        if impl is not None:
+            nx = len(p.states)
+            u_a = impl.applied(u_a, x[:, nx:])
+            x, y = x[:, :nx], y[:, :nx]
         tracked: dict[str, Any] = {}
         if self.motion is not None:
             from designkit.simulation.motion import tracked_outputs
@@ -256,7 +282,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     Parameters
     ----------
     spec : Spec
-        Its ``simulation`` (and ``requirements.settling_time`` for the default duration) and
+        Its ``simulation``, ``implementation`` (and ``requirements.settling_time`` for the default duration) and
         ``numerics`` sections are used.
     design : Design
         The controller; ``design.plant`` is the nominal plant its model terms use.
@@ -278,7 +304,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         On a per-joint list of the wrong length, ``simulation.dt`` incompatible with the sampling
         period, the delay, the poles or the law's largest step, or a run beyond the step bound
         (naming ``simulation.dt``, ``simulation.duration`` or an explicit ``numerics.integrator: rk4`` on
-        a stiff loop; see :mod:`designkit.simulation.timing`).
+        a stiff loop; see :mod:`designkit.simulation.timing`); an ``implementation`` whose sampling period or delay
+        conflicts with ``simulation``'s or the law's, is not shorter than the run, or whose per-state or per-input
+        list has the wrong length (naming its key).
     ValueError
         ``design`` has no law and none is given.
     """
@@ -300,13 +328,23 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         raise ValueError(f"this {design.kind} design carries no law to simulate")
     _check_anti_windup(sim.anti_windup, law)
     element = element_for(sim.nonlinearity, len(true_plant.inputs))
-    rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
+    impl = implemented_of(spec, true_plant)
+    rates = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), lag_rates(impl),
+                     reference_rate=ref.rate)
     sampling = sampling_of(spec, law)
+    delay = delay_of(spec)
+    measure = measure_function(impl, len(true_plant.states) + (impl.n_lag if impl is not None else 0))
+    quantized = measure is not None
     noisy = sim.noise is not None and bool(np.any(np.asarray(sim.noise.std, dtype=float) > 0))
-    regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy)
+    regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=delay[0] > 0, noisy=noisy, quantized=quantized)
     held_per_step = sampling[0] == 0 and regime.per_step
-    timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
-                     max_dt_reason=law.max_step_reason, sampling=sampling)
+    try:
+        timing = resolve(spec, rates, ref.horizon, held_per_step=held_per_step, max_dt=law.max_step,
+                         max_dt_reason=law.max_step_reason, sampling=sampling, delay=delay)
+    except SpecError as exc:
+        others = rates_of(_requested_poles(design), *_closed_loop_poles(design, true_plant), reference_rate=ref.rate)
+        law_rate = DT_FACTOR / law.max_step if law.max_step else 0.0
+        raise lag_step_error(exc, impl, max(others.fast, law_rate)) from None
 
     t = grid(timing)
     if motion is None:  # a task-space path is checked on its joint path (the family's motion)
@@ -314,6 +352,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     N, dt = timing.n_samples, timing.dt
     nx, nd, nu = len(true_plant.states), len(true_plant.disturbances), len(true_plant.inputs)
     noise, noise_settings = noise_rows_of(spec, N, nx, tuple(s.name for s in true_plant.states))
+    n_lag = impl.n_lag if impl is not None else 0
+    if n_lag:  # the actuator's states are not measured with noise (the law does not read them)
+        noise = np.vstack([noise, np.zeros((n_lag, N))])
     dist, pert_settings = perturbation_rows(spec, t, dt, nd)
     flag = np.ones((1, N))
     if timing.steps_per_sample:
@@ -326,15 +367,18 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     inputs = np.vstack([*stages, noise, dist, flag, np.zeros((nu, N)), p_rows])
     x0 = np.asarray(true_plant.rest_state(ref.start), dtype=float)
     rest = rest_state(true_plant, law, x0, ref.rest())
-    z0 = np.concatenate([x0, rest.xc, np.asarray(law.initial_memory, dtype=float),
+    loop_plant, loop_law = actuated(true_plant, impl), measuring_law(law, nx, n_lag)
+    x0_loop = np.concatenate([x0, _lag_start(impl, law, x0, rest, ref.rest(), measure)])
+    z0 = np.concatenate([x0_loop, rest.xc, np.asarray(law.initial_memory, dtype=float),
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
-    step = step_function(true_plant, law, element, timing, spec.numerics)
+    step = step_function(loop_plant, loop_law, element, timing, spec.numerics, measure=measure)
     if regime.smooth and true_plant.nonsmooth():  # smooth unless the law leaves the plant's jump in the loop
-        regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy,
-                           plant=true_plant, probe=_probe(true_plant, law, element, z0, inputs))
-    dopri5, integrator, choice = _pair(spec, timing, regime, true_plant, law, element)
-    cvodes = cvodes_for(spec.numerics, timing, regime, rates, true_plant, law, element, t)  # None unless it applies
+        regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=delay[0] > 0, noisy=noisy,
+                           plant=loop_plant, probe=_probe(loop_plant, loop_law, element, z0, inputs),
+                           quantized=quantized)
+    dopri5, integrator, choice = _pair(spec, timing, regime, loop_plant, loop_law, element)
+    cvodes = cvodes_for(spec.numerics, timing, regime, rates, loop_plant, loop_law, element, t)  # None unless so
     if cvodes is not None:
         integrator, accumulated, compile_info = cvodes.settings_words, None, cvodes.compile_info
     elif dopri5 is None:
@@ -360,6 +404,9 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     if law.discontinuous and timing.steps_per_sample == 0:
         evaluation = ("discontinuous law: its command and state derivative evaluated once per step, at the step's "
                       "start, and held over the step (the step is its sampling period)")
+    elif quantized and timing.steps_per_sample == 0:
+        evaluation = ("quantised measurements: the law's command and state derivative evaluated once per step on the "
+                      "quantised measurement, at the step's start, and held over the step")
     settings = {
         "integrator": integrator,
         **timing.settings,
@@ -370,13 +417,14 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         "controller": {"kind": law.kind, **law.settings},
         "reference": dict(ref.settings),
         "nonlinearity": element.settings,
-        "delay": float(sim.delay),
+        "delay": float(delay[0]),
         "sampling_period": float(sampling[0]),
         "sampling_period_source": sampling[1] if sampling[0] > 0 else "",
+        **_scope(spec, impl, law, true_plant, timing.dt, sampling[0], delay[0]),
         "noise": noise_settings,
         "perturbation": pert_settings,
         "plant_change": change_settings,
-        "initial_state": {**{s.name: float(v) for s, v in zip(true_plant.states, x0, strict=True)},
+        "initial_state": {**{s.name: float(v) for s, v in zip(loop_plant.states, x0_loop, strict=True)},
                           **{name: float(v) for name, v in zip(law.state_names, rest.xc, strict=True)}},
         "start": _start_words(law, rest),
         "ignored": ignored,
@@ -386,7 +434,33 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         arr.setflags(write=False)
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=reference, kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes)
+                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes,
+                     implementation=impl if impl is not None and impl.changes_plant else None)
+
+
+def _lag_start(impl: Any, law: Law, x0: np.ndarray, rest: Any, before: np.ndarray, measure: Any) -> np.ndarray:
+    """The actuator lag's initial states: the clipped command of the loop at rest before the motion (empty without
+    a lag)."""
+    if impl is None or not impl.bandwidth:
+        return np.zeros(0)
+    y0 = x0 if measure is None else np.asarray(measure(np.r_[x0, np.zeros(impl.n_lag)]), dtype=float).ravel()[
+        :x0.size]
+    m0 = np.asarray(law.initial_memory, dtype=float)
+    u0 = np.asarray(law.command(y0, rest.xc, m0, np.asarray(before, dtype=float)), dtype=float).ravel()
+    if impl.limit:
+        lim = np.asarray(impl.limit, dtype=float)
+        u0 = np.clip(u0, -lim, lim)
+    return np.where(np.isfinite(u0), u0, 0.0) + 0.0  # no negative zero in the settings
+
+
+def _scope(spec: Any, impl: Any, law: Law, plant: Any, dt: float, sampling: float, delay: float) -> dict[str, str]:
+    """The settings that say what the verdict is on: ``implementation`` (the controller as implemented, in words)
+    when the spec gives the section; ``scope`` for a switching law run without it."""
+    if getattr(spec, "implementation", None) is not None:
+        return {"implementation": implementation_words(impl, plant, sampling, delay)}
+    if law.discontinuous:
+        return {"scope": switching_scope(law, dt, sampling)}
+    return {}
 
 
 def _probe(plant: Any, law: Law, element: Any, z0: np.ndarray, inputs: np.ndarray) -> tuple[Any, np.ndarray]:

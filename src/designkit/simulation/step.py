@@ -2,7 +2,8 @@
 
 Signal chain over the step ``[t_k, t_k + dt]``::
 
-    y = x + n_k                        measurement, Gaussian noise n_k held over the step
+    y = x + n_k                        measurement, Gaussian noise n_k held over the step (quantised when the
+                                       spec gives implementation.quantization: ``measure``)
     u_c = law.command(y, xc, m, r) + F(y, xc, m, r, v_k)
                                        controller plus the trial's feedforward v_k (F = law.feedforward,
                                        v_k itself when the law declares none); sampled or discontinuous:
@@ -12,7 +13,9 @@ Signal chain over the step ``[t_k, t_k + dt]``::
                                        update, compute; the signals are recorded on the same memory)
     v = element(u_c, e)                nonlinear element per input (saturation, dead zone, relay, quantizer)
     u_a(t) = v(t - delay)              delay line of ``delay/dt`` steps
-    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative
+    x' = plant.ode(x, u_a, d_k, p)     the true plant (its own parameters), integrated with xc' = law.derivative;
+                                       behind an actuator (implementation.actuator) the plant is the actuated one
+                                       (:mod:`designkit.simulation.implementation`)
 
 State and per-step input layouts (computed from the plant, the law and the element, never fixed)::
 
@@ -88,7 +91,8 @@ def _feedforward(law: Law, y: Any, xc: Any, m: Any, r: Any, v: Any) -> Any:
     return v if law.feedforward is None else law.feedforward(y, xc, m, r, v)
 
 
-def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any) -> ca.Function:
+def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any, *,
+                  measure: ca.Function | None = None) -> ca.Function:
     """One integration step ``sim_step: (z, w) -> (z_next, record)`` (module docstring).
 
     Parameters
@@ -102,9 +106,14 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
         Step, sampling and delay (:mod:`designkit.simulation.timing`).
     numerics : Numerics
         ``rtol`` and ``atol`` of CVODES.
+    measure : casadi.Function, optional
+        ``y -> y_measured``: the quantised measurement the law reads (``implementation.quantization``,
+        :func:`designkit.simulation.implementation.measure_function`), evaluated once per step; the law is then
+        held over the step.
     """
     L = layout(plant, law, element, timing.delay_steps)
-    regime = regime_of(law, element, sampled=timing.steps_per_sample > 0, delayed=L.delay_steps > 0)
+    regime = regime_of(law, element, sampled=timing.steps_per_sample > 0, delayed=L.delay_steps > 0,
+                       quantized=measure is not None)
     held_law, per_step = regime.held_law, regime.per_step
     ode = plant.ode()
 
@@ -127,7 +136,7 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
     z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
     x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
     r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)
-    y = x + noise
+    y = x + noise if measure is None else measure(x + noise)
     m_next = ca.if_else(flag, law.update(y, xc, m, r0), m) if L.nm else m
     m_cmd = m_next if law.command_after_update else m  # the memory the command and the signals read
     gate = law.gate(y, xc, m_cmd, r0)

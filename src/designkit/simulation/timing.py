@@ -27,8 +27,10 @@ Defaults:
   ``max(CAPPED_STEPS * dt, horizon + 10 / |Re p|med + delay)`` when that fits the budget; the
   settings then say that the run does not reach steady state.
 
-The sampling period is ``simulation.sampling_period`` or the one the control law declares
-(:func:`sampling_of`, which refuses the two in conflict).  A user ``dt`` must divide the sampling
+The sampling period is ``implementation.sampling_period``, ``simulation.sampling_period`` or the one the control
+law declares (:func:`sampling_of`, which refuses them in conflict), the delay ``implementation.delay`` or
+``simulation.delay`` (:func:`delay_of`); an implementation's period or delay not shorter than the run is refused
+naming its key.  A user ``dt`` must divide the sampling
 period and the delay into whole numbers of steps and satisfy ``dt * rate <= MAX_DT_RATE``, else
 :class:`SpecError` on ``simulation.dt``.  Any run longer than :data:`MAX_STEPS` steps is refused
 (a resource bound) naming the field to change: ``simulation.dt`` when the user set it,
@@ -239,18 +241,20 @@ def _count(n: float) -> str:
     return f"{n:.0f}" if n < 1e9 else f"{n:.3g}"
 
 
-def _duration(spec: Any, slow: float, horizon: float) -> tuple[float, str, float]:
-    """``(duration, why, start)``: ``start`` (s) is where the settling allowance begins, plus the delay."""
+def _duration(spec: Any, slow: float, horizon: float, delay: float | None = None) -> tuple[float, str, float]:
+    """``(duration, why, start)``: ``start`` (s) is where the settling allowance begins, plus the delay (s, default
+    ``simulation.delay``)."""
     sim, req = spec.simulation, spec.requirements
+    delay = float(sim.delay) if delay is None else float(delay)
     start = max(horizon, sim.perturbation.time) if sim.perturbation is not None else horizon
     if sim.duration is not None:
-        return float(sim.duration), "simulation.duration", start + sim.delay
+        return float(sim.duration), "simulation.duration", start + delay
     if req is not None and req.settling_time is not None:
         settle, why = SETTLE_FACTOR * req.settling_time, f"{SETTLE_FACTOR:g} x requirements.settling_time"
     else:
         settle, why = POLE_HORIZON / slow, f"{POLE_HORIZON:g} / |Re p|min"
-    return (start + settle + sim.delay, f"default: max(reference horizon, perturbation time) + {why} + delay",
-            start + sim.delay)
+    return (start + settle + delay, f"default: max(reference horizon, perturbation time) + {why} + delay",
+            start + delay)
 
 
 def _choose_integrator(spec: Any, rates: Rates, stiff: tuple[float, ...], duration: float,
@@ -343,7 +347,21 @@ def sampling_of(spec: Any, law: Any) -> tuple[float, str]:
         On ``simulation.sampling_period`` when it is positive and differs from the law's period.
     """
     given = float(spec.simulation.sampling_period)
+    impl = getattr(getattr(spec, "implementation", None), "sampling_period", None)
     own = getattr(law, "sampling_period", None)
+    if impl is not None:
+        impl = float(impl)
+        key = "implementation.sampling_period"
+        if given > 0 and abs(given - impl) > 1e-9 * impl:
+            raise SpecError(key, f"{impl:g} s conflicts with simulation.sampling_period = {given:g} s; the controller "
+                            "as implemented is sampled once: leave simulation.sampling_period out or set it to "
+                            f"{impl:g} s")
+        if own is not None and abs(impl - own) > 1e-9 * own:
+            source = getattr(law, "sampling_period_source", "") or "the control law's design"
+            raise SpecError(key, f"{impl:g} s conflicts with the {own:g} s the controller was designed for "
+                            f"({source}); leave {key} out or set it to {own:g} s")
+        if own is None:
+            return impl, key
     if own is None:
         return given, "simulation.sampling_period"
     source = getattr(law, "sampling_period_source", "") or "the control law's design"
@@ -353,12 +371,33 @@ def sampling_of(spec: Any, law: Any) -> tuple[float, str]:
     return float(own), source
 
 
+def delay_of(spec: Any) -> tuple[float, str]:
+    """``(delay, key)``: the control delay (s, 0: none) and the key path that sets it: ``implementation.delay`` when
+    positive, else ``simulation.delay``.
+
+    Raises
+    ------
+    SpecError
+        On ``implementation.delay`` when both are positive and differ.
+    """
+    given = float(spec.simulation.delay)
+    impl = float(getattr(getattr(spec, "implementation", None), "delay", 0.0) or 0.0)
+    if impl <= 0:
+        return given, "simulation.delay"
+    if given > 0 and abs(given - impl) > 1e-9 * impl:
+        raise SpecError("implementation.delay", f"{impl:g} s conflicts with simulation.delay = {given:g} s; the "
+                        f"controller as implemented has one computation delay: leave simulation.delay out or set it "
+                        f"to {impl:g} s")
+    return impl, "implementation.delay"
+
+
 MAX_DELAY_STEPS = 10_000
 """Longest delay line, in integration steps (its values are part of the simulated state)."""
 
 
 def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool = False, max_dt: float | None = None,
-            max_dt_reason: str = "", sampling: tuple[float, str] | None = None) -> Timing:
+            max_dt_reason: str = "", sampling: tuple[float, str] | None = None,
+            delay: tuple[float, str] | None = None) -> Timing:
     """Integrator, step, number of samples, sampling and delay steps for ``spec.simulation``.
 
     Parameters
@@ -379,6 +418,8 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     sampling : (float, str), optional
         The controller's sampling period (s) and the key path that sets it (:func:`sampling_of`); default
         ``simulation.sampling_period``.
+    delay : (float, str), optional
+        The control delay (s) and the key path that sets it (:func:`delay_of`); default ``simulation.delay``.
 
     Raises
     ------
@@ -388,9 +429,10 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
     """
     sim = spec.simulation
     fast = rates.fast
-    duration, duration_source, start = _duration(spec, rates.slow, ref_horizon)
+    delay_s, delay_key = (float(sim.delay), "simulation.delay") if delay is None else (float(delay[0]), delay[1])
+    duration, duration_source, start = _duration(spec, rates.slow, ref_horizon, delay_s)
     sample, sample_key = (float(sim.sampling_period), "simulation.sampling_period") if sampling is None else sampling
-    periods = {sample_key: sample, "simulation.delay": sim.delay}
+    periods = {sample_key: sample, delay_key: delay_s}
     g = _rational_gcd(list(periods.values()))
     stiff = () if held_per_step else rates.stiff()
     default_dt = sim.dt is None
@@ -453,18 +495,29 @@ def resolve(spec: Any, rates: Rates, ref_horizon: float, *, held_per_step: bool 
                       f"delay = {needed:.4g} s); checks that need the steady state (settling time, steady-state error) "
                       "are measured at the end of this run; set simulation.duration to simulate longer")
     steps = duration / dt
+    if not steps <= MAX_STEPS and default_dt:  # an implemented period or delay too short for the run sets the step
+        for key, period in periods.items():
+            if key.startswith("implementation.") and period > 0 and duration / period > MAX_STEPS:
+                raise SpecError(key, f"{period:g} s sets the integration step (the step divides it into whole "
+                                f"steps): {duration:.4g} s needs at least {_count(duration / period)} steps, more "
+                                f"than {MAX_STEPS} (resource bound); lengthen {key} or shorten simulation.duration")
     if not steps <= MAX_STEPS:
         raise _bound_error(spec, duration, dt, steps, integrator=integrator, stiff_hint=bool(rates.stiff()),
                            held=held_per_step, law_step=(max_dt, max_dt_reason) if law_sets_step and max_dt else None)
+    for key, period in periods.items():  # the controller as implemented: a period or delay beyond the run
+        if key.startswith("implementation.") and period >= duration:
+            raise SpecError(key, f"{period:g} s is not shorter than the run ({duration:.6g} s, {duration_source}): "
+                            "the run would not see one sample of the controller as implemented; shorten it or "
+                            "set a longer simulation.duration")
     if dt >= duration:
         raise SpecError("simulation.dt", f"{dt:g} s must be smaller than the duration {duration:g} s")
     n_samples = round(steps) + 1
     steps_per_sample = _whole_steps(sample, dt) or 0
-    delay_steps = _whole_steps(sim.delay, dt) or 0
+    delay_steps = _whole_steps(delay_s, dt) or 0
     if delay_steps > MAX_DELAY_STEPS:
-        raise SpecError("simulation.delay", f"{sim.delay:g} s is {delay_steps} steps of dt = {dt:g} s, more than the "
+        raise SpecError(delay_key, f"{delay_s:g} s is {delay_steps} steps of dt = {dt:g} s, more than the "
                         f"{MAX_DELAY_STEPS} a delay line may hold (resource bound: the line is part of the simulated "
-                        "state); shorten simulation.delay or set a coarser simulation.dt")
+                        f"state); shorten {delay_key} or set a coarser simulation.dt")
     settings: dict[str, Any] = {
         "integrator_choice": integrator_source,
         "dt": dt, "dt_source": dt_source, "duration": (n_samples - 1) * dt,

@@ -109,6 +109,11 @@ def base(text: str, path: str) -> Prepared:
 
     keep_large_arrays_on_the_heap()
     sw = parse_sweep(text, path=path)
+    if getattr(sw.loaded.spec, "implementation", None) is not None:
+        raise SpecError("implementation", "a sweep runs every sample through one compiled kernel of the designed "
+                        "loop, which does not carry the controller as implemented (sampling, computation delay, "
+                        "quantisation, actuator); verify the implemented loop with designkit verify, or leave the "
+                        "section out to sweep the designed loop")
     true_plant = plant(sw.loaded)
     space = sample_space(sw, true_plant)  # the sampled box checked before anything is designed
     dsn = design(sw.loaded, true_plant)

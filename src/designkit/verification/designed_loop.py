@@ -14,8 +14,9 @@ time-domain PASS on it says nothing about the design.  Two tests, both on the de
    controller at the state the run starts from, the loop's state derivative at the reference before
    the motion must vanish: ``max |z_dot| <= REST_TOL (1 + max |z|)``.
 3. **Small signal.**  The same run with the reference's motion and the perturbation scaled by
-   :data:`SMALL_SIGNAL` (no nonlinear element, noise, delay or sampling: the elements a linear design
-   does not contain, and without a plant change: the designed plant) must follow the loop linearized at that
+   :data:`SMALL_SIGNAL` (no nonlinear element, noise, delay or sampling and no ``implementation`` -- hold, computation
+   delay, quantisation, actuator: the elements a linear design does not contain, and without a plant change: the
+   designed plant) must follow the loop linearized at that
    rest point: the largest difference between
    the run's deviations divided by the scale and the linear response, over the positions and the plant
    inputs, relative to the linear response's extent (the largest over the positions, and over the inputs), at
@@ -23,6 +24,9 @@ time-domain PASS on it says nothing about the design.  Two tests, both on the de
    terms of a smooth plant contribute in proportion to the scale (1e-4), the integrators about 1e-6.
    A plant with non-smooth terms at rest (Coulomb friction, :meth:`~designkit.models.plant.PlantBase.nonsmooth`)
    is not linear however small the signal, so part 3 is not run on it and the check says so.
+
+When the verified run contains such elements, the check's detail and its certificate (``not_in_linear_reference``)
+name them: the check is then about the design inside the implementation, not about the implemented loop.
 
 Part 3 compares with the law linearized where the run starts; when that is not the design's operating
 point (a decentralized design at ``q*`` simulated from ``q0``) the check says so.
@@ -72,7 +76,25 @@ def _small_spec(spec: Any, scale: float) -> Any:
         pert = pert.model_copy(update={"value": value})
     small = sim.model_copy(update={"nonlinearity": None, "noise": None, "delay": 0.0, "sampling_period": 0.0,
                                    "perturbation": pert, "plant_change": None})
-    return spec.model_copy(update={"simulation": small})
+    return spec.model_copy(update={"simulation": small, "implementation": None})
+
+
+def _left_out(spec: Any) -> str:
+    """The parts of the run the small-signal comparison leaves out, in words (empty when none)."""
+    parts = []
+    impl = getattr(spec, "implementation", None)
+    if impl is not None:
+        what = [w for w, on in (("the sampling and hold", impl.sampling_period is not None),
+                                ("the computation delay", impl.delay > 0),
+                                ("the measurement quantisation", impl.quantization is not None),
+                                ("the actuator's saturation and lag", impl.actuator is not None)) if on]
+        parts.append("the controller as implemented (" + (", ".join(what) or "as designed") + ")")
+    sim = spec.simulation
+    for words, on in (("the nonlinear element", sim.nonlinearity is not None), ("the noise", sim.noise is not None),
+                      ("the sampling", sim.sampling_period > 0), ("the delay", sim.delay > 0)):
+        if on:
+            parts.append(words)
+    return ", ".join(parts)
 
 
 def _scaled_reference(ref: Any, scale: float) -> Any:
@@ -117,6 +139,10 @@ def designed_loop_check(spec: Any, design: Any) -> Check:
     names = [*(s.name for s in plant.states), *law.state_names]
     cert: dict[str, Any] = {"start": start.tolist(), "controller_start": xc0.tolist(), "rest_residual": residual,
                             "rest_tolerance": REST_TOL * scale}
+    left_out = _left_out(spec)
+    if left_out:
+        cert["not_in_linear_reference"] = (f"{left_out}: part of the verified run, not of the designed linear loop; "
+                                           "this check compares the run without them with the design")
     target = "the simulated loop starts at rest and follows its linearization in the small"
     if not at_rest:
         k = int(np.argmax(np.abs(z_dot)))
@@ -174,4 +200,7 @@ def designed_loop_check(spec: Any, design: Any) -> Check:
         what = (f"the small-signal run leaves the linear closed loop by {worst:.3g} of the response on {outputs[row]} "
                 f"at t = {t[k]:.3g} s (tolerance {SMALL_SIGNAL_REL:g}){moved}: the simulated loop is not the "
                 "designed one -- a state, reference or feed-forward the design does not contain")
+    if left_out:
+        what += (f"; the small-signal run leaves out {left_out}, which the verified run contains and the linear "
+                 "design does not model")
     return Check("designed_loop", ok, target, worst, SMALL_SIGNAL_REL - worst, "1 (relative)", what, cert)

@@ -29,5 +29,6 @@ CONFORMANCE = {
 EXAMPLES = {
     "sliding-mode-link": 0,
     "sliding-mode-weak-switching": 1,  # M below the perturbation: the certificate names the M that would do
+    "sliding-mode-link-implemented": 0,  # sampled at 1 kHz, 0.1 ms delay, a +-5 N*m actuator with a 300 rad/s lag
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -125,6 +125,10 @@ def validate(spec: Any) -> None:
     if sim.nonlinearity is not None:
         raise ValueError("simulation.nonlinearity: the learning's certificate is for the linear error system; a "
                          "nonlinear element at the plant input is not part of it")
+    if getattr(spec, "implementation", None) is not None:
+        raise ValueError("implementation: the learning's lifted model and certificate are of the continuous loop the "
+                         "simulator integrates; sampling, a computation delay, quantisation or an actuator change that "
+                         "loop, and the learning is not designed for it; leave the implementation section out")
 
 
 def synthesize(spec: Any, plant: Any) -> Design:

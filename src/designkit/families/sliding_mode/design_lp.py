@@ -135,7 +135,8 @@ def _solve(G: list, h: list, w: np.ndarray, solver: str) -> tuple[np.ndarray | N
         if bounds.size and bounds.max() > _TINY:
             scale[j] = bounds.max()
     Gs = G * scale
-    norms = np.linalg.norm(Gs, axis=1)
+    peaks = np.max(np.abs(Gs), axis=1)  # each row's norm taken on the row scaled to 1: a gain given as 1e-308 would
+    norms = peaks * np.linalg.norm(Gs / peaks[:, None], axis=1)  # underflow in the sum of squares
     sol = solve_lp(w * scale / np.max(np.abs(w * scale)), Gs / norms[:, None], h / norms, solver=solver)
     return (None if sol.x is None else np.asarray(sol.x, float) * scale), sol.status
 
