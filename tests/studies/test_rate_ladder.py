@@ -26,7 +26,7 @@ def _link(extra: str = "") -> str:
 
 
 def test_the_key_is_the_one_the_spec_samples_through():
-    assert sampling_key(_fake(_link())) == SAMPLING_KEYS[0] == "simulation.sampling_period"
+    assert sampling_key(_fake(_link())) == SAMPLING_KEYS[0] == "implementation.sampling_period"
     assert sampling_key(_fake(_link("  sampling_period: 0.001\n"),
                               {"sampling_period": 0.001, "sampling_period_source": "simulation.sampling_period"})
                         ) == "simulation.sampling_period"

@@ -88,12 +88,12 @@ def _first(value: Any) -> float | None:
 
 def timing_of(spec: Any, sim: Any) -> Timing:
     """The run's sampling period and delay (``sim.settings``), the actuator lag the spec's ``implementation``
-    states, and whether the run's settings record it."""
+    states, and whether the run was built with it (its settings say what the verdict is on as implemented,
+    ``settings["implementation"]``)."""
     st = sim.settings
     actuator = getattr(getattr(spec, "implementation", None), "actuator", None)
     bandwidth = _first(getattr(actuator, "bandwidth", None))
-    recorded = st.get("actuator") if hasattr(st, "get") else None
-    in_run = isinstance(recorded, dict) and recorded.get("bandwidth") is not None
+    in_run = hasattr(st, "get") and st.get("implementation") is not None
     return Timing(float(st.get("sampling_period") or 0.0), float(st.get("delay") or 0.0), bandwidth,
                   bool(in_run and bandwidth is not None), float(st["dt"]))
 

@@ -179,7 +179,8 @@ def loop_window(design: Any, spec: Any, duration: float) -> float:
         if fastest > 0:
             window = 1.0 / fastest
             break
-    sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
+    sampling = max(float(getattr(getattr(spec, section, None), "sampling_period", 0.0) or 0.0)
+                   for section in ("simulation", "implementation"))
     return max(window, 2 * sampling)
 
 
@@ -255,11 +256,21 @@ def judge(m: Switching, unit: str = "") -> tuple[bool, str]:
     return not faults, words + (": " + " and ".join(faults) if faults else "")
 
 
+def sampling_of(sim: Any, spec: Any) -> float:
+    """The period (s, 0: continuous) at which the run ``sim`` sampled its law: its settings' ``sampling_period``
+    (``simulation.sampling_period``, ``implementation.sampling_period`` or the law's own), else the spec's
+    ``simulation.sampling_period``."""
+    settings = getattr(sim, "settings", None)
+    if hasattr(settings, "get") and settings.get("sampling_period") is not None:
+        return float(settings.get("sampling_period") or 0.0)
+    return float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
+
+
 def of_run(design: Any, sim: Any, spec: Any, j: int = 0) -> Switching:
     """How input ``j`` of the run ``sim`` (a ``SimulationResult``) of ``design`` switches, averaged over
-    :func:`loop_window`, with the spec's ``simulation.sampling_period``."""
+    :func:`loop_window`, with the period the run sampled its law at (:func:`sampling_of`)."""
     duration = float(sim.time[-1] - sim.time[0]) if len(sim.time) > 1 else 0.0
-    sampling = float(getattr(getattr(spec, "simulation", None), "sampling_period", 0.0) or 0.0)
+    sampling = sampling_of(sim, spec)
     return measure(sim.input_names[j], sim.time, np.asarray(sim.u_command)[:, j],
                    loop_window(design, spec, duration), sampling)
 

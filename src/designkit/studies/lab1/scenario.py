@@ -6,7 +6,8 @@ manipulator's parameters do (masses, lengths, viscosity).  Each variant here is 
 true plant, the controller designed as before and not told of it), sized from the run itself so that it means
 the same on a 2 kg link and on a 6-joint arm:
 
-* a sampling period and a computation delay of 1/20 and 1/5 of the fastest closed-loop time constant ``1/|p|max``;
+* a sampling period and a computation delay of 1/20 and 1/5 of the fastest closed-loop time constant ``1/|p|max`` (set
+  in the spec's ``implementation`` section when it has one, else in ``simulation``);
 * white measurement noise of 1e-4 and 1e-3 of the commanded move on every measured state;
 * the command quantized (a D/A converter) in steps of 1 % and 5 % of the run's peak command;
 * the command limited to 50 % and 25 % of the run's peak command (the actuator's maximum level);
@@ -84,14 +85,15 @@ def scenario_changes(result: Any) -> tuple[ScenarioChange, ...]:
     peak = np.where(peak > 0, peak, 1.0)
     unit = next(iter({s.unit for s in result.plant.inputs}), "") if result.plant is not None else ""
     duration = float(result.simulation.time[-1])
+    section = "implementation" if getattr(result.loaded.spec, "implementation", None) is not None else "simulation"
     out = []
     for k in (0.05, 0.2):
         out.append(ScenarioChange("sampling", f"sampled every {quantity(k * tc, 's', 3)} ({fmt_number(k, 2)} of the "
                                   f"fastest time constant, {quantity(tc, 's', 3)})",
-                                  (("simulation.sampling_period", float(k * tc)),), k))
+                                  ((f"{section}.sampling_period", float(k * tc)),), k))
     for k in (0.05, 0.2):
         out.append(ScenarioChange("delay", f"a computation delay of {quantity(k * tc, 's', 3)}",
-                                  (("simulation.delay", float(k * tc)),), k))
+                                  ((f"{section}.delay", float(k * tc)),), k))
     for k in (1e-4, 1e-3):
         out.append(ScenarioChange("noise", f"measurement noise of σ = {fmt_number(k * move, 3)} on every measured "
                                   f"state ({fmt_number(k, 1)} of the move)",

@@ -22,7 +22,7 @@ __all__ = ["DEFAULT_RATES", "SAMPLING_KEYS", "Rung", "divides", "own_rate", "run
 DEFAULT_RATES = (20_000.0, 10_000.0, 5_000.0, 2_000.0, 1_000.0, 500.0)
 """The rates run when the spec's ``studies.rate.rates`` is not given (Hz)."""
 
-SAMPLING_KEYS = ("simulation.sampling_period", "implementation.sampling_period")
+SAMPLING_KEYS = ("implementation.sampling_period", "simulation.sampling_period")
 """Where a spec gives the period its command is computed at and held over (s); the study sets the first when the
 spec samples its command through none of them."""
 
