@@ -37,8 +37,8 @@ def _bound(name: str, limit: float, measured: list, value: Any, unit: str, what:
 def _told_by_chatter(design: Any, ctx: Context) -> set[int]:
     """The inputs whose chattering the ``command_chatter`` check already warns of, with its source: that check runs
     on a law that is not a switching law, and one warning per input is enough."""
-    law = ctx.law if ctx.law is not None else design.law
-    if getattr(law, "discontinuous", False):
+    law = ctx.law if ctx.law is not None else getattr(design, "law", None)
+    if law is None or getattr(law, "discontinuous", False):
         return set()
     from designkit.verification.chatter import input_chatter
 
