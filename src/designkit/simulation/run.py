@@ -135,6 +135,9 @@ class Simulator:
         The simulated plant and controller.
     settings : Mapping
         Every option used.
+    restep : callable or None
+        ``Law -> sim_step``: the step of this loop (plant, element, timing) with another law of the same layout,
+        e.g. one whose functions call compiled C (the ``generated_code`` check).
     """
 
     step: ca.Function
@@ -152,6 +155,7 @@ class Simulator:
     change: Any = None
     dopri5: Any = None
     cvodes: Any = None
+    restep: Any = field(default=None, repr=False)
     _flat: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -330,6 +334,10 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = step_function(true_plant, law, element, timing, spec.numerics)
+
+    def restep(other: Law) -> ca.Function:  # the same step with another law of the same layout
+        return step_function(true_plant, other, element, timing, spec.numerics)
+
     if regime.smooth and true_plant.nonsmooth():  # smooth unless the law leaves the plant's jump in the loop
         regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=sim.delay > 0, noisy=noisy,
                            plant=true_plant, probe=_probe(true_plant, law, element, z0, inputs))
@@ -386,7 +394,8 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
         arr.setflags(write=False)
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=reference, kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
-                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes)
+                     compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes,
+                     restep=restep)
 
 
 def _probe(plant: Any, law: Law, element: Any, z0: np.ndarray, inputs: np.ndarray) -> tuple[Any, np.ndarray]:

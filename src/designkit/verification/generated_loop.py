@@ -1,0 +1,296 @@
+"""The closed loop run with the generated C law compiled and called at every step, against the Python law's loop.
+
+``designkit codegen`` writes the designed law as C (:func:`designkit.synthesis.codegen.generate_law_code`).  The
+``generated_code`` check runs that C in the verified loop: :func:`compare_generated_code`
+
+1. writes the law's C exactly as ``designkit codegen`` does (the spec's name as prefix) and compiles it with the
+   system C compiler into a shared library, loaded function by function with :func:`casadi.external`;
+2. builds the spec's loop as the verdict's run builds it (:func:`designkit.simulation.run.build`: the plant, the
+   reference, the sampling, the delay, the nonlinear element, the noise, the perturbation, the time grid), and
+   two steps of it (:attr:`~designkit.simulation.run.Simulator.restep`): one whose law functions are the calls of
+   the compiled C (``C law``), one whose law functions are the Python law's CasADi functions (``Python law``),
+   both as MX graphs with the law as a called function;
+3. generates both rolled steps to C (``mapaccum``) in one file, compiles it with the law's C file into one library
+   (``-O1 -ffp-contract=off``: no reassociation, no fused multiply-add), cached in
+   :func:`designkit.cache.cache_dir` ``("codegen")`` under the hash of the two sources, the compiler, the flags and
+   CasADi's version;
+4. runs both loops on the same inputs with the same fixed-step RK4 on the verdict's output grid -- the family's
+   trials with their learning update between them for a learning design -- and compares them: the largest
+   difference of the states (plant and controller) and of the command over every step of every run.
+
+**Tolerance** (:data:`TOLERANCE`): each difference relative to the largest magnitude of that quantity over the
+Python law's run, at most ``1e-9``.  Both loops execute the same operations in the same order, compiled by the
+same compiler with the same flags into the same library, so they differ by rounding at most; on every example spec
+they are bit-identical (difference 0, measured), so a switching law's sign never meets a rounding-level tie
+between them.  ``1e-9`` leaves room for a C library whose elementary functions round differently from the
+law's interpretation, amplified over a run, and is far below any change of a gain (a gain changed in its 17th
+significant digit is the smallest change that can show).  Were a switching law to flip at a tie, the loops would
+part from that step on: the check reports the first instant at which any difference appears, with the largest
+differences, so such a flip is seen for what it is.
+
+The verdict's own run may use another integrator (the compiled Dormand--Prince pair of a smooth loop); the
+comparison is made with RK4 for both laws because the compiled pair embeds the law's expressions in its own
+generated C and cannot call a library.  The certificate also gives the difference between the C law's run and
+the verdict's run (zero where the verdict's run is RK4 on the same grid; the integrators' difference otherwise).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from designkit.models.codegen import find_compiler
+from designkit.simulation.compiled import CHUNK, COMPILE_FLAGS, COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS
+from designkit.synthesis.codegen import LAW_ROLES, c_identifier, generate_law_code
+
+__all__ = ["TOLERANCE", "CompileFailure", "LoopComparison", "NoCompiler", "compare_generated_code", "law_source"]
+
+TOLERANCE = 1e-9
+"""Largest relative difference of the states and of the command between the C law's loop and the Python law's
+(module docstring)."""
+COMPILER_LINES = 4
+"""Lines of the compiler's message kept in a failure."""
+
+
+class NoCompiler(Exception):
+    """No C compiler found: the generated code cannot be run."""
+
+
+class CompileFailure(Exception):
+    """The compiler refused the generated code; the message holds its first lines."""
+
+
+@dataclass(frozen=True)
+class LoopComparison:
+    """The two loops compared (module docstring).
+
+    Parameters
+    ----------
+    state_difference, command_difference : float
+        Largest absolute difference of the states (plant and controller, their units) and of the command
+        (the inputs' units, N*m) over every step of every run.
+    state_scale, command_scale : float
+        Largest magnitude of the states and of the command over the Python law's runs.
+    first_difference : float or None
+        Time (s) of the first step at which the states or the command differ at all (None: bit-identical).
+    runs, steps : int
+        Runs compared (trials of a learning design) and output steps of each.
+    symbols : tuple of str
+        The C functions called by the loop.
+    library : str
+        The shared library run.
+    compiled_now : bool
+        The compiler ran (False: the library was cached).
+    verdict_state_difference, verdict_command_difference : float or None
+        Largest differences between the C law's (last) run and the verdict's run (None: no verdict run given).
+    integrator : str
+        The verdict run's integrator in words.
+    seconds : dict
+        Wall time (s) of ``compile`` (with writing the code and building the steps), ``c_run`` and ``python_run``.
+    """
+
+    state_difference: float
+    command_difference: float
+    state_scale: float
+    command_scale: float
+    first_difference: float | None
+    runs: int
+    steps: int
+    symbols: tuple[str, ...]
+    library: str
+    compiled_now: bool
+    verdict_state_difference: float | None
+    verdict_command_difference: float | None
+    integrator: str
+    seconds: dict[str, float]
+
+    @property
+    def state_relative(self) -> float:
+        """``state_difference`` relative to ``state_scale``."""
+        return _relative(self.state_difference, self.state_scale)
+
+    @property
+    def command_relative(self) -> float:
+        """``command_difference`` relative to ``command_scale``."""
+        return _relative(self.command_difference, self.command_scale)
+
+
+def _relative(diff: float, scale: float) -> float:
+    if diff == 0:
+        return 0.0
+    return diff / scale if scale > 0 else float("inf")
+
+
+def law_source(design: Any, law: Any, name: str) -> str:
+    """The C source ``designkit codegen`` writes for ``law`` under the prefix ``name``."""
+    with tempfile.TemporaryDirectory(prefix="designkit-generated-code-") as tmp:
+        code = generate_law_code(design, law, tmp, name=name, spec_name=name)
+        return code.source.read_text(encoding="utf-8")
+
+
+def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
+    """The shared library of ``sources`` (file name -> text), cached by content; ``(path, compiled now)``."""
+    from designkit.cache import cache_dir
+
+    key = "\0".join([*(f"{k}\0{v}" for k, v in sources.items()), cc, *COMPILE_FLAGS, ca.__version__])
+    cache = cache_dir("codegen")
+    library = cache / f"{stem}_{hashlib.sha256(key.encode()).hexdigest()[:16]}.so"
+    if library.exists():
+        return library, False
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix="designkit-generated-code-") as tmp:
+            files = []
+            for name, text in sources.items():
+                (Path(tmp) / name).write_text(text, encoding="utf-8")
+                files.append(str(Path(tmp) / name))
+            built = str(Path(tmp) / "library.so")
+            proc = subprocess.run([cc, *COMPILE_FLAGS, *files, "-o", built, "-lm"], capture_output=True, text=True,
+                                  cwd=tmp)
+            if proc.returncode != 0:
+                lines = [line for line in (proc.stderr or proc.stdout).strip().splitlines() if line.strip()]
+                raise CompileFailure(f"{Path(cc).name} exited with {proc.returncode}: "
+                                     + " | ".join(lines[:COMPILER_LINES] or ["no message"]))
+            fd, staged = tempfile.mkstemp(suffix=".so", dir=cache)  # then renamed: safe with concurrent builders
+            os.close(fd)
+            try:
+                shutil.copyfile(built, staged)  # the temporary folder may be on another file system
+                os.replace(staged, library)
+            except OSError:
+                with contextlib.suppress(OSError):
+                    os.unlink(staged)
+                raise
+    except OSError as exc:
+        raise CompileFailure(f"{Path(cc).name} could not build the library in {cache}: {exc}") from None
+    return library, True
+
+
+def _mx(f: ca.Function, name: str) -> ca.Function:
+    """``f`` as an MX function calling it (the law a called function, as the C law's calls are)."""
+    args = f.mx_in()
+    return ca.Function(name, args, f.call(args), f.name_in(), f.name_out())
+
+
+def _rolled(step: ca.Function, name: str) -> ca.Function:
+    m = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
+    return step.mapaccum(name, m)
+
+
+def _runs(simulator: Any, design: Any) -> tuple[Any, ...]:
+    learning = design.learning
+    if learning is None:
+        return (simulator.run(),)
+    from designkit.simulation.trials import run_trials
+
+    return run_trials(simulator, learning.trials, learning.update).results
+
+
+def _difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``|a - b|`` per step (rows: steps), with equal non-finite entries (NaN of a diverged run) counted equal."""
+    same = (a == b) | (np.isnan(a) & np.isnan(b))
+    with np.errstate(invalid="ignore"):
+        d = np.where(same, 0.0, np.abs(a - b))
+    d = np.where(np.isnan(d), np.inf, d)
+    return d.reshape(d.shape[0], -1).max(axis=1) if d.size else np.zeros(d.shape[0])
+
+
+def _scale(values: np.ndarray) -> float:
+    finite = np.abs(values[np.isfinite(values)])
+    return float(finite.max()) if finite.size else 0.0
+
+
+def _states(res: Any) -> np.ndarray:
+    return np.hstack([res.state, res.controller_state])
+
+
+def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: Any = None,
+                           verdict: Any = None) -> LoopComparison:
+    """Run the loop of ``spec`` with the generated C of ``law`` and with ``law`` itself, and compare (module docstring).
+
+    Parameters
+    ----------
+    spec : Spec
+        The validated spec (its ``simulation`` and ``numerics``; its ``name`` is the C prefix).
+    design : Design
+        The design (its ``learning`` runs the trials).
+    plant : Plant, optional
+        The true plant (default the design's).
+    law : Law, optional
+        The simulated law (default ``design.law``).
+    verdict : SimulationResult, optional
+        The verdict's run, compared with the C law's for the record.
+
+    Returns
+    -------
+    LoopComparison
+
+    Raises
+    ------
+    NoCompiler
+        No C compiler on ``PATH``.
+    CompileFailure
+        The compiler refused the law's C or the loop's.
+    """
+    from designkit.simulation.run import build
+
+    cc = find_compiler()
+    if cc is None:
+        raise NoCompiler("no C compiler found on PATH (cc, gcc or clang)")
+    start = time.perf_counter()
+    law = design.law if law is None else law
+    name = c_identifier(spec.name)
+    learning = design.learning
+    simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
+    text = law_source(design, law, name)
+    law_library, _ = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
+    symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
+    c_law = dataclasses.replace(law, **{role: ca.external(sym, str(law_library))
+                                        for role, sym in zip(LAW_ROLES, symbols, strict=True)})
+    py_law = dataclasses.replace(law, **{role: _mx(getattr(law, role), f"dk_python_{role}") for role in LAW_ROLES})
+    steps = {"c": simulator.restep(c_law), "python": simulator.restep(py_law)}
+    rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
+    gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
+    for f in rolled.values():
+        gen.add(f)
+    library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc, f"dk_loop_{name}")
+    loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
+    laws = {"c": c_law, "python": py_law}
+    seconds = {"compile": time.perf_counter() - start}
+    results = {}
+    for k in ("c", "python"):
+        t0 = time.perf_counter()
+        run = dataclasses.replace(simulator, step=steps[k], accumulated=loaded[k], dopri5=None, cvodes=None,
+                                  law=laws[k], _flat={})
+        results[k] = _runs(run, design)
+        seconds[f"{k}_run"] = time.perf_counter() - t0
+    state_d, command_d, first = 0.0, 0.0, None
+    for c, p in zip(results["c"], results["python"], strict=True):
+        ds, du = _difference(_states(c), _states(p)), _difference(c.u_command, p.u_command)
+        state_d, command_d = max(state_d, float(ds.max(initial=0.0))), max(command_d, float(du.max(initial=0.0)))
+        moved = np.flatnonzero((ds > 0) | (du > 0))
+        if moved.size and (first is None or p.time[moved[0]] < first):
+            first = float(p.time[moved[0]])
+    v_state = v_command = None
+    if verdict is not None and verdict.state.shape == results["c"][-1].state.shape:
+        last = results["c"][-1]
+        v_state = float(_difference(_states(last), _states(verdict)).max(initial=0.0))
+        v_command = float(_difference(last.u_command, verdict.u_command).max(initial=0.0))
+    py = results["python"]
+    return LoopComparison(
+        state_difference=state_d, command_difference=command_d,
+        state_scale=max(_scale(_states(r)) for r in py), command_scale=max(_scale(r.u_command) for r in py),
+        first_difference=first, runs=len(py), steps=int(py[0].time.size), symbols=symbols, library=str(library),
+        compiled_now=compiled_now, verdict_state_difference=v_state, verdict_command_difference=v_command,
+        integrator=str(simulator.settings.get("integrator", "")), seconds={k: round(v, 4) for k, v in seconds.items()})
