@@ -18,6 +18,12 @@
    trials with their learning update between them for a learning design -- and compares them: the largest
    difference of the states (plant and controller) and of the command over every step of every run.
 
+A stiff loop the verdict integrates with CVODES is integrated by CVODES inside every step of the grid instead, the
+loop interpreted by CasADi's virtual machine (it cannot generate C of a CVODES step) and the law still the compiled
+library; the Jacobians CVODES needs are finite differences of the law's functions, for the C law (a library has no
+derivatives) and the Python law (an SX function kept as a call) alike, so both Newton iterations see the same
+numbers.
+
 **Tolerance** (:data:`TOLERANCE`): each difference relative to the largest magnitude of that quantity over the
 Python law's run, at most ``1e-9``.  Both loops execute the same operations in the same order, compiled by the
 same compiler with the same flags into the same library, so they differ by rounding at most; on every example spec
@@ -55,7 +61,7 @@ from designkit.models.codegen import find_compiler
 from designkit.simulation.compiled import CHUNK, COMPILE_FLAGS, COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS
 from designkit.synthesis.codegen import LAW_ROLES, c_identifier, generate_law_code
 
-__all__ = ["TOLERANCE", "CompileFailure", "LoopComparison", "NoCompiler", "compare_generated_code", "law_source"]
+__all__ = ["TOLERANCE", "CompileError", "LoopComparison", "NoCompilerError", "compare_generated_code", "law_source"]
 
 TOLERANCE = 1e-9
 """Largest relative difference of the states and of the command between the C law's loop and the Python law's
@@ -64,11 +70,11 @@ COMPILER_LINES = 4
 """Lines of the compiler's message kept in a failure."""
 
 
-class NoCompiler(Exception):
+class NoCompilerError(Exception):
     """No C compiler found: the generated code cannot be run."""
 
 
-class CompileFailure(Exception):
+class CompileError(Exception):
     """The compiler refused the generated code; the message holds its first lines."""
 
 
@@ -97,6 +103,8 @@ class LoopComparison:
         Largest differences between the C law's (last) run and the verdict's run (None: no verdict run given).
     integrator : str
         The verdict run's integrator in words.
+    method : str
+        How both loops were integrated and evaluated, in words.
     seconds : dict
         Wall time (s) of ``compile`` (with writing the code and building the steps), ``c_run`` and ``python_run``.
     """
@@ -114,6 +122,7 @@ class LoopComparison:
     verdict_state_difference: float | None
     verdict_command_difference: float | None
     integrator: str
+    method: str
     seconds: dict[str, float]
 
     @property
@@ -161,7 +170,7 @@ def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
                                   cwd=tmp)
             if proc.returncode != 0:
                 lines = [line for line in (proc.stderr or proc.stdout).strip().splitlines() if line.strip()]
-                raise CompileFailure(f"{Path(cc).name} exited with {proc.returncode}: "
+                raise CompileError(f"{Path(cc).name} exited with {proc.returncode}: "
                                      + " | ".join(lines[:COMPILER_LINES] or ["no message"]))
             fd, staged = tempfile.mkstemp(suffix=".so", dir=cache)  # then renamed: safe with concurrent builders
             os.close(fd)
@@ -173,12 +182,21 @@ def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
                     os.unlink(staged)
                 raise
     except OSError as exc:
-        raise CompileFailure(f"{Path(cc).name} could not build the library in {cache}: {exc}") from None
+        raise CompileError(f"{Path(cc).name} could not build the library in {cache}: {exc}") from None
     return library, True
 
 
-def _mx(f: ca.Function, name: str) -> ca.Function:
-    """``f`` as an MX function calling it (the law a called function, as the C law's calls are)."""
+_FD = {"enable_fd": True, "enable_forward": False, "enable_reverse": False, "enable_jacobian": False}
+"""Options of a law function inside a CVODES step: derivatives by finite differences (a compiled library has no
+others), the same for the C law and the Python law so that both Newton iterations see the same Jacobians."""
+
+
+def _opaque(f: ca.Function, name: str, cvodes: bool) -> ca.Function:
+    """``f`` as a called function, as the C law's functions are: an MX function calling it, or inside a CVODES step
+    an SX function never inlined, with finite-difference derivatives (:data:`_FD`)."""
+    if cvodes:
+        args = f.sx_in()
+        return ca.Function(name, args, f.call(args), f.name_in(), f.name_out(), {"never_inline": True, **_FD})
     args = f.mx_in()
     return ca.Function(name, args, f.call(args), f.name_in(), f.name_out())
 
@@ -238,34 +256,42 @@ def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: An
 
     Raises
     ------
-    NoCompiler
+    NoCompilerError
         No C compiler on ``PATH``.
-    CompileFailure
+    CompileError
         The compiler refused the law's C or the loop's.
     """
     from designkit.simulation.run import build
 
     cc = find_compiler()
     if cc is None:
-        raise NoCompiler("no C compiler found on PATH (cc, gcc or clang)")
+        raise NoCompilerError("no C compiler found on PATH (cc, gcc or clang)")
     start = time.perf_counter()
     law = design.law if law is None else law
     name = c_identifier(spec.name)
     learning = design.learning
     simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
     text = law_source(design, law, name)
-    law_library, _ = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
+    law_library, law_now = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
     symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
-    c_law = dataclasses.replace(law, **{role: ca.external(sym, str(law_library))
+    cvodes = str(simulator.settings.get("integrator", "")).startswith("cvodes")
+    options = _FD if cvodes else {}
+    c_law = dataclasses.replace(law, **{role: ca.external(sym, str(law_library), options)
                                         for role, sym in zip(LAW_ROLES, symbols, strict=True)})
-    py_law = dataclasses.replace(law, **{role: _mx(getattr(law, role), f"dk_python_{role}") for role in LAW_ROLES})
+    py_law = dataclasses.replace(law, **{role: _opaque(getattr(law, role), f"dk_python_{role}", cvodes)
+                                         for role in LAW_ROLES})
     steps = {"c": simulator.restep(c_law), "python": simulator.restep(py_law)}
-    rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
-    gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
-    for f in rolled.values():
-        gen.add(f)
-    library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc, f"dk_loop_{name}")
-    loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
+    if cvodes:  # CasADi cannot generate C of a CVODES step: the loop runs interpreted, the law compiled
+        library, compiled_now = law_library, law_now
+        loaded: dict[str, Any] = {"c": None, "python": None}
+    else:
+        rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
+        gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
+        for f in rolled.values():
+            gen.add(f)
+        library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc,
+                                         f"dk_loop_{name}")
+        loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
     laws = {"c": c_law, "python": py_law}
     seconds = {"compile": time.perf_counter() - start}
     results = {}
@@ -293,4 +319,8 @@ def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: An
         state_scale=max(_scale(_states(r)) for r in py), command_scale=max(_scale(r.u_command) for r in py),
         first_difference=first, runs=len(py), steps=int(py[0].time.size), symbols=symbols, library=str(library),
         compiled_now=compiled_now, verdict_state_difference=v_state, verdict_command_difference=v_command,
-        integrator=str(simulator.settings.get("integrator", "")), seconds={k: round(v, 4) for k, v in seconds.items()})
+        integrator=str(simulator.settings.get("integrator", "")),
+        method=("CVODES inside every step of the verdict's grid, the loop interpreted (CasADi cannot generate C of a "
+                "CVODES step), the law's derivatives by finite differences" if cvodes
+                else "RK4 on the verdict's grid, both loops compiled in one library"),
+        seconds={k: round(v, 4) for k, v in seconds.items()})

@@ -26,8 +26,8 @@ def _run(design: Any, ctx: Context) -> tuple:
     from designkit.verification.check import Check
     from designkit.verification.generated_loop import (
         TOLERANCE,
-        CompileFailure,
-        NoCompiler,
+        CompileError,
+        NoCompilerError,
         compare_generated_code,
     )
 
@@ -35,10 +35,10 @@ def _run(design: Any, ctx: Context) -> tuple:
               "largest magnitudes) of the loop with the Python law")
     try:
         cmp = compare_generated_code(ctx.spec, design, plant=ctx.plant, law=ctx.law, verdict=ctx.simulation)
-    except NoCompiler as exc:
+    except NoCompilerError as exc:
         return (Check(name="generated_code", passed=None, target=target, detail=f"not run: {exc}; the generated C "
                       "cannot be compiled here (install cc, gcc or clang)", certificate={"compiler": None}),)
-    except CompileFailure as exc:
+    except CompileError as exc:
         return (Check(name="generated_code", passed=False, target=target, detail=f"the generated C does not "
                       f"compile: {exc}", certificate={"compiler_message": str(exc)}),)
     worst = max(cmp.state_relative, cmp.command_relative)
@@ -49,8 +49,8 @@ def _run(design: Any, ctx: Context) -> tuple:
              f"{_format(cmp.command_relative)})")
     where = ("bit-identical at every step" if cmp.first_difference is None
              else f"first difference at t = {cmp.first_difference:.6g} s")
-    detail = (f"{', '.join(cmp.symbols[:1])} and the other law functions compiled and called at every step of "
-              f"{runs} ({cmp.steps:,} steps, RK4 on the verdict's grid): {diffs}; {where}")
+    detail = (f"{cmp.symbols[0]} and the other law functions compiled and called at every step of {runs} "
+              f"({cmp.steps:,} steps; {cmp.method}): {diffs}; {where}")
     if not passed:
         detail = f"the generated C gives another loop: {diffs}; {where}"
     cert = {
@@ -59,7 +59,8 @@ def _run(design: Any, ctx: Context) -> tuple:
         "state_relative": cmp.state_relative, "command_relative": cmp.command_relative, "tolerance": TOLERANCE,
         "first_difference_s": cmp.first_difference, "runs": cmp.runs, "steps": cmp.steps,
         "functions": list(cmp.symbols), "library": cmp.library, "compiled_now": cmp.compiled_now,
-        "verdict_integrator": cmp.integrator, "verdict_state_difference": cmp.verdict_state_difference,
+        "method": cmp.method, "verdict_integrator": cmp.integrator,
+        "verdict_state_difference": cmp.verdict_state_difference,
         "verdict_command_difference": cmp.verdict_command_difference, "seconds": dict(cmp.seconds),
     }
     return (Check(name="generated_code", passed=passed, target=target, achieved=worst, margin=TOLERANCE - worst,
