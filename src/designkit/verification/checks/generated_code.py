@@ -23,6 +23,7 @@ def _format(value: float) -> str:
 
 
 def _run(design: Any, ctx: Context) -> tuple:
+    from designkit.errors import DesignkitError
     from designkit.verification.check import Check
     from designkit.verification.generated_loop import (
         TOLERANCE,
@@ -41,6 +42,13 @@ def _run(design: Any, ctx: Context) -> tuple:
     except CompileError as exc:
         return (Check(name="generated_code", passed=False, target=target, detail=f"the generated C does not "
                       f"compile: {exc}", certificate={"compiler_message": str(exc)}),)
+    except DesignkitError:
+        raise
+    except Exception as exc:  # noqa: BLE001 -- a loop that cannot be run with the C law decides nothing, with why
+        first = (str(exc).strip().splitlines() or [""])[0]
+        return (Check(name="generated_code", passed=None, target=target, detail=f"the loop with the compiled C law "
+                      f"could not be run: {type(exc).__name__}: {first}",
+                      certificate={"error": f"{type(exc).__name__}: {exc}"}),)
     worst = max(cmp.state_relative, cmp.command_relative)
     passed = worst <= TOLERANCE
     runs = f"{cmp.runs} trials" if cmp.runs > 1 else "the run"
