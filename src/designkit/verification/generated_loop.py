@@ -61,7 +61,8 @@ from designkit.models.codegen import find_compiler
 from designkit.simulation.compiled import CHUNK, COMPILE_FLAGS, COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS
 from designkit.synthesis.codegen import LAW_ROLES, c_identifier, generate_law_code
 
-__all__ = ["TOLERANCE", "CompileError", "LoopComparison", "NoCompilerError", "compare_generated_code", "law_source"]
+__all__ = ["TOLERANCE", "CompileError", "GeneratedLoops", "LoopComparison", "NoCompilerError", "compare_generated_code",
+           "generated_loops", "law_source"]
 
 TOLERANCE = 1e-9
 """Largest relative difference of the states and of the command between the C law's loop and the Python law's
@@ -233,20 +234,108 @@ def _states(res: Any) -> np.ndarray:
     return np.hstack([res.state, res.controller_state])
 
 
-def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: Any = None,
-                           verdict: Any = None) -> LoopComparison:
-    """Run the loop of ``spec`` with the generated C of ``law`` and with ``law`` itself, and compare (module docstring).
+@dataclass(frozen=True, eq=False)
+class GeneratedLoops:
+    """The two loops of :func:`compare_generated_code`, built and ready to run.
+
+    Parameters
+    ----------
+    c, python : Simulator
+        The loop calling the compiled C law, and the loop calling the Python law (``Simulator.run``).
+    verdict : Simulator
+        The loop as the verdict's run builds it (its own integrator).
+    symbols : tuple of str
+        The C functions of the law, in :data:`~designkit.synthesis.codegen.LAW_ROLES` order.
+    library : str
+        The shared library the loops run.
+    compiled_now : bool
+        The compiler ran (False: cached).
+    cvodes : bool
+        The loops are stepped by CVODES (interpreted loop, compiled law).
+    """
+
+    c: Any
+    python: Any
+    verdict: Any
+    symbols: tuple[str, ...]
+    library: str
+    compiled_now: bool
+    cvodes: bool
+
+    @property
+    def method(self) -> str:
+        """How both loops are integrated and evaluated, in words."""
+        if self.cvodes:
+            return ("CVODES inside every step of the verdict's grid, the loop interpreted (CasADi cannot generate C "
+                    "of a CVODES step), the law's derivatives by finite differences")
+        return "RK4 on the verdict's grid, both loops compiled in one library"
+
+
+def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = None) -> GeneratedLoops:
+    """Compile the generated C of ``law`` and build the loop of ``spec`` with it and with ``law`` (module docstring).
 
     Parameters
     ----------
     spec : Spec
         The validated spec (its ``simulation`` and ``numerics``; its ``name`` is the C prefix).
     design : Design
-        The design (its ``learning`` runs the trials).
+        The design.
     plant : Plant, optional
         The true plant (default the design's).
     law : Law, optional
         The simulated law (default ``design.law``).
+
+    Raises
+    ------
+    NoCompilerError
+        No C compiler on ``PATH``.
+    CompileError
+        The compiler refused the law's C or the loop's.
+    """
+    from designkit.simulation.run import build
+
+    cc = find_compiler()
+    if cc is None:
+        raise NoCompilerError("no C compiler found on PATH (cc, gcc or clang)")
+    law = design.law if law is None else law
+    name = c_identifier(spec.name)
+    learning = design.learning
+    simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
+    text = law_source(design, law, name)
+    law_library, law_now = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
+    symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
+    cvodes = str(simulator.settings.get("integrator", "")).startswith("cvodes")
+    options = _FD if cvodes else {}
+    laws = {"c": dataclasses.replace(law, **{role: ca.external(sym, str(law_library), options)
+                                             for role, sym in zip(LAW_ROLES, symbols, strict=True)}),
+            "python": dataclasses.replace(law, **{role: _opaque(getattr(law, role), f"dk_python_{role}", cvodes)
+                                                  for role in LAW_ROLES})}
+    steps = {k: simulator.restep(v) for k, v in laws.items()}
+    if cvodes:  # CasADi cannot generate C of a CVODES step: the loop runs interpreted, the law compiled
+        library, compiled_now = law_library, law_now
+        loaded: dict[str, Any] = {"c": None, "python": None}
+    else:
+        rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
+        gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
+        for f in rolled.values():
+            gen.add(f)
+        library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc,
+                                         f"dk_loop_{name}")
+        loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
+    loops = {k: dataclasses.replace(simulator, step=steps[k], accumulated=loaded[k], dopri5=None, cvodes=None,
+                                    law=laws[k], _flat={}) for k in laws}
+    return GeneratedLoops(c=loops["c"], python=loops["python"], verdict=simulator, symbols=symbols,
+                          library=str(library), compiled_now=compiled_now, cvodes=cvodes)
+
+
+def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: Any = None,
+                           verdict: Any = None) -> LoopComparison:
+    """Run the loop of ``spec`` with the generated C of ``law`` and with ``law`` itself, and compare (module docstring).
+
+    Parameters
+    ----------
+    spec, design, plant, law
+        As for :func:`generated_loops`.
     verdict : SimulationResult, optional
         The verdict's run, compared with the C law's for the record.
 
@@ -261,45 +350,13 @@ def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: An
     CompileError
         The compiler refused the law's C or the loop's.
     """
-    from designkit.simulation.run import build
-
-    cc = find_compiler()
-    if cc is None:
-        raise NoCompilerError("no C compiler found on PATH (cc, gcc or clang)")
     start = time.perf_counter()
-    law = design.law if law is None else law
-    name = c_identifier(spec.name)
-    learning = design.learning
-    simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
-    text = law_source(design, law, name)
-    law_library, law_now = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
-    symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
-    cvodes = str(simulator.settings.get("integrator", "")).startswith("cvodes")
-    options = _FD if cvodes else {}
-    c_law = dataclasses.replace(law, **{role: ca.external(sym, str(law_library), options)
-                                        for role, sym in zip(LAW_ROLES, symbols, strict=True)})
-    py_law = dataclasses.replace(law, **{role: _opaque(getattr(law, role), f"dk_python_{role}", cvodes)
-                                         for role in LAW_ROLES})
-    steps = {"c": simulator.restep(c_law), "python": simulator.restep(py_law)}
-    if cvodes:  # CasADi cannot generate C of a CVODES step: the loop runs interpreted, the law compiled
-        library, compiled_now = law_library, law_now
-        loaded: dict[str, Any] = {"c": None, "python": None}
-    else:
-        rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
-        gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
-        for f in rolled.values():
-            gen.add(f)
-        library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc,
-                                         f"dk_loop_{name}")
-        loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
-    laws = {"c": c_law, "python": py_law}
+    loops = generated_loops(spec, design, plant=plant, law=law)
     seconds = {"compile": time.perf_counter() - start}
     results = {}
-    for k in ("c", "python"):
+    for k, loop in (("c", loops.c), ("python", loops.python)):
         t0 = time.perf_counter()
-        run = dataclasses.replace(simulator, step=steps[k], accumulated=loaded[k], dopri5=None, cvodes=None,
-                                  law=laws[k], _flat={})
-        results[k] = _runs(run, design)
+        results[k] = _runs(loop, design)
         seconds[f"{k}_run"] = time.perf_counter() - t0
     state_d, command_d, first = 0.0, 0.0, None
     for c, p in zip(results["c"], results["python"], strict=True):
@@ -317,10 +374,7 @@ def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: An
     return LoopComparison(
         state_difference=state_d, command_difference=command_d,
         state_scale=max(_scale(_states(r)) for r in py), command_scale=max(_scale(r.u_command) for r in py),
-        first_difference=first, runs=len(py), steps=int(py[0].time.size), symbols=symbols, library=str(library),
-        compiled_now=compiled_now, verdict_state_difference=v_state, verdict_command_difference=v_command,
-        integrator=str(simulator.settings.get("integrator", "")),
-        method=("CVODES inside every step of the verdict's grid, the loop interpreted (CasADi cannot generate C of a "
-                "CVODES step), the law's derivatives by finite differences" if cvodes
-                else "RK4 on the verdict's grid, both loops compiled in one library"),
-        seconds={k: round(v, 4) for k, v in seconds.items()})
+        first_difference=first, runs=len(py), steps=int(py[0].time.size), symbols=loops.symbols,
+        library=loops.library, compiled_now=loops.compiled_now, verdict_state_difference=v_state,
+        verdict_command_difference=v_command, integrator=str(loops.verdict.settings.get("integrator", "")),
+        method=loops.method, seconds={k: round(v, 4) for k, v in seconds.items()})
