@@ -28,6 +28,9 @@ sampled controller (``sampling_period > 0``: ``simulation.sampling_period``, or 
 declares, :attr:`designkit.synthesis.law.Law.sampling_period`) computes its command and the
 derivative of its state at ``t = j Ts`` and holds both; a **discontinuous** law is held the same
 way at every step (its sample is the step); a relay, quantizer or delay line is evaluated once per step and held.
+
+A law whose functions cannot be expanded into SX (calls of compiled C loaded with :func:`casadi.external`, the
+``generated_code`` check's law) is composed in MX instead: the same operations, the law's functions called.
 """
 
 from __future__ import annotations

@@ -202,9 +202,12 @@ def _opaque(f: ca.Function, name: str, cvodes: bool) -> ca.Function:
     return ca.Function(name, args, f.call(args), f.name_in(), f.name_out())
 
 
-def _rolled(step: ca.Function, name: str) -> ca.Function:
-    m = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
-    return step.mapaccum(name, m)
+def _rolled(step: ca.Function, name: str, n_steps: int) -> ca.Function:
+    """``step`` rolled over a chunk of steps: at most the simulator's compiled chunk, and as even as the run's
+    ``n_steps`` allow, so that the last chunk pads few steps (2,501 steps run as two chunks of 1,251, not 2,000)."""
+    largest = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
+    chunks = -(-n_steps // largest)
+    return step.mapaccum(name, max(1, -(-n_steps // chunks)))
 
 
 def _runs(simulator: Any, design: Any) -> tuple[Any, ...]:
@@ -315,7 +318,7 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
         library, compiled_now = law_library, law_now
         loaded: dict[str, Any] = {"c": None, "python": None}
     else:
-        rolled = {k: _rolled(s, f"dk_loop_{k}") for k, s in steps.items()}
+        rolled = {k: _rolled(s, f"dk_loop_{k}", simulator.time.size) for k, s in steps.items()}
         gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
         for f in rolled.values():
             gen.add(f)

@@ -41,7 +41,7 @@ def _runs(loaded, monkeypatch):
     """The family's own run of each controller of ``loaded`` with the check (and the universal ones) only."""
     monkeypatch.setattr(designkit.families, "check_rules", lambda kind: resolve(("generated_code",)))
     members = [m for _, m in loaded.members()] if loaded.is_comparison else [loaded]
-    return [run_spec(m, box=False) for m in members]
+    return [run_spec(m, box=False, verdict_run=True) for m in members]
 
 
 def _check(run):

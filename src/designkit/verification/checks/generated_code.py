@@ -8,7 +8,9 @@ largest differences of the states and of the command, relative to their largest 
 most :data:`~designkit.verification.generated_loop.TOLERANCE` (``1e-9``; the two loops execute the same operations,
 so only rounding could separate them, and they are bit-identical on every example spec).  A compiler refusing the
 generated code is a failure with the compiler's first lines; without a C compiler the check is undecided.
-Offered on every design with a law and a simulation (universal).
+Offered on every design with a law and a simulation (universal), in the run that gives the spec's verdict
+(:attr:`~designkit.verification.suite.Context.verdict_run`): a study's variant, a fix's re-run or a box re-run has
+other gains or another plant, and its code is not the code ``designkit codegen`` writes for the spec.
 """
 
 from __future__ import annotations
@@ -77,7 +79,8 @@ def _run(design: Any, ctx: Context) -> tuple:
 
 RULE = CheckRule(
     name="generated_code", order=148,
-    applies=lambda d, c: c.simulation is not None and (c.law is not None or getattr(d, "law", None) is not None),
+    applies=lambda d, c: c.verdict_run and c.simulation is not None and (c.law is not None
+                                                                          or getattr(d, "law", None) is not None),
     run=_run, label="The generated C code in the closed loop", universal=True,
     glossary=(("generated C code", "the control law as C written by designkit codegen (CasADi's code generator), "
                "compiled by the system C compiler"),
