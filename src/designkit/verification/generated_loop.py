@@ -58,8 +58,9 @@ import casadi as ca
 import numpy as np
 
 from designkit.models.codegen import find_compiler
-from designkit.simulation.compiled import CHUNK, COMPILE_FLAGS, COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS
-from designkit.synthesis.codegen import LAW_ROLES, c_identifier, generate_law_code
+from designkit.simulation.compiled import COMPILE_FLAGS, COMPILED_CHUNK_NUMBERS
+from designkit.synthesis.codegen import LAW_ROLES, c_identifier
+from designkit.synthesis.codegen import law_source as generated_source
 
 __all__ = ["TOLERANCE", "CompileError", "GeneratedLoops", "LoopComparison", "NoCompilerError", "compare_generated_code",
            "generated_loops", "law_source"]
@@ -144,10 +145,9 @@ def _relative(diff: float, scale: float) -> float:
 
 
 def law_source(design: Any, law: Any, name: str) -> str:
-    """The C source ``designkit codegen`` writes for ``law`` under the prefix ``name``."""
-    with tempfile.TemporaryDirectory(prefix="designkit-generated-code-") as tmp:
-        code = generate_law_code(design, law, tmp, name=name, spec_name=name)
-        return code.source.read_text(encoding="utf-8")
+    """The text of ``<name>.c`` that ``designkit codegen`` writes for ``law`` under the prefix ``name``
+    (:func:`designkit.synthesis.codegen.law_source`)."""
+    return generated_source(design, law, name=name, spec_name=name)
 
 
 def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
@@ -202,10 +202,16 @@ def _opaque(f: ca.Function, name: str, cvodes: bool) -> ca.Function:
     return ca.Function(name, args, f.call(args), f.name_in(), f.name_out())
 
 
+ROLLED_CHUNK = 500
+"""Most steps per call of the compiled loop: CasADi builds an MX ``mapaccum`` of up to about 500 steps in a
+millisecond, and of 1,250 in 45 ms (measured); a call costs microseconds, so short chunks cost nothing."""
+
+
 def _rolled(step: ca.Function, name: str, n_steps: int) -> ca.Function:
-    """``step`` rolled over a chunk of steps: at most the simulator's compiled chunk, and as even as the run's
-    ``n_steps`` allow, so that the last chunk pads few steps (2,501 steps run as two chunks of 1,251, not 2,000)."""
-    largest = max(CHUNK, min(COMPILED_CHUNK, COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))))
+    """``step`` rolled over a chunk of steps: at most :data:`ROLLED_CHUNK` (fewer when the state and record are
+    large), as even as the run's ``n_steps`` allow, so that the last chunk pads few steps."""
+    numbers = COMPILED_CHUNK_NUMBERS // (step.size1_in(0) + step.size1_out(1))
+    largest = max(1, min(ROLLED_CHUNK, numbers))
     chunks = -(-n_steps // largest)
     return step.mapaccum(name, max(1, -(-n_steps // chunks)))
 
