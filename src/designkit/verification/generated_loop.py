@@ -25,14 +25,15 @@ derivatives) and the Python law (an SX function kept as a call) alike, so both N
 numbers.
 
 **Tolerance** (:data:`TOLERANCE`): each difference relative to the largest magnitude of that quantity over the
-Python law's run, at most ``1e-9``.  Both loops execute the same operations in the same order, compiled by the
-same compiler with the same flags into the same library, so they differ by rounding at most; on every example spec
-they are bit-identical (difference 0, measured), so a switching law's sign never meets a rounding-level tie
-between them.  ``1e-9`` leaves room for a C library whose elementary functions round differently from the
-law's interpretation, amplified over a run, and is far below any change of a gain (a gain changed in its 17th
-significant digit is the smallest change that can show).  Were a switching law to flip at a tie, the loops would
-part from that step on: the check reports the first instant at which any difference appears, with the largest
-differences, so such a flip is seen for what it is.
+Python law's run, at most ``1e-9``.  The two loops execute the same operations in the same order -- the Python
+law's functions generated to C by CasADi as part of the loop's file, the C law's being the written file's --
+compiled by the same compiler with the same flags into one library, so at most rounding could part them (an
+operation the written file orders otherwise); on every example spec they are bit-identical (difference 0,
+measured), so a switching law's sign never meets a rounding-level tie between them.  ``1e-9`` leaves room for such
+rounding amplified over a run, and is far below a change of a gain that matters: a gain changed in its seventh
+significant digit moves the command by about ``1e-7`` of its size at the first step.  Were a switching law to flip
+at a tie, the loops would part from that step on: the check reports the first instant at which any difference
+appears, with the largest differences, so such a flip is seen for what it is.
 
 The verdict's own run may use another integrator (the compiled Dormand--Prince pair of a smooth loop); the
 comparison is made with RK4 for both laws because the compiled pair embeds the law's expressions in its own
@@ -144,10 +145,10 @@ def _relative(diff: float, scale: float) -> float:
     return diff / scale if scale > 0 else float("inf")
 
 
-def law_source(design: Any, law: Any, name: str) -> str:
-    """The text of ``<name>.c`` that ``designkit codegen`` writes for ``law`` under the prefix ``name``
-    (:func:`designkit.synthesis.codegen.law_source`)."""
-    return generated_source(design, law, name=name, spec_name=name)
+def law_source(design: Any, law: Any, name: str, spec_name: str) -> str:
+    """The text of ``<name>.c`` that ``designkit codegen`` writes for ``law`` of the spec ``spec_name`` under the
+    prefix ``name`` (:func:`designkit.synthesis.codegen.law_source`)."""
+    return generated_source(design, law, name=name, spec_name=spec_name)
 
 
 def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
@@ -310,7 +311,7 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
     name = c_identifier(spec.name)
     learning = design.learning
     simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
-    text = law_source(design, law, name)
+    text = law_source(design, law, name, spec.name)
     law_library, law_now = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
     symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
     cvodes = str(simulator.settings.get("integrator", "")).startswith("cvodes")

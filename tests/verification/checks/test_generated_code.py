@@ -84,8 +84,8 @@ def test_a_gain_changed_in_the_c_text_fails_with_the_difference(cache, monkeypat
     original = generated_loop.law_source
     seen = {}
 
-    def planted(design, law, name):
-        text, seen["value"] = _plant_gain(original(design, law, name))
+    def planted(*args):
+        text, seen["value"] = _plant_gain(original(*args))
         return text
 
     monkeypatch.setattr(generated_loop, "law_source", planted)
@@ -108,7 +108,7 @@ def test_a_gain_changed_in_the_c_text_fails_with_the_difference(cache, monkeypat
 @needs_compiler
 def test_a_planted_gain_makes_verify_exit_1(cache, monkeypatch, capsys):
     original = generated_loop.law_source
-    monkeypatch.setattr(generated_loop, "law_source", lambda d, law, n: _plant_gain(original(d, law, n))[0])
+    monkeypatch.setattr(generated_loop, "law_source", lambda *args: _plant_gain(original(*args))[0])
     assert main(["verify", "--jobs", "1", str(ROOT / "specs" / "posspeed-link.yaml")]) == 1
     out = capsys.readouterr().out
     assert "generated" in out.lower()
@@ -117,8 +117,7 @@ def test_a_planted_gain_makes_verify_exit_1(cache, monkeypatch, capsys):
 @needs_compiler
 def test_c_the_compiler_refuses_fails_with_its_message(cache, monkeypatch):
     original = generated_loop.law_source
-    monkeypatch.setattr(generated_loop, "law_source",
-                        lambda d, law, n: original(d, law, n) + "\nthis is not C;\n")
+    monkeypatch.setattr(generated_loop, "law_source", lambda *args: original(*args) + "\nthis is not C;\n")
     (run,) = _runs(load_spec(ROOT / "specs" / "posspeed-link.yaml"), monkeypatch)
     check = _check(run)
     assert check.passed is False
@@ -142,3 +141,15 @@ def test_the_library_is_cached_by_content(cache, monkeypatch):
     again = _check(_runs(loaded, monkeypatch)[0]).certificate
     assert first["compiled_now"] is True and again["compiled_now"] is False
     assert first["library"] == again["library"] and Path(first["library"]).exists()
+
+
+def test_the_code_compiled_is_the_file_codegen_writes(tmp_path):
+    from designkit.pipeline import codegen
+    from designkit.pipeline import design as design_of
+    from designkit.synthesis.codegen import c_identifier
+
+    path = ROOT / "specs" / "pid-sm-link.yaml"
+    written = codegen(path, tmp_path).source.read_text(encoding="utf-8")
+    loaded = load_spec(path)
+    design = design_of(loaded)
+    assert generated_loop.law_source(design, design.law, c_identifier(loaded.spec.name), loaded.spec.name) == written
