@@ -7,7 +7,7 @@ For each link example (``specs/posspeed-link.yaml``, ``specs/sliding-mode-link.y
    ``verify --jobs 1 --json`` in this process, warm (``check_share``), each with the check and without it
    (``generated_code`` filtered out of the rules the suite resolves), the libraries cached (one warm-up run
    first); the ratio ``with / without - 1`` is the share the check adds.  Goal: at most 0.30.  The check's own
-   time (``compare_generated_code``, cached) over the warm verify without it is given too: on a loaded machine
+   time (``compare_generated_code`` given the verdict's simulator, as in ``verify``; cached) over the warm verify without it is given too: on a loaded machine
    the difference of two verify times is noise of the size of the check.
 2. The loop calling the compiled C law (``GeneratedLoops.c.run()``) against the verdict's own compiled
    simulation (``build(...).run()``: the Dormand--Prince pair or the compiled RK4 roll), and against the compiled
@@ -118,7 +118,8 @@ def measure(name: str, repeats: int) -> dict[str, Any]:
     compiled = _median_time(loops.verdict.run, max(repeats, 5))
     c_loop = _median_time(loops.c.run, max(repeats, 5))
     python_loop = _median_time(loops.python.run, max(repeats, 5))
-    check_s = _median_time(lambda: compare_generated_code(run.loaded.spec, run.design, plant=run.plant), repeats)
+    check_s = _median_time(lambda: compare_generated_code(run.loaded.spec, run.design, plant=run.plant,
+                                                          simulator=loops.verdict), repeats)
     with tempfile.TemporaryDirectory() as cold:
         before = os.environ.get("DESIGNKIT_CACHE_DIR")
         os.environ["DESIGNKIT_CACHE_DIR"] = cold

@@ -107,7 +107,7 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     if adjust is not None:
         design = adjust(design)
     plant = plant if actual is None else actual
-    sim = trials = None
+    sim = trials = simulator = None
     if simulate:
         learning = design.learning
         simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
@@ -127,5 +127,5 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
             return run_spec(loaded, plant=true_plant, design=base, actual=other, box=False).checks
 
     checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials, rerun=rerun,
-                        verdict_run=verdict_run)
+                        verdict_run=verdict_run, simulator=simulator)
     return Run(loaded, plant, design, sim, trials, tuple(checks), time.perf_counter() - start)

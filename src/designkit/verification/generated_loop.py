@@ -281,7 +281,8 @@ class GeneratedLoops:
         return "RK4 on the verdict's grid, both loops compiled in one library"
 
 
-def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = None) -> GeneratedLoops:
+def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = None,
+                    simulator: Any = None) -> GeneratedLoops:
     """Compile the generated C of ``law`` and build the loop of ``spec`` with it and with ``law`` (module docstring).
 
     Parameters
@@ -294,6 +295,9 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
         The true plant (default the design's).
     law : Law, optional
         The simulated law (default ``design.law``).
+    simulator : Simulator, optional
+        The verdict's built simulation of this spec, design, plant and law (default: built here, as the verdict's
+        run builds it).
 
     Raises
     ------
@@ -310,7 +314,8 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
     law = design.law if law is None else law
     name = c_identifier(spec.name)
     learning = design.learning
-    simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
+    if simulator is None:
+        simulator = build(spec, design, plant=plant, law=law, expected_runs=learning.trials if learning else 1)
     text = law_source(design, law, name, spec.name)
     law_library, law_now = _compile({f"{name}.c": text}, cc, f"dk_law_{name}")
     symbols = tuple(f"{name}_{role}" for role in LAW_ROLES)
@@ -338,13 +343,13 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
                           library=str(library), compiled_now=compiled_now, cvodes=cvodes)
 
 
-def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: Any = None,
-                           verdict: Any = None) -> LoopComparison:
+def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: Any = None, verdict: Any = None,
+                           simulator: Any = None) -> LoopComparison:
     """Run the loop of ``spec`` with the generated C of ``law`` and with ``law`` itself, and compare (module docstring).
 
     Parameters
     ----------
-    spec, design, plant, law
+    spec, design, plant, law, simulator
         As for :func:`generated_loops`.
     verdict : SimulationResult, optional
         The verdict's run, compared with the C law's for the record.
@@ -361,7 +366,7 @@ def compare_generated_code(spec: Any, design: Any, *, plant: Any = None, law: An
         The compiler refused the law's C or the loop's.
     """
     start = time.perf_counter()
-    loops = generated_loops(spec, design, plant=plant, law=law)
+    loops = generated_loops(spec, design, plant=plant, law=law, simulator=simulator)
     seconds = {"compile": time.perf_counter() - start}
     results = {}
     for k, loop in (("c", loops.c), ("python", loops.python)):

@@ -84,6 +84,9 @@ class Context:
         The run gives the spec's verdict (the pipeline's run), not a study's variant, a fix's re-run or a box
         re-run: checks of what the design ships (``generated_code``: its C code, written for this design only) run
         on it alone, so that variants do not compile code nobody ships.
+    simulator : Simulator or None
+        The built simulation the run ran (:func:`designkit.simulation.run.build`), for a check that runs the loop
+        again with something changed (``generated_code``: the law's compiled C); None: built again when needed.
     """
 
     spec: Any
@@ -94,6 +97,7 @@ class Context:
     trials: Any = None
     rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None
     verdict_run: bool = False
+    simulator: Any = None
 
     def true_plant(self, design: Any) -> Any:
         """The true plant (the design's when none was given)."""
@@ -240,8 +244,8 @@ def owner(rules: Sequence[CheckRule], check_name: str) -> CheckRule | None:
 
 
 def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any, rerun: Any = None,
-             verdict_run: bool = False) -> Context:
-    return Context(spec, simulation, spec.numerics.solver, plant, law, trials, rerun, verdict_run)
+             verdict_run: bool = False, simulator: Any = None) -> Context:
+    return Context(spec, simulation, spec.numerics.solver, plant, law, trials, rerun, verdict_run, simulator)
 
 
 def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None, *,
@@ -254,7 +258,7 @@ def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None
 def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None, *,
                rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None,
                rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None,
-               verdict_run: bool = False) -> tuple[Check, ...]:
+               verdict_run: bool = False, simulator: Any = None) -> tuple[Check, ...]:
     """Run every check of ``rules`` that applies (see the module docstring).
 
     Parameters
@@ -277,12 +281,14 @@ def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None
         The family's own run at other parameter values (:attr:`Context.rerun`).
     verdict_run : bool
         The run gives the spec's verdict (:attr:`Context.verdict_run`).
+    simulator : Simulator, optional
+        The built simulation ``simulation`` came from (:attr:`Context.simulator`).
 
     Returns
     -------
     tuple of Check
     """
-    ctx = _context(spec, simulation, plant, law, trials, rerun, verdict_run)
+    ctx = _context(spec, simulation, plant, law, trials, rerun, verdict_run, simulator)
     checks: list[Check] = []
     for rule in resolve(rules):
         if rule.offered_for(design, ctx):

@@ -37,7 +37,8 @@ def _run(design: Any, ctx: Context) -> tuple:
     target = (f"states and command of the loop with the compiled C law within {TOLERANCE:g} (relative to their "
               "largest magnitudes) of the loop with the Python law")
     try:
-        cmp = compare_generated_code(ctx.spec, design, plant=ctx.plant, law=ctx.law, verdict=ctx.simulation)
+        cmp = compare_generated_code(ctx.spec, design, plant=ctx.plant, law=ctx.law, verdict=ctx.simulation,
+                                     simulator=ctx.simulator)
     except NoCompilerError as exc:
         return (Check(name="generated_code", passed=None, target=target, detail=f"not run: {exc}; the generated C "
                       "cannot be compiled here (install cc, gcc or clang)", certificate={"compiler": None}),)
