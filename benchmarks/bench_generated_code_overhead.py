@@ -7,8 +7,9 @@ For each link example (``specs/posspeed-link.yaml``, ``specs/sliding-mode-link.y
    ``verify --jobs 1 --json`` in this process, warm (``check_share``), each with the check and without it
    (``generated_code`` filtered out of the rules the suite resolves), the libraries cached (one warm-up run
    first); the ratio ``with / without - 1`` is the share the check adds.  Goal: at most 0.30.  The check's own
-   time (``compare_generated_code`` given the verdict's simulator, as in ``verify``; cached) over the warm verify without it is given too: on a loaded machine
-   the difference of two verify times is noise of the size of the check.
+   time (``compare_generated_code`` given the verdict's simulator, as in ``verify``; cached) over the warm verify
+   without it is given too: on a loaded machine the difference of two verify times is noise of the size of the
+   check.
 2. The loop calling the compiled C law (``GeneratedLoops.c.run()``) against the verdict's own compiled
    simulation (``build(...).run()``: the Dormand--Prince pair or the compiled RK4 roll), and against the compiled
    RK4 roll of the same loop with the Python law (``GeneratedLoops.python.run()``, the same integrator); the ratios
