@@ -12,8 +12,8 @@
    both as MX graphs with the law as a called function;
 3. generates both rolled steps to C (``mapaccum``) in one file, compiles it with the law's C file into one library
    (``-O1 -ffp-contract=off``: no reassociation, no fused multiply-add), cached in
-   :func:`designkit.cache.cache_dir` ``("codegen")`` under the hash of the two sources, the compiler, the flags and
-   CasADi's version;
+   :func:`designkit.cache.cache_dir` ``("codegen")`` under the hash of the law's C text, the two steps'
+   serialization, the run's length, the compiler, the flags and CasADi's version;
 4. runs both loops on the same inputs with the same fixed-step RK4 on the verdict's output grid -- the family's
    trials with their learning update between them for a learning design -- and compares them: the largest
    difference of the states (plant and controller) and of the command over every step of every run.
@@ -51,6 +51,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -151,15 +152,19 @@ def law_source(design: Any, law: Any, name: str, spec_name: str) -> str:
     return generated_source(design, law, name=name, spec_name=spec_name)
 
 
-def _compile(sources: dict[str, str], cc: str, stem: str) -> tuple[Path, bool]:
-    """The shared library of ``sources`` (file name -> text), cached by content; ``(path, compiled now)``."""
+def _compile(content: dict[str, str], cc: str, stem: str,
+             sources: Callable[[], dict[str, str]] | None = None) -> tuple[Path, bool]:
+    """The shared library of ``sources()`` (file name -> text; default ``content``), cached under the hash of
+    ``content`` (which determines the sources), the compiler, the flags and CasADi's version; ``(path, compiled
+    now)``.  The sources are generated only when the library is not cached."""
     from designkit.cache import cache_dir
 
-    key = "\0".join([*(f"{k}\0{v}" for k, v in sources.items()), cc, *COMPILE_FLAGS, ca.__version__])
+    key = "\0".join([*(f"{k}\0{v}" for k, v in content.items()), cc, *COMPILE_FLAGS, ca.__version__])
     cache = cache_dir("codegen")
     library = cache / f"{stem}_{hashlib.sha256(key.encode()).hexdigest()[:16]}.so"
     if library.exists():
         return library, False
+    sources = content if sources is None else sources()
     try:
         cache.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory(prefix="designkit-generated-code-") as tmp:
@@ -330,13 +335,18 @@ def generated_loops(spec: Any, design: Any, *, plant: Any = None, law: Any = Non
         library, compiled_now = law_library, law_now
         loaded: dict[str, Any] = {"c": None, "python": None}
     else:
-        rolled = {k: _rolled(s, f"dk_loop_{k}", simulator.time.size) for k, s in steps.items()}
-        gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
-        for f in rolled.values():
-            gen.add(f)
-        library, compiled_now = _compile({"dk_generated_loop.c": gen.dump(), f"{name}.c": text}, cc,
-                                         f"dk_loop_{name}")
-        loaded = {k: ca.external(f.name(), str(library)) for k, f in rolled.items()}
+        def sources() -> dict[str, str]:
+            gen = ca.CodeGenerator("dk_generated_loop.c", {"with_header": False, "verbose": False})
+            for k, s in steps.items():
+                gen.add(_rolled(s, f"dk_loop_{k}", simulator.time.size))
+            return {"dk_generated_loop.c": gen.dump(), f"{name}.c": text}
+
+        # keyed by the steps' serialization (which names the law's library, itself keyed by the law's text) and the
+        # run's length (the chunk): rolling and generating them costs more than a cached run
+        content = {"steps": "\0".join(s.serialize() for s in steps.values()), "n": str(simulator.time.size),
+                   f"{name}.c": text}
+        library, compiled_now = _compile(content, cc, f"dk_loop_{name}", sources)
+        loaded = {k: ca.external(f"dk_loop_{k}", str(library)) for k in steps}
     loops = {k: dataclasses.replace(simulator, step=steps[k], accumulated=loaded[k], dopri5=None, cvodes=None,
                                     law=laws[k], _flat={}) for k in laws}
     return GeneratedLoops(c=loops["c"], python=loops["python"], verdict=simulator, symbols=symbols,
