@@ -391,7 +391,7 @@ def run(loaded: LoadedSpec | Spec | ComparisonSpec, *, simulate: bool = True,
     check_studies(spec, base_dir(loaded))
     true_plant = plant(loaded)
     _check_per_input(spec, true_plant)
-    done = run_spec(loaded, plant=true_plant, simulate=simulate)
+    done = run_spec(loaded, plant=true_plant, simulate=simulate, verdict_run=True)
     return PipelineResult(loaded=loaded, design=done.design, checks=done.checks, simulation=done.simulation,
                           versions=versions(), plant=true_plant, trials=done.trials, seconds=done.seconds)
 

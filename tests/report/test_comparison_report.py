@@ -149,4 +149,4 @@ def test_a_load_step_gets_a_zoom_and_warnings_reach_page_one(tmp_path):
         pages[0].split())
     summary = _comparison_summary(result)
     assert f"  fast: {warning}" in summary
-    assert "fast (PID position servo) is verified: all 8 of its checks pass (4 required, 4 informational)." in summary
+    assert "fast (PID position servo) is verified: all 9 of its checks pass (5 required, 4 informational)." in summary

@@ -33,6 +33,7 @@ from designkit.synthesis.codegen import (
     LawCode,
     c_identifier,
     generate_law_code,
+    law_source,
 )
 from tests.marks import slow_cases
 from tests.tolerances import TOL
@@ -216,6 +217,19 @@ def test_terms_are_the_ones_the_family_declares(tmp_path):
     servo = codegen(SERVO, tmp_path)
     assert [f.role for f in servo.functions] == list(LAW_ROLES)
     assert [f.role for f in codegen(SIMNOG, tmp_path).functions] == [*LAW_ROLES, "g_hat"]
+
+
+def test_law_source_is_the_file_written(tmp_path):
+    """``law_source`` (what the ``generated_code`` check compiles) is the ``.c`` file ``generate_law_code`` writes,
+    byte for byte, model terms included; it writes nothing."""
+    for spec, prefix in ((SERVO, "posspeed_link"), (SIMNOG, "simnog_pid")):
+        dsn, law = _law(load_spec(spec))
+        code = generate_law_code(dsn, law, tmp_path / "out", name=prefix, spec_name=spec.stem)
+        before = sorted(tmp_path.rglob("*"))
+        assert law_source(dsn, law, name=prefix, spec_name=spec.stem) == code.source.read_text(encoding="utf-8")
+        assert sorted(tmp_path.rglob("*")) == before
+    with pytest.raises(SpecError, match="name"):
+        law_source(dsn, law, name="1bad")
 
 
 def test_two_controllers_link_into_one_library(cc, tmp_path):

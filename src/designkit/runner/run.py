@@ -62,7 +62,8 @@ def base_dir(loaded: Any) -> Path | None:
 
 
 def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | None = None,
-             simulate: bool = True, actual: Any = None, design: Any = None, box: bool = True) -> Run:
+             simulate: bool = True, actual: Any = None, design: Any = None, box: bool = True,
+             verdict_run: bool = False) -> Run:
     """Run a one-controller spec as :func:`designkit.pipeline.run` does.
 
     Parameters
@@ -85,6 +86,9 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     box : bool
         Let the checks re-run this run at points of ``plant.uncertainty`` (the ``box_runs`` check: the same design,
         the true plant with other parameter values, ``box=False`` inside, so runs do not nest).
+    verdict_run : bool
+        This run gives the spec's verdict (:func:`designkit.pipeline.run`), not a study's variant, a fix's re-run or a
+        box re-run: the checks of the design's shipped code run on it (:attr:`Context.verdict_run`).
 
     Returns
     -------
@@ -103,7 +107,7 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     if adjust is not None:
         design = adjust(design)
     plant = plant if actual is None else actual
-    sim = trials = None
+    sim = trials = simulator = None
     if simulate:
         learning = design.learning
         simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
@@ -122,5 +126,6 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
                 return run_spec(loaded, plant=other, adjust=adjust, box=False).checks
             return run_spec(loaded, plant=true_plant, design=base, actual=other, box=False).checks
 
-    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials, rerun=rerun)
+    checks = run_checks(spec, design, sim, plant=plant, rules=check_rules(design.kind), trials=trials, rerun=rerun,
+                        verdict_run=verdict_run, simulator=simulator)
     return Run(loaded, plant, design, sim, trials, tuple(checks), time.perf_counter() - start)

@@ -151,6 +151,9 @@ class Simulator:
         The simulated plant and controller.
     settings : Mapping
         Every option used.
+    restep : callable or None
+        ``Law -> sim_step``: the step of this loop (plant, element, timing) with another law of the same layout,
+        e.g. one whose functions call compiled C (the ``generated_code`` check).
     """
 
     step: ca.Function
@@ -169,6 +172,7 @@ class Simulator:
     dopri5: Any = None
     cvodes: Any = None
     implementation: Any = None
+    restep: Any = field(default=None, repr=False)
     _flat: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -373,6 +377,11 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
                          np.asarray(element.initial_memory, dtype=float),
                          np.zeros(nu + law.n_state + nu * timing.delay_steps)])
     step = step_function(loop_plant, loop_law, element, timing, spec.numerics, measure=measure)
+
+    def restep(other: Law) -> ca.Function:  # the same step with another law of the same layout
+        return step_function(loop_plant, measuring_law(other, nx, n_lag), element, timing, spec.numerics,
+                             measure=measure)
+
     if regime.smooth and true_plant.nonsmooth():  # smooth unless the law leaves the plant's jump in the loop
         regime = regime_of(law, element, sampled=sampling[0] > 0, delayed=delay[0] > 0, noisy=noisy,
                            plant=loop_plant, probe=_probe(loop_plant, loop_law, element, z0, inputs),
@@ -435,7 +444,7 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=reference, kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
                      compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes,
-                     implementation=impl if impl is not None and impl.changes_plant else None)
+                     implementation=impl if impl is not None and impl.changes_plant else None, restep=restep)
 
 
 def _lag_start(impl: Any, law: Law, x0: np.ndarray, rest: Any, before: np.ndarray, measure: Any) -> np.ndarray:

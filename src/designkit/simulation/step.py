@@ -31,6 +31,9 @@ sampled controller (``sampling_period > 0``: ``simulation.sampling_period``, or 
 declares, :attr:`designkit.synthesis.law.Law.sampling_period`) computes its command and the
 derivative of its state at ``t = j Ts`` and holds both; a **discontinuous** law is held the same
 way at every step (its sample is the step); a relay, quantizer or delay line is evaluated once per step and held.
+
+A law whose functions cannot be expanded into SX (calls of compiled C loaded with :func:`casadi.external`, the
+``generated_code`` check's law) is composed in MX instead: the same operations, the law's functions called.
 """
 
 from __future__ import annotations
@@ -117,10 +120,14 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
     held_law, per_step = regime.held_law, regime.per_step
     ode = plant.ode()
 
-    # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values
-    s, a = ca.SX.sym("s", L.nx + L.nc), ca.SX.sym("a", 3 * L.n)
+    # the right-hand side over one step, in fresh symbols: s = (x, xc), a = reference, h = held values; MX when a
+    # law function cannot be expanded into SX (a call of compiled C, casadi.external)
+    expands = all(getattr(law, role).is_a("SXFunction") for role in ("command", "derivative", "gate", "project",
+                                                                      "update"))
+    rsym = ca.SX.sym if expands else ca.MX.sym
+    s, a = rsym("s", L.nx + L.nc), rsym("a", 3 * L.n)
     h_sizes = [L.nx, L.nd, L.nu, L.nm, L.ne, L.nc, L.nu, L.nc, L.np_]
-    h = ca.SX.sym("h", sum(h_sizes))
+    h = rsym("h", sum(h_sizes))
     noise, dist, uff, m, e, gate, u_held, d_held, p_true = _split(h, h_sizes)
     x, xc = s[:L.nx], s[L.nx:]
     if per_step:
@@ -132,7 +139,7 @@ def step_function(plant: Any, law: Law, element: Any, timing: Any, numerics: Any
     rhs = ca.Function("loop_rhs", [s, a, h], [ca.vertcat(ode(x, u_in, dist, p_true), xc_dot)], ["s", "a", "h"],
                       ["s_dot"])
 
-    sym = ca.MX.sym if timing.integrator == "cvodes" else ca.SX.sym
+    sym = ca.MX.sym if timing.integrator == "cvodes" or not expands else ca.SX.sym
     z, w = sym("z", sum(L.z_sizes)), sym("w", sum(L.w_sizes))
     x, xc, m, e, u_hold, d_hold, line = _split(z, L.z_sizes)
     r0, rm, r1, noise, dist, flag, uff, p = _split(w, L.w_sizes)

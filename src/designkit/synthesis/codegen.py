@@ -45,7 +45,7 @@ from designkit.synthesis.law import Law
 
 __all__ = [
     "LAW_ROLES", "MODEL_TERMS", "GeneratedFunction", "LawCode", "ModelTerm", "Port",
-    "c_identifier", "check_name", "generate_law_code",
+    "c_identifier", "check_name", "generate_law_code", "law_source",
 ]
 
 LAW_ROLES: tuple[str, ...] = ("command", "derivative", "gate", "project", "update")
@@ -451,6 +451,52 @@ def _generate(functions: list[ca.Function], name: str) -> tuple[str, str]:
     return source, header
 
 
+def _functions(design: Design, law: Law, name: str) -> tuple[list[ca.Function], list[str]]:
+    """The exported functions (law, model terms, the law's own exports) under their C names, and their roles."""
+    functions: list[ca.Function] = [_dense(getattr(law, role), f"{name}_{role}") for role in LAW_ROLES]
+    roles = list(LAW_ROLES)
+    for term in _terms(design):
+        f = _model_term(design.plant, term, f"{name}_{term}")
+        if f is not None:
+            functions.append(f)
+            roles.append(term)
+    for role, f in dict(getattr(law, "exports", None) or {}).items():
+        if role in roles or not _IDENTIFIER.match(role):
+            raise ValueError(f"{design.kind}: law export {role!r} is not a new C identifier")
+        functions.append(_dense(f, f"{name}_{role}"))
+        roles.append(role)
+    return functions, roles
+
+
+def _source_text(kind: str, spec_name: str | None, name: str, source: str) -> str:
+    of_spec = f" of spec {_comment(spec_name)!r}" if spec_name else ""
+    return f"/* designkit: C code of the {kind} controller{of_spec}; the functions are documented in {name}.h. */\n" \
+        + source
+
+
+def law_source(design: Design, law: Law, *, name: str, spec_name: str | None = None) -> str:
+    """The text of ``<name>.c`` that :func:`generate_law_code` writes for these arguments, without writing anything.
+
+    Parameters
+    ----------
+    design, law
+        As for :func:`generate_law_code`.
+    name : str
+        The C prefix (a C identifier).
+    spec_name : str, optional
+        The spec named in the file's first line.
+
+    Raises
+    ------
+    SpecError
+        ``name`` not a C identifier.
+    """
+    name = check_name(name)
+    functions, _ = _functions(design, law, name)
+    source, _ = _generate(functions, name)
+    return _source_text(design.kind, spec_name, name, source)
+
+
 def generate_law_code(
     design: Design,
     law: Law,
@@ -496,19 +542,7 @@ def generate_law_code(
     folder = Path(out_dir) / _check_folder(spec_name if spec_name is not None else name)
 
     docs = _port_docs(design, law)
-    functions: list[ca.Function] = [_dense(getattr(law, role), f"{name}_{role}") for role in LAW_ROLES]
-    roles = list(LAW_ROLES)
-    for term in _terms(design):
-        f = _model_term(design.plant, term, f"{name}_{term}")
-        if f is not None:
-            functions.append(f)
-            roles.append(term)
-    for role, f in dict(getattr(law, "exports", None) or {}).items():
-        if role in roles or not _IDENTIFIER.match(role):
-            raise ValueError(f"{design.kind}: law export {role!r} is not a new C identifier")
-        functions.append(_dense(f, f"{name}_{role}"))
-        roles.append(role)
-
+    functions, roles = _functions(design, law, name)
     generated = tuple(GeneratedFunction(role, f.name(), *_ports(f, docs))
                       for role, f in zip(roles, functions, strict=True))
     code = LawCode(directory=folder, source=folder / f"{name}.c", header=folder / f"{name}.h", name=name,
@@ -519,9 +553,7 @@ def generate_law_code(
     guard = f"DESIGNKIT_{name.upper()}_H"
     header_text = (f"{comment}\n#ifndef {guard}\n#define {guard}\n\n{header}\n{_sizes(code, law)}\n"
                    f"#endif /* {guard} */\n")
-    source_text = (f"/* designkit: C code of the {design.kind} controller"
-                   + (f" of spec {_comment(spec_name)!r}" if spec_name else "")
-                   + f"; the functions are documented in {name}.h. */\n" + source)
+    source_text = _source_text(design.kind, spec_name, name, source)
     try:
         _write(folder, {f"{name}.c": source_text, f"{name}.h": header_text})
     except OSError as exc:

@@ -37,6 +37,8 @@ command_chatter    145   a run of a non-switching law            a command jumpi
 command_switching  146   a run (every law)                       switching vs averaged control, reversal rate
                                                                  vs the step; ``max_reversal_rate``,
                                                                  ``max_command_variation``
+generated_code     148   a run and a law (every law)             the law's generated C, compiled and called at
+                                                                 every step, gives the Python law's loop
 box_runs           150   a run and ``plant.uncertainty``         the family's own run at the box's corners and
                                                                  samples: every check passes at each
 ================== ===== ======================================= ==============================================
@@ -78,6 +80,13 @@ class Context:
         checks) on the true plant with these parameter values, passed in by the runner (the layer above), which
         the ``box_runs`` check calls at the points of the parameter box; None inside such a run (no nesting) and
         without a simulation.
+    verdict_run : bool
+        The run gives the spec's verdict (the pipeline's run), not a study's variant, a fix's re-run or a box
+        re-run: checks of what the design ships (``generated_code``: its C code, written for this design only) run
+        on it alone, so that variants do not compile code nobody ships.
+    simulator : Simulator or None
+        The built simulation the run ran (:func:`designkit.simulation.run.build`), for a check that runs the loop
+        again with something changed (``generated_code``: the law's compiled C); None: built again when needed.
     """
 
     spec: Any
@@ -87,6 +96,8 @@ class Context:
     law: Any = None
     trials: Any = None
     rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None
+    verdict_run: bool = False
+    simulator: Any = None
 
     def true_plant(self, design: Any) -> Any:
         """The true plant (the design's when none was given)."""
@@ -232,8 +243,9 @@ def owner(rules: Sequence[CheckRule], check_name: str) -> CheckRule | None:
     return next((r for r in rules if r.owns(check_name)), None)
 
 
-def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any, rerun: Any = None) -> Context:
-    return Context(spec, simulation, spec.numerics.solver, plant, law, trials, rerun)
+def _context(spec: Any, simulation: Any, plant: Any, law: Any, trials: Any, rerun: Any = None,
+             verdict_run: bool = False, simulator: Any = None) -> Context:
+    return Context(spec, simulation, spec.numerics.solver, plant, law, trials, rerun, verdict_run, simulator)
 
 
 def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None, *,
@@ -245,7 +257,8 @@ def applicable(design: Any, spec: Any, simulation: Any = None, plant: Any = None
 
 def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None, *,
                rules: Sequence[str | CheckRule], law: Any = None, trials: Any = None,
-               rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None) -> tuple[Check, ...]:
+               rerun: Callable[[Mapping[str, float]], tuple[Check, ...]] | None = None,
+               verdict_run: bool = False, simulator: Any = None) -> tuple[Check, ...]:
     """Run every check of ``rules`` that applies (see the module docstring).
 
     Parameters
@@ -266,12 +279,16 @@ def run_checks(spec: Any, design: Any, simulation: Any = None, plant: Any = None
         The trials of a learning design.
     rerun : callable, optional
         The family's own run at other parameter values (:attr:`Context.rerun`).
+    verdict_run : bool
+        The run gives the spec's verdict (:attr:`Context.verdict_run`).
+    simulator : Simulator, optional
+        The built simulation ``simulation`` came from (:attr:`Context.simulator`).
 
     Returns
     -------
     tuple of Check
     """
-    ctx = _context(spec, simulation, plant, law, trials, rerun)
+    ctx = _context(spec, simulation, plant, law, trials, rerun, verdict_run, simulator)
     checks: list[Check] = []
     for rule in resolve(rules):
         if rule.offered_for(design, ctx):

@@ -108,7 +108,9 @@ class FixTrial:
 
 
 def rerun(loaded: Any) -> Any:
-    """Run a spec as :func:`designkit.pipeline.run` does (:func:`designkit.runner.run.run_spec`)."""
+    """Run a spec as :func:`designkit.pipeline.run` does (:func:`designkit.runner.run.run_spec`), with every check but
+    those of the code the spec's own design ships (``generated_code``: a fix's design is not the one ``designkit
+    codegen`` writes until the spec is changed; :attr:`designkit.verification.suite.Context.verdict_run`)."""
     from designkit.runner.run import run_spec
 
     return run_spec(loaded)
