@@ -9,7 +9,8 @@ with those parameters (or the family's design for that plant, when it designs fo
 ``Family.box_design``) and the requirement checks are measured on that run.
 
 A requirement's **normalised margin** is the check's margin over the requirement's limit (the limit taken as 1 of
-its unit when it is 0), capped at 1; a loop margin's comes from the ``loop_margins`` certificate.  The candidate's
+its unit when it is 0), capped at 1 and, below -1, compressed logarithmically (:func:`compressed`); a loop margin's
+comes from the ``loop_margins`` certificate.  The candidate's
 **score** is the smallest normalised margin over the requirements and the points: positive when every requirement
 holds everywhere it was run.
 """
@@ -33,9 +34,18 @@ _LOOP = {"gain_margin": "gain_margin_db", "phase_margin": "phase_margin_deg", "m
 CAP = 1.0
 """Largest normalised margin counted (a requirement met with the whole of its limit to spare)."""
 
-REFUSED, NOT_RUN, DIVERGED, UNCERTIFIED = -4.0, -3.0, -2.0, -1.0
-"""Scores below every normalised margin: the family refused the values, the run could not be made, the loop
-diverged, a certificate failed (this one added to the requirements' score when it is below 0)."""
+REFUSED, NOT_RUN, DIVERGED, UNCERTIFIED = -100.0, -90.0, -80.0, -20.0
+"""Scores below every (compressed) normalised margin: the family refused the values, the run could not be made,
+the loop diverged, a certificate failed (this one added to the requirements' score when it is below 0)."""
+
+UNMEASURED = -1.5
+"""The margin of a failed requirement its check could not measure (a response that never settles)."""
+
+
+def compressed(margin: float) -> float:
+    """``margin`` above -1, ``-1 - ln(-margin)`` below: the same order, so that a requirement failed a
+    thousandfold does not hide by its size every other one from the search."""
+    return margin if margin >= -1.0 else -1.0 - math.log(-margin)
 
 
 def requirement_names(spec: Any) -> tuple[str, ...]:
@@ -120,8 +130,8 @@ def _limit(spec: Any, name: str) -> float:
 
 def _normalised(check: Any, limit: float) -> float:
     if check.margin is None or not math.isfinite(float(check.margin)):
-        return CAP if check.passed is True else DIVERGED / 2
-    return min(CAP, float(check.margin) / (limit if limit > 0 else 1.0))
+        return CAP if check.passed is True else UNMEASURED
+    return compressed(min(CAP, float(check.margin) / (limit if limit > 0 else 1.0)))
 
 
 def _loop_margins(check: Any, names: tuple[str, ...]) -> dict[str, float]:
@@ -139,7 +149,7 @@ def _loop_margins(check: Any, names: tuple[str, ...]) -> dict[str, float]:
                 continue
             v = abs(float(v)) if name == "gain_margin" else float(v)
             worst = min(worst, (v - lim) / (lim if lim > 0 else 1.0))
-        out[name] = min(CAP, worst) if rows else DIVERGED / 2
+        out[name] = compressed(min(CAP, worst)) if rows else UNMEASURED
     return out
 
 
@@ -179,7 +189,7 @@ def _at_point(problem: Problem, loaded: Any, run: Any, values: dict[str, float])
     if sim.diverged_at is not None:
         return dict.fromkeys(problem.requirements, DIVERGED), 1
     margins = margins_of(checks, spec, problem.requirements)
-    return {n: margins.get(n, DIVERGED / 2) for n in problem.requirements}, 1
+    return {n: margins.get(n, UNMEASURED) for n in problem.requirements}, 1
 
 
 def evaluate(problem: Problem, space: Any, x: np.ndarray) -> Evaluation:
@@ -205,7 +215,7 @@ def evaluate(problem: Problem, space: Any, x: np.ndarray) -> Evaluation:
     if sim is not None and sim.diverged_at is not None:
         return Evaluation(x, values, DIVERGED, dict.fromkeys(names, DIVERGED), failed=("diverged",), runs=runs)
     margins = margins_of(run.checks, loaded.spec, names)
-    margins = {n: margins.get(n, DIVERGED / 2) for n in names}
+    margins = {n: margins.get(n, UNMEASURED) for n in names}
     worst: dict[str, dict[str, float]] = dict.fromkeys(names, {})
     certificates = tuple(c.name for c in run.failed if c.name not in names and not (
         c.name == "loop_margins" and set(names) & set(_LOOP)))

@@ -26,7 +26,7 @@ STEP = np.log(1.3)
 """The first simplex's step in log space (a 30 % change of every coordinate)."""
 
 
-class _OutOfTime(Exception):
+class _OutOfTimeError(Exception):
     """The budget is spent (raised inside the objective to stop scipy's loop)."""
 
 
@@ -104,7 +104,7 @@ def nelder_mead(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds: t
         key = np.round(x, 10).tobytes()
         if key not in cache:
             if done and time.perf_counter() - start > budget:
-                raise _OutOfTime
+                raise _OutOfTimeError
             cache[key] = evaluate(x)
             done.append(cache[key])
         return -cache[key].score
@@ -124,11 +124,10 @@ def nelder_mead(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds: t
         steps = [np.clip(point + width * np.eye(n)[i] * (1 if point[i] + width <= hi[i] else -1), lo, hi)
                  for i in range(n)]
         try:
-            res = minimize(objective, point, method="Nelder-Mead", bounds=list(zip(lo, hi, strict=True)),
+            minimize(objective, point, method="Nelder-Mead", bounds=list(zip(lo, hi, strict=True)),
                            options={"initial_simplex": np.vstack([point, *steps]), "xatol": 1e-3,
                                     "fatol": TOLERANCE / 4, "maxfev": 60 * n, "adaptive": n > 3}, callback=tick)
-            del res
-        except _OutOfTime:
+        except _OutOfTimeError:
             stopped = "budget spent"
             break
         score = best().score

@@ -14,7 +14,6 @@ setting's value in its unit), else a decade either side of the starting value, i
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -284,7 +283,20 @@ def build_space(loaded: Any, design: Any, knobs: tuple[Any, ...], settings: Any)
                         + ("; ".join(kept) if kept else "none is a spec setting"))
     coords = [Coordinate(c.knob, c.label, c.unit, min(max(c.initial, c.low), c.high), c.low, c.high)
               for c in coords]
+    coords = _apart(coords)
     return Space(tuple(coords), tuple(slots), tuple(fixed), tuple(kept))
+
+
+def _apart(coords: list[Coordinate]) -> list[Coordinate]:
+    """A zero the family placed on a pole (the third pole of a derived design) started 1e-6 off it: a spec may not
+    name a zero equal to a pole, and the response is the same to that precision."""
+    poles = [c.initial for c in coords if c.knob.endswith("poles")]
+    out = []
+    for c in coords:
+        if c.knob == "zero" and any(abs(c.initial - p) <= 1e-9 * p for p in poles):
+            c = Coordinate(c.knob, c.label, c.unit, min(c.initial * (1 + 1e-6), c.high), c.low, c.high)
+        out.append(c)
+    return out
 
 
 def _given(spec: Any, path: str) -> bool:
@@ -303,8 +315,3 @@ def _plain_value(knob: Any, value: Any) -> Any:
     return [complex(v) if isinstance(v, complex) and v.imag else float(np.real(v)) for v in arr.tolist()] \
         if arr.ndim == 1 else [[complex(v) if isinstance(v, complex) and v.imag else float(np.real(v)) for v in row]
                                for row in arr.tolist()]
-
-
-def magnitude_ok(value: float) -> bool:
-    """Whether ``value`` is a positive finite number (a coordinate's value)."""
-    return math.isfinite(value) and value > 0

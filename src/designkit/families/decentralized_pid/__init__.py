@@ -46,7 +46,7 @@ from designkit.spec.workspace import Workspace, joint_limits_word, workspace_box
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import gain_knobs
+from designkit.synthesis.knobs import Knob, gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.pid import GAIN_INFO, SERVO_FORMULAS
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
@@ -252,7 +252,10 @@ FAMILY = Family(
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
     validate=poles_or_requirements,
-    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
+        Knob("poles", "1/s", "closed-loop poles each joint's gains place on its simplified link", 1e-3, 1e6,
+             path="controller.poles"),
+        Knob("zero", "1/s", "zero of each joint's q_i/qD_i (sets K4)", 1e-6, 1e6, path="controller.zero")),
     traits=("pid",),
     regain=regain,
     diagnoses=(diagnose,),
