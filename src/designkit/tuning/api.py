@@ -195,8 +195,8 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     space = build_space(loaded, design, fam.knobs, getattr(loaded.spec, "tune", None))
     points = _points(loaded, plant)
     problem = Problem(loaded, plant, names, points, fam.box_design == "each")
-    search = nelder_mead(lambda x: evaluate(problem, space, x), space.x0, space.bounds, budget=float(budget),
-                         seed=seed)
+    search = nelder_mead(lambda x, above: evaluate(problem, space, x, above=above), space.x0, space.bounds,
+                         budget=float(budget), seed=seed)
     initial = search.evaluations[0]
     best = search.best
     tuned = changed_spec(loaded, [("name", (loaded.spec.name + "-tuned")[:100]), *space.changes(best.x)])

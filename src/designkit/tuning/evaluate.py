@@ -1,12 +1,13 @@
 """One candidate of a tuning: the spec with the candidate's values, run through the family's own run, judged.
 
-At the nominal plant the candidate is run as ``designkit verify`` runs it (:func:`designkit.runner.run.run_spec`:
-the family's design, the simulation, every check the family offers): every required check that is not a
-requirement -- stability, the Lyapunov and robustness certificates, SPR, the sliding conditions, the convergence
-of a learning law -- must pass, or the candidate is not certified.  At each other point of the box (the corners of
-``plant.uncertainty``, and its seeded samples when the spec asks for ``samples``) the same design runs on the plant
-with those parameters (or the family's design for that plant, when it designs for each,
-``Family.box_design``) and the requirement checks are measured on that run.
+At the nominal plant and at each other point of the box (the corners of ``plant.uncertainty``, and its seeded
+samples when the spec asks for ``samples``) the family's design runs on the plant with those parameters (the design
+for the nominal plant, or the family's design for that plant when it designs for each, ``Family.box_design``), and
+the requirement checks are measured on that run.  A candidate whose requirements could make it the best so far is
+then run as ``designkit verify`` runs it (:func:`designkit.runner.run.run_spec`: the family's design, the
+simulation, every check the family offers): every required check that is not a requirement -- stability, the
+Lyapunov and robustness certificates, SPR, the sliding conditions, the convergence of a learning law -- must pass,
+or the candidate is not certified and its score falls below every certified one.
 
 A requirement's **normalised margin** is the check's margin over the requirement's limit (the limit taken as 1 of
 its unit when it is 0), capped at 1 and, below -1, compressed logarithmically (:func:`compressed`); a loop margin's
@@ -95,8 +96,9 @@ class Evaluation:
         Requirement -> its worst normalised margin over the points run.
     worst_point : dict
         Requirement -> the point where that margin was found (``{}`` for the nominal plant).
-    certified : bool
-        Every required check other than the requirements passed at the nominal plant.
+    certified : bool or None
+        Every required check other than the requirements passed at the nominal plant; None when they were not run
+        (a candidate whose requirements' score could not make it the best, :func:`evaluate`).
     failed : tuple of str
         The required checks (certificates) that failed or are undecided, or why the candidate was not run.
     runs : int
@@ -108,14 +110,14 @@ class Evaluation:
     score: float
     margins: dict[str, float]
     worst_point: dict[str, dict[str, float]] = field(default_factory=dict)
-    certified: bool = False
+    certified: bool | None = False
     failed: tuple[str, ...] = ()
     runs: int = 0
 
     @property
     def feasible(self) -> bool:
         """Certified and every requirement met at every point run."""
-        return self.certified and self.score > 0
+        return self.certified is True and self.score > 0
 
     @property
     def active(self) -> str | None:
@@ -165,7 +167,8 @@ def margins_of(checks: tuple[Any, ...], spec: Any, names: tuple[str, ...]) -> di
 
 
 def _requirement_rules(kind: str, names: tuple[str, ...]) -> tuple[Any, ...]:
-    """The family's rules (and the universal ones) that own a requirement's check."""
+    """The family's rules (and the universal ones) that own a requirement's check, and no other (run directly:
+    :func:`designkit.verification.suite.run_checks` would add every universal rule)."""
     from designkit.families import check_rules
     from designkit.verification.suite import resolve
 
@@ -174,66 +177,79 @@ def _requirement_rules(kind: str, names: tuple[str, ...]) -> tuple[Any, ...]:
                  or (r.name == "loop_margins" and wanted & set(_LOOP)))
 
 
-def _at_point(problem: Problem, loaded: Any, run: Any, values: dict[str, float]) -> tuple[dict[str, float], int]:
-    """The requirement margins of ``run``'s loop on the plant with ``values``."""
-    from designkit.families import synthesize
+def _requirements_at(problem: Problem, loaded: Any, design: Any, plant: Any) -> dict[str, float]:
+    """The requirement margins of ``design``'s loop run on ``plant``."""
     from designkit.simulation.run import build
-    from designkit.verification.suite import run_checks
+    from designkit.verification.suite import Context
 
     spec = loaded.spec
-    actual = run.plant.with_params(**values)
-    design = synthesize(spec, actual) if problem.each else run.design
-    sim = build(spec, design, plant=actual).run()
-    rules = _requirement_rules(design.kind, problem.requirements)
-    checks = run_checks(spec, design, sim, plant=actual, rules=rules)
+    sim = build(spec, design, plant=plant).run()
     if sim.diverged_at is not None:
-        return dict.fromkeys(problem.requirements, DIVERGED), 1
+        return dict.fromkeys(problem.requirements, DIVERGED)
+    ctx = Context(spec, sim, spec.numerics.solver, plant, None, None, None)
+    checks = [c for rule in _requirement_rules(design.kind, problem.requirements) if rule.offered_for(design, ctx)
+              for c in rule.run(design, ctx)]
     margins = margins_of(checks, spec, problem.requirements)
-    return {n: margins.get(n, UNMEASURED) for n in problem.requirements}, 1
+    return {n: margins.get(n, UNMEASURED) for n in problem.requirements}
 
 
-def evaluate(problem: Problem, space: Any, x: np.ndarray) -> Evaluation:
-    """Run the candidate at ``x`` (module docstring); never raises for a value the family refuses or a run that
-    cannot be made: its score says so, with the reason in ``failed``."""
-    from designkit.errors import DesignkitError
+def _certificates(problem: Problem, loaded: Any, design: Any) -> tuple[str, ...]:
+    """The required checks other than the requirements that fail or are undecided in the family's own run."""
     from designkit.runner.run import run_spec
+
+    run = run_spec(loaded, plant=problem.plant, design=design, box=False)
+    names = problem.requirements
+    return tuple(c.name for c in run.failed if c.name not in names and not (
+        c.name == "loop_margins" and set(names) & set(_LOOP)))
+
+
+def evaluate(problem: Problem, space: Any, x: np.ndarray, *, above: float = -np.inf) -> Evaluation:
+    """Run the candidate at ``x`` (module docstring); never raises for a value the family refuses or a run that
+    cannot be made: its score says so, with the reason in ``failed``.
+
+    The requirements are measured first, at every point; the family's certificates (its full run at the nominal
+    plant, every check) are run only when the requirements' score exceeds ``above`` -- the best score found so
+    far: a candidate that cannot become the best needs no certificate (its ``certified`` is then None).
+    """
+    from designkit.errors import DesignkitError
+    from designkit.families import synthesize
     from designkit.runner.variants import changed_spec
 
     x = np.asarray(x, dtype=float)
     values = space.values(x)
     names = problem.requirements
+    margins = dict.fromkeys(names, CAP)
+    worst: dict[str, dict[str, float]] = dict.fromkeys(names, {})
+    runs = 0
     try:
         loaded = changed_spec(problem.loaded, space.changes(x))
-        run = run_spec(loaded, plant=problem.plant, box=False)
+        nominal = synthesize(loaded.spec, problem.plant)
+        for point in ({}, *problem.points):
+            plant = problem.plant.with_params(**point) if point else problem.plant
+            design = synthesize(loaded.spec, plant) if point and problem.each else nominal
+            here = _requirements_at(problem, loaded, design, plant)
+            runs += 1
+            for name, m in here.items():
+                if m < margins[name]:
+                    margins[name], worst[name] = m, dict(point)
+            if min(here.values()) <= DIVERGED:
+                return Evaluation(x, values, DIVERGED, margins, worst, False, (f"diverged at {point or 'nominal'}",),
+                                  runs)
     except DesignkitError as exc:
-        return Evaluation(x, values, REFUSED, dict.fromkeys(names, REFUSED), failed=(f"refused: {exc}",))
+        return Evaluation(x, values, REFUSED, dict.fromkeys(names, REFUSED), failed=(f"refused: {exc}",), runs=runs)
     except Exception as exc:  # noqa: BLE001 -- a run that cannot be made is that candidate's outcome, with its reason
         return Evaluation(x, values, NOT_RUN, dict.fromkeys(names, NOT_RUN),
-                          failed=(f"not run: {type(exc).__name__}: {exc}",))
-    runs = 1
-    sim = run.simulation
-    if sim is not None and sim.diverged_at is not None:
-        return Evaluation(x, values, DIVERGED, dict.fromkeys(names, DIVERGED), failed=("diverged",), runs=runs)
-    margins = margins_of(run.checks, loaded.spec, names)
-    margins = {n: margins.get(n, UNMEASURED) for n in names}
-    worst: dict[str, dict[str, float]] = dict.fromkeys(names, {})
-    certificates = tuple(c.name for c in run.failed if c.name not in names and not (
-        c.name == "loop_margins" and set(names) & set(_LOOP)))
-    for point in problem.points:
-        try:
-            here, n = _at_point(problem, loaded, run, point)
-        except DesignkitError as exc:
-            return Evaluation(x, values, REFUSED, dict.fromkeys(names, REFUSED), failed=(f"refused: {exc}",),
-                              runs=runs)
-        except Exception as exc:  # noqa: BLE001 -- as above, at a point of the box
-            here, n = dict.fromkeys(names, NOT_RUN), 0
-            certificates = (*certificates, f"not run at {point}: {type(exc).__name__}")
-        runs += n
-        for name, m in here.items():
-            if m < margins[name]:
-                margins[name], worst[name] = m, dict(point)
+                          failed=(f"not run: {type(exc).__name__}: {exc}",), runs=runs)
     score = min(margins.values()) if margins else CAP
-    certified = not certificates
-    if not certified:
+    if score <= above:
+        return Evaluation(x, values, score, margins, worst, None, (), runs)
+    try:
+        failed = _certificates(problem, loaded, nominal)
+    except DesignkitError as exc:
+        failed = (f"refused: {exc}",)
+    except Exception as exc:  # noqa: BLE001 -- as above
+        failed = (f"not run: {type(exc).__name__}: {exc}",)
+    runs += 1
+    if failed:
         score = min(score, 0.0) + UNCERTIFIED
-    return Evaluation(x, values, score, margins, worst, certified, certificates, runs)
+    return Evaluation(x, values, score, margins, worst, not failed, failed, runs)

@@ -63,7 +63,7 @@ class Conflict:
 
 def conflict(evaluations: tuple[Any, ...], best: Any) -> Conflict | None:
     """The conflicting pair of a search's candidates (None when no candidate was certified)."""
-    certified = [e for e in evaluations if e.certified]
+    certified = [e for e in evaluations if e.certified is not False and e.score > -20]
     if not certified or not best.margins:
         return None
     names = tuple(best.margins)

@@ -72,6 +72,11 @@ class Search:
         return np.column_stack([scores, np.maximum.accumulate(scores)]) if scores.size else np.zeros((0, 2))
 
 
+def _best(done: list[Any]) -> Any:
+    """The candidate with the largest score (the first among equals)."""
+    return max(done, key=lambda e: e.score)
+
+
 def nelder_mead(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], *,
                 budget: float, seed: int = 0, max_restarts: int = 6) -> Search:
     """Maximise ``evaluate(x).score`` over the box ``bounds`` from ``x0`` (module docstring).
@@ -79,7 +84,8 @@ def nelder_mead(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds: t
     Parameters
     ----------
     evaluate : callable
-        ``x -> Evaluation``.
+        ``(x, best score so far) -> Evaluation`` (the certificates of a candidate that cannot become the best may be
+        left out, :func:`designkit.tuning.evaluate.evaluate`).
     x0 : ndarray
         The start (log space).
     bounds : (ndarray, ndarray)
@@ -105,12 +111,12 @@ def nelder_mead(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds: t
         if key not in cache:
             if done and time.perf_counter() - start > budget:
                 raise _OutOfTimeError
-            cache[key] = evaluate(x)
+            cache[key] = evaluate(x, max((e.score for e in done), default=-np.inf))
             done.append(cache[key])
         return -cache[key].score
 
     def best() -> Any:
-        return max(done, key=lambda e: e.score)
+        return _best(done)
 
     restarts, stopped = 0, "converged"
     count = [0]
@@ -152,12 +158,12 @@ def random_search(evaluate: Callable[[np.ndarray], Any], x0: np.ndarray, bounds:
     lo, hi = bounds
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
-    done = [evaluate(np.clip(np.asarray(x0, dtype=float), lo, hi))]
+    done = [evaluate(np.clip(np.asarray(x0, dtype=float), lo, hi), -np.inf)]
     stopped = "budget spent"
     while time.perf_counter() - start <= budget:
         if draws is not None and len(done) >= draws:
             stopped = "draws done"
             break
-        done.append(evaluate(lo + rng.random(lo.size) * (hi - lo)))
-    return Search("random search (seeded uniform draws in the log box)", max(done, key=lambda e: e.score),
+        done.append(evaluate(lo + rng.random(lo.size) * (hi - lo), _best(done).score))
+    return Search("random search (seeded uniform draws in the log box)", _best(done),
                   tuple(done), len(done), 0, time.perf_counter() - start, stopped)
