@@ -73,3 +73,13 @@ def test_tuned_link_meets_the_independent_optimum(tuned):
     assert best_grid > 0.5
     assert independent >= best_grid - 0.02
     assert independent > 0.5  # every requirement met with half its limit to spare, the torque included
+
+
+def test_the_tuned_spec_is_rerun_by_synth(tuned, tmp_path, capsys):
+    from designkit.cli import main
+
+    assert main(["synth", str(tuned.files["spec"]), "--out", str(tmp_path), "--no-studies", "--jobs", "1"]) == 0
+    assert "VERIFIED" in capsys.readouterr().out
+    html = tuned.files["html"].read_text(encoding="utf-8")
+    for said in ("initial", "tuned", "active", "Nelder–Mead", "<svg"):
+        assert said in html
