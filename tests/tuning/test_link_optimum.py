@@ -21,8 +21,8 @@ TIME = np.linspace(0.0, 3.0, 601)
 def _loops(poles: np.ndarray) -> tuple[control.TransferFunction, control.TransferFunction]:
     """x1/xD and u/xD of the link under u = -K1 e - K2 x2 - K3 int(e) + K3 K4 xD placing ``poles`` and ZERO: the
     gains matched on tau s^3 + (1 + Km K2) s^2 + Km K1 s + Km K3 = tau prod(s - p)."""
-    a = np.real(np.poly(poles))  # [1, a2, a1, a0]
-    K2, K1, K3 = (TAU * a[1] - 1.0) / KM, TAU * a[2] / KM, TAU * a[3] / KM
+    a = np.real(np.poly(poles))  # [1, a2, a1, a0]; K2 = (tau a2 - 1) / Km is in the characteristic polynomial only
+    K1, K3 = TAU * a[2] / KM, TAU * a[3] / KM
     K4 = (-K3 / ZERO - K1) / K3
     char = TAU * a
     num = [K1 + K3 * K4, K3]  # F(s) s, F = K1 + K3/s + K3 K4

@@ -128,14 +128,41 @@ def _points(loaded: Any, plant: Any) -> tuple[dict[str, float], ...]:
 
 
 def _loaded(spec: Any) -> Any:
+    """``spec`` as a LoadedSpec: one already loaded, or the file at a path (refused, naming ``spec``, when it is no
+    path or no file)."""
+    from designkit import arguments
     from designkit.errors import SpecError
     from designkit.schema.loader import LoadedSpec, load_spec
 
     if isinstance(spec, LoadedSpec):
         return spec
-    if isinstance(spec, str | Path):
-        return load_spec(spec)
-    raise SpecError("spec", f"expected a spec file's path or a LoadedSpec, got {type(spec).__name__}")
+    path = arguments.path(spec, "spec", what="a spec file's path or a LoadedSpec")
+    if not path.is_file():
+        raise SpecError("spec", f"no spec file at {str(path)[:PATH_SHOWN]} (not found, or not a file)")
+    return load_spec(path)
+
+
+PATH_SHOWN = 200
+"""Longest quotation of a path in an error message (characters)."""
+
+
+def _destination(out: Any) -> Path:
+    """The output folder, checked before anything runs: no file in the way, writable."""
+    import os
+
+    from designkit import arguments
+    from designkit.errors import OutputError
+
+    folder = Path.cwd() if out is None else arguments.path(out, "out", error=OutputError, what="a folder path")
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if existing.exists() and not existing.is_dir():
+        raise OutputError("out", f"{str(existing)[:PATH_SHOWN]} is an existing file, not a folder; nothing was "
+                          "written")
+    if existing.exists() and not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError("out", f"no permission to write in {str(existing)[:PATH_SHOWN]}; nothing was written")
+    return folder
 
 
 def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BUDGET, seed: int = 0,
@@ -147,7 +174,7 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     spec : str, Path or LoadedSpec
         A one-controller spec with ``requirements`` (and optionally ``plant.uncertainty`` and ``tune``).
     out : str or Path, optional
-        Folder of ``<name>-tuned.yaml`` and ``<name>-tuning.html`` (default: the current folder).
+        Folder of ``<name>-tuned.yaml`` and ``<name>-tuning.html`` (default: the current folder; created if needed).
     budget : float
         Wall time the search may take (s, > 0).
     seed : int
@@ -164,9 +191,10 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     SpecError
         A bad argument, a spec without requirements, a comparison spec, or a ``tune`` section naming no knob of the
         family (each with its key path).
+    OutputError
+        ``out`` cannot be a folder (a file in the way, no permission); checked before anything runs.
     """
-    import math
-
+    from designkit import arguments
     from designkit.errors import SpecError
     from designkit.families import family, synthesize
     from designkit.runner.variants import changed_spec
@@ -176,10 +204,10 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     from designkit.tuning.search import nelder_mead
     from designkit.tuning.space import build_space
 
-    if isinstance(budget, bool) or not isinstance(budget, int | float) or not math.isfinite(budget) or budget <= 0:
-        raise SpecError("budget", f"must be a positive number of seconds, got {budget!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise SpecError("seed", f"must be a non-negative integer, got {seed!r}")
+    budget = arguments.number(budget, "budget", positive=True)
+    seed = arguments.integer(seed, "seed", low=0, high=2**32 - 1)
+    write = arguments.flag(write, "write")
+    folder = _destination(out)
     loaded = _loaded(spec)
     if not hasattr(loaded.spec, "controller"):
         raise SpecError("controllers", "tune takes a one-controller spec, not a comparison")
@@ -211,5 +239,5 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     if write:
         from designkit.tuning.report import write_files
 
-        result = write_files(result, Path(out) if out is not None else Path.cwd())
+        result = write_files(result, folder)
     return result

@@ -127,5 +127,5 @@ def write_files(result: Any, out: Path) -> Any:
         spec_file.write_text(result.tuned.text, encoding="utf-8")
         html_file.write_text(html_text(result), encoding="utf-8")
     except OSError as exc:
-        raise OutputError("--out", f"cannot write the tuning's files: {exc.strerror or exc}") from None
+        raise OutputError("out", f"cannot write the tuning's files: {exc.strerror or exc}") from None
     return dataclasses.replace(result, files={"spec": spec_file, "html": html_file})
