@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DEFAULT_BUDGET", "TuneResult", "tune"]
+__all__ = ["DEFAULT_BUDGET", "TuneResult", "prepare", "tune"]
 
 DEFAULT_BUDGET = 60.0
 """Wall time the search may take by default (s)."""
@@ -165,6 +165,36 @@ def _destination(out: Any) -> Path:
     return folder
 
 
+def prepare(loaded: Any) -> tuple[Any, Any]:
+    """The tuning problem of a loaded one-controller spec: ``(Problem, Space)`` (what every candidate shares, and
+    what is tuned), as :func:`tune` searches it.
+
+    Raises
+    ------
+    SpecError
+        A comparison spec, a spec without requirements, or a ``tune`` section naming no knob of the family.
+    """
+    from designkit.errors import SpecError
+    from designkit.families import family, synthesize
+    from designkit.runner.run import base_dir
+    from designkit.spec.plant_builder import plant_from_spec
+    from designkit.tuning.evaluate import Problem, requirement_names
+    from designkit.tuning.space import build_space
+
+    if not hasattr(loaded.spec, "controller"):
+        raise SpecError("controllers", "tune takes a one-controller spec, not a comparison")
+    names = requirement_names(loaded.spec)
+    if not names:
+        raise SpecError("requirements", "the spec gives no requirement to tune for (overshoot, settling_time, "
+                        "tracking_error, max_control, margins, ...)")
+    plant = plant_from_spec(loaded.spec.plant, base_dir(loaded))
+    design = synthesize(loaded.spec, plant)
+    fam = family(design.kind)
+    space = build_space(loaded, design, fam.knobs, getattr(loaded.spec, "tune", None))
+    problem = Problem(loaded, plant, names, _points(loaded, plant), fam.box_design == "each")
+    return problem, space
+
+
 def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BUDGET, seed: int = 0,
          write: bool = True) -> TuneResult:
     """Tune the knobs of a spec's controller for its requirements over its uncertainty box (docs/tuning.md).
@@ -195,36 +225,19 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         ``out`` cannot be a folder (a file in the way, no permission); checked before anything runs.
     """
     from designkit import arguments
-    from designkit.errors import SpecError
-    from designkit.families import family, synthesize
     from designkit.runner.variants import changed_spec
-    from designkit.spec.plant_builder import plant_from_spec
-    from designkit.tuning.evaluate import Problem, evaluate, requirement_names
+    from designkit.tuning.evaluate import evaluate
     from designkit.tuning.infeasible import conflict, minimum_time
     from designkit.tuning.search import nelder_mead
-    from designkit.tuning.space import build_space
 
     budget = arguments.number(budget, "budget", positive=True)
     seed = arguments.integer(seed, "seed", low=0, high=2**32 - 1)
     write = arguments.flag(write, "write")
     folder = _destination(out)
     loaded = _loaded(spec)
-    if not hasattr(loaded.spec, "controller"):
-        raise SpecError("controllers", "tune takes a one-controller spec, not a comparison")
-    names = requirement_names(loaded.spec)
-    if not names:
-        raise SpecError("requirements", "the spec gives no requirement to tune for (overshoot, settling_time, "
-                        "tracking_error, max_control, margins, ...)")
-    from designkit.runner.run import base_dir
-
-    plant = plant_from_spec(loaded.spec.plant, base_dir(loaded))
-    design = synthesize(loaded.spec, plant)
-    fam = family(design.kind)
-    space = build_space(loaded, design, fam.knobs, getattr(loaded.spec, "tune", None))
-    points = _points(loaded, plant)
-    problem = Problem(loaded, plant, names, points, fam.box_design == "each")
+    problem, space = prepare(loaded)
     search = nelder_mead(lambda x, above: evaluate(problem, space, x, above=above), space.x0, space.bounds,
-                         budget=float(budget), seed=seed)
+                         budget=budget, seed=seed)
     initial = search.evaluations[0]
     best = search.best
     tuned = changed_spec(loaded, [("name", (loaded.spec.name + "-tuned")[:100]), *space.changes(best.x)])
@@ -235,7 +248,7 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         verify = run(tuned)
     found = None if best.feasible else conflict(search.evaluations, best)
     bound = minimum_time(loaded.spec)
-    result = TuneResult(loaded, space, points, search, initial, tuned, verify, found, bound)
+    result = TuneResult(loaded, space, problem.points, search, initial, tuned, verify, found, bound)
     if write:
         from designkit.tuning.report import write_files
 
