@@ -233,6 +233,11 @@ def regain(design: Design, gains: Gains, anti_windup: Any = None) -> Design:
     return dataclasses.replace(arm, loops=tuple(loops))
 
 
+def _one_pole_set(design: Design) -> bool:
+    """Every joint places the same poles (the ``poles`` knob moves that one set; a set per joint is not a knob)."""
+    return len({tuple(np.round(np.asarray(loop.poles, dtype=complex), 12)) for loop in design.loops}) <= 1
+
+
 FAMILY = Family(
     kind=KIND,
     spec=DecentralizedPidSpec,
@@ -254,7 +259,7 @@ FAMILY = Family(
     validate=poles_or_requirements,
     knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
         Knob("poles", "1/s", "closed-loop poles each joint's gains place on its simplified link", 1e-3, 1e6,
-             path="controller.poles"),
+             path="controller.poles", when=_one_pole_set),
         Knob("zero", "1/s", "zero of each joint's q_i/qD_i (sets K4)", 1e-6, 1e6, path="controller.zero")),
     traits=("pid",),
     regain=regain,
