@@ -320,6 +320,8 @@ def cmd_tune(args: argparse.Namespace) -> int:
         lines.append(f"  {req}: worst normalised margin {initial.margins[req]:.3g} -> {best.margins[req]:.3g}{mark}")
     for knob in best.values:
         lines.append(f"  {knob}: {_number_or_poles(initial.values[knob])} -> {_number_or_poles(best.values[knob])}")
+    if result.at_bounds:
+        lines.append("at an end of its range (widen tune.ranges to go further): " + ", ".join(result.at_bounds))
     if result.conflict is not None:
         lines.append("conflict: " + result.conflict.sentence)
     if result.bound is not None:

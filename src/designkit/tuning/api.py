@@ -60,6 +60,17 @@ class TuneResult:
         return self.search.best
 
     @property
+    def at_bounds(self) -> tuple[str, ...]:
+        """The coordinates the best candidate holds at an end of their range (``"poles[0] (high)"``): the range, not a
+        requirement, stops the design there."""
+        out = []
+        for c, x in zip(self.space.coordinates, self.best.x, strict=True):
+            for end, value in (("low", c.low), ("high", c.high)):
+                if abs(float(x) - float(np.log(value))) <= 1e-6:
+                    out.append(f"{c.label} ({end})")
+        return tuple(out)
+
+    @property
     def met(self) -> bool:
         """The best candidate meets every requirement at every point of the box and is certified."""
         return bool(self.best.feasible)
@@ -95,6 +106,7 @@ class TuneResult:
                              "initial": c.initial, "tuned": float(np.exp(np.clip(x, np.log(c.low), np.log(c.high))))}
                             for c, x in zip(self.space.coordinates, self.best.x, strict=True)],
             "kept": list(self.space.kept),
+            "at_bounds": list(self.at_bounds),
             "initial": {"values": {k: plain(v) for k, v in self.initial.values.items()},
                         "margins": self.initial.margins, "score": self.initial.score,
                         "certified": self.initial.certified, "failed": list(self.initial.failed)},

@@ -81,6 +81,9 @@ def html_text(result: Any) -> str:
         (c.label, c.unit, f"[{c.low:.4g}, {c.high:.4g}]", f"{c.initial:.4g}",
          f"{float(np.exp(np.clip(x, np.log(c.low), np.log(c.high)))):.4g}")
         for c, x in zip(result.space.coordinates, best.x, strict=True)]))
+    if result.at_bounds:
+        parts.append(para("At an end of its range (the range, not a requirement, stops the design there; widen "
+                          "tune.ranges to go further): " + ", ".join(result.at_bounds) + "."))
     for k in result.space.kept:
         parts.append(para("Not tuned: " + k))
     parts.append(heading("Search"))
