@@ -27,6 +27,14 @@ def _value(v: Any) -> str:
     return "[" + ", ".join(_value(e) for e in arr) + "]"
 
 
+def _achieved(check: Any) -> str:
+    value = check.achieved
+    if value is None:
+        return ""
+    text = f"{value:.4g}" if isinstance(value, float) else str(value)
+    return f"{text} {check.unit}".strip()
+
+
 def convergence_svg(result: Any) -> str:
     """The best score after each candidate, and each candidate's score (SVG)."""
     from designkit.display.svg import new_figure, tag, to_svg
@@ -88,9 +96,10 @@ def html_text(result: Any) -> str:
         parts.append(para("Not tuned: " + k))
     parts.append(heading("Search"))
     parts.append(para(f"{s.method}: {s.iterations} iterations, {s.restarts} restarts, {len(s.evaluations)} "
-                      f"candidates, {s.simulations} simulations, {s.seconds:.1f} s ({s.stopped}). Every candidate "
-                      f"ran through the family's own run at the nominal plant with every check, and its requirement "
-                      f"checks at {len(result.points)} other points of the box."))
+                      f"candidates, {s.simulations} simulations, {s.seconds:.1f} s ({s.stopped}). Every candidate's "
+                      f"requirement checks were measured at the nominal plant and at {len(result.points)} other points "
+                      "of the box; every candidate that could become the best also ran through the family's own run "
+                      "with every check (its certificates)."))
     parts.append(convergence_svg(result))
     if result.conflict is not None:
         parts.append(heading("Why no tuning meets every requirement"))
@@ -106,7 +115,7 @@ def html_text(result: Any) -> str:
     if result.verify is not None:
         parts.append(heading("The tuned spec's checks (designkit verify)"))
         parts.append(table(("check", "status", "achieved", "target", "margin"), [
-            (c.name, c.status, "" if c.achieved is None else f"{c.achieved}", c.target,
+            (c.name, c.status, _achieved(c), c.target,
              "" if c.margin is None else f"{c.margin:.4g}") for c in result.verify.checks], status_column=1))
     parts.append("</body></html>")
     return "\n".join(parts)
