@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 import designkit as dk
@@ -34,14 +35,23 @@ def _score(folder: Path, gamma: float) -> float:
     return min((0.82 - _rise(t, x, 0.5)) / 0.82, (2.0 - overshoot) / 2.0)
 
 
-def test_the_adaptation_gain_is_tuned_where_a_scan_of_it_is_best(tmp_path):
+def test_the_adaptation_gain_is_tuned_and_the_tuned_spec_re_runs(tmp_path):
     result = dk.tune(SPEC, out=tmp_path, budget=20.0)
     assert result.initial.margins["rise_time"] < 0  # gamma = 100 misses the rise time
     assert result.verified and result.met
-    gamma = float(result.best.values["gamma"])
-    # the tuned spec, read back, re-runs as it is (synth exit 0)
+    # the tuned spec, read back, re-runs as it is (synth exit 0), and adapts
     run = dk.run(dk.load_spec(result.files["spec"]))
     assert run.verified
+    sim = run.simulation
+    a = sim.controller_state[:, [sim.controller_state_names.index("a1"), sim.controller_state_names.index("a2")]]
+    assert np.max(np.abs(a[-1] - a[0]) / np.abs(a[0])) > 0.05  # adapted: a parameter moved by more than 5 %
+    assert _score(tmp_path, float(result.best.values["gamma"])) > 0
+
+
+@pytest.mark.slow  # about 6 s: 17 adaptive runs besides the search
+def test_the_adaptation_gain_is_tuned_where_a_scan_of_it_is_best(tmp_path):
+    result = dk.tune(SPEC, out=tmp_path, budget=20.0)
+    gamma = float(result.best.values["gamma"])
     # an independent scan: 17 gains, a decade in four steps, over the tuned range, judged on the trace
     grid = np.logspace(0.0, 4.0, 17)
     scores = np.array([_score(tmp_path, g) for g in grid])
