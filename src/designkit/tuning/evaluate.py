@@ -178,15 +178,20 @@ def _requirement_rules(kind: str, names: tuple[str, ...]) -> tuple[Any, ...]:
 
 
 def _requirements_at(problem: Problem, loaded: Any, design: Any, plant: Any) -> dict[str, float]:
-    """The requirement margins of ``design``'s loop run on ``plant``."""
+    """The requirement margins of ``design``'s loop run on ``plant``: its simulation, or, for a learning design, its
+    trials (the requirements then read the last trial, as the family's own run does)."""
     from designkit.simulation.run import build
+    from designkit.simulation.trials import run_trials
     from designkit.verification.suite import Context
 
     spec = loaded.spec
-    sim = build(spec, design, plant=plant).run()
+    learning = design.learning
+    simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
+    trials = run_trials(simulator, learning.trials, learning.update) if learning is not None else None
+    sim = trials.results[-1] if trials is not None else simulator.run()
     if sim.diverged_at is not None:
         return dict.fromkeys(problem.requirements, DIVERGED)
-    ctx = Context(spec, sim, spec.numerics.solver, plant, None, None, None)
+    ctx = Context(spec, sim, spec.numerics.solver, plant, None, trials, None)
     checks = [c for rule in _requirement_rules(design.kind, problem.requirements) if rule.offered_for(design, ctx)
               for c in rule.run(design, ctx)]
     margins = margins_of(checks, spec, problem.requirements)
