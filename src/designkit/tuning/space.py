@@ -236,6 +236,10 @@ def build_space(loaded: Any, design: Any, knobs: tuple[Any, ...], settings: Any)
             kept.append(f"{knob.key}: no value in use to start from")
             continue
         given = _given(spec, knob.path)
+        if not given and (why := _refused(loaded, knob, value)):
+            kept.append(f"{knob.key}: not given in the spec, which cannot carry the value in use ({why}); give it "
+                        "in the spec to tune it")
+            continue
         if knob.key in fixed_names:
             if not given:
                 fixed.append((knob.path, _plain_value(knob, value)))
@@ -297,6 +301,19 @@ def _apart(coords: list[Coordinate]) -> list[Coordinate]:
             c = Coordinate(c.knob, c.label, c.unit, min(c.initial * (1 + 1e-6), c.high), c.low, c.high)
         out.append(c)
     return out
+
+
+def _refused(loaded: Any, knob: Any, value: Any) -> str:
+    """Why the spec cannot carry ``knob`` at the value in use the design gave (the spec sets it another way, as a
+    damping and a natural frequency instead of poles, or in another shape); ``""`` when it can."""
+    from designkit.errors import SpecError
+    from designkit.runner.variants import changed_spec
+
+    try:
+        changed_spec(loaded, [(knob.path, _plain_value(knob, value))])
+    except SpecError as exc:
+        return str(exc)
+    return ""
 
 
 def _given(spec: Any, path: str) -> bool:
