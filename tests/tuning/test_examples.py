@@ -14,8 +14,8 @@ from tests.marks import slow_cases
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p.stem for p in (ROOT / "specs").glob("tune-*.yaml"))
-SLOW = {"tune-simnog-decentralized-pid", "tune-vsc-link", "tune-simnog-computed-torque"}
-"""Tuned specs whose full verify (the box's robustness checks) takes more than a few seconds."""
+SLOW = {"tune-simnog-decentralized-pid"}
+"""The tuned spec whose full verify takes more than 5 s."""
 
 
 def test_every_example_has_its_tuning_report():
