@@ -354,7 +354,10 @@ def env(tmp_path_factory):
     q = ca.SX.sym("q", 2)
     sweepable = dk.parse_spec(POSSPEED_YAML.replace("tau: 0.5}", "tau: 0.5, uncertainty: {Km: [1.8, 2.2]}}")
                               + "requirements: {overshoot: 20}\nsimulation: {duration: 1.0}\n")
-    return {"loaded": loaded, "sweepable": sweepable, "spec_file": spec_file, "spec": loaded.spec, "design": design,
+    tunable = folder / "tunable.yaml"
+    tunable.write_text(POSSPEED_YAML + "requirements: {overshoot: 20}\nsimulation: {duration: 1.0}\n")
+    return {"loaded": loaded, "sweepable": sweepable, "spec_file": spec_file, "tunable": tunable, "spec": loaded.spec,
+            "design": design,
             "simulator": dk.build(loaded.spec, design), "result": dk.run(loaded, simulate=False),
             "arm": dk.robot("planar2r"), "chain": dk.robot("planar2r").description,
             "f": ca.Function("f", [q], [ca.cos(q[0]) + q[1] ** 2], ["q"], ["y"]),
@@ -409,6 +412,8 @@ CALLS = {
               {"spec": "object", "samples": "count", "seed": "seed", "client": "object", "scheduler": "name",
                "workers": "count", "out": "folder", "chunk": "count", "engine": "name", "progress": "flag",
                "falsification": "flag", "report": "flag"}),
+    "tune": ("tune", lambda e, out: {"spec": e["tunable"], "out": out, "budget": 0.5, "seed": 0, "write": True},
+             {"spec": "file", "out": "folder", "budget": "positive", "seed": "seed", "write": "flag"}),
     "codegen": (_codegen, lambda e, out: {"loaded": e["loaded"], "out_dir": out, "name": None},
                 {"loaded": "object", "out_dir": "folder", "name": "name"}),
     "robot_from_dh": ("robot_from_dh", lambda e, out: {"description": e["chain"], "friction": False,
@@ -439,7 +444,7 @@ ALLOWED: dict[tuple[str, str], set[str]] = {
         ("run_trials", "feedforward"), ("run", "budget"), ("zoo_plant", "overrides"),
         ("zoo_plant", "consistent_inertia"), ("chain_plant", "consistent_inertia"),
         ("sweep", "client"), ("sweep", "scheduler"), ("sweep", "workers"),
-        ("sweep", "out"), ("sweep", "chunk"), ("codegen", "name"), ("robot_from_dh", "description"),
+        ("sweep", "out"), ("sweep", "chunk"), ("tune", "out"), ("codegen", "name"), ("robot_from_dh", "description"),
         ("enclose", "index"), ("model_bound", "max_boxes"), ("robot_from_urdf", "base_link"),
         ("robot_from_urdf", "tip_link")]},
     ("synthesize", "base_dir"): {"None", "file"}, ("codegen", "loaded"): {"str", "str-sub"},

@@ -38,6 +38,13 @@ EXPECTED_EXIT = {
     "puma560-resolved-acceleration-dls": 0,
     "mrac-vs-selftune": 0,  # a comparison spec (controllers:): both controllers verified (docs/comparison.md)
     "robel": 0,  # ROBEL's four controllers on the elastic joint, all verified (docs/comparison.md, lab 3)
+    # designkit tune's examples (docs/tuning.md): each spec as given misses a requirement, which is why it is tuned;
+    # its tuned spec (reports/<name>/<name>-tuned.yaml) verifies
+    "tune-simnog-decentralized-pid": 1,  # 15 % overshoot at m2 = 2 kg (5 % asked)
+    "tune-vsc-link": 1,  # settles too slowly and chatters beyond 200 reversals a second
+    "tune-mrac-link": 1,  # rise time 0.861 s (0.82 s asked)
+    "tune-ilc-simnog": 1,  # the 8th trial tracks to 0.0136 rad (0.005 rad asked)
+    "tune-simnog-computed-torque": 1,  # tracking_bounds: 0.03 rad at m2 = 4 kg (0.01 rad asked)
 }
 for _examples in discovered("EXAMPLES").values():  # the families' own examples (tests/families/<kind>/cases.py)
     EXPECTED_EXIT.update(_examples)

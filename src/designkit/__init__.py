@@ -55,6 +55,8 @@ _EXPORTS: dict[str, str] = {
     "SimulationResult": "designkit.simulation.result",
     "write_report": "designkit.report",
     "sweep": "designkit.sweep",
+    "tune": "designkit.tuning",
+    "TuneResult": "designkit.tuning",
     # models
     "LinkPlant": "designkit.models.link",
     "ChainDescription": "designkit.models.description",

@@ -302,6 +302,53 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK if result.verified else EXIT_CHECK_FAILED
 
 
+def cmd_tune(args: argparse.Namespace) -> int:
+    """Tune the controller's knobs for the spec's requirements over its uncertainty box (:mod:`designkit.tuning`)."""
+    from designkit.schema.loader import load_spec
+    from designkit.tuning import tune
+
+    result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2, default=str))
+        return EXIT_OK if result.verified else EXIT_CHECK_FAILED
+    s, best, initial = result.search, result.best, result.initial
+    lines = [f"{result.loaded.spec.name}: {s.method}; {s.iterations} iterations, {len(s.evaluations)} candidates, "
+             f"{s.simulations} simulations, {s.seconds:.1f} s ({s.stopped})",
+             f"plants: the nominal and {len(result.points)} points of the box"]
+    for req in best.margins:
+        mark = " (active)" if req == best.active else ""
+        lines.append(f"  {req}: worst normalised margin {initial.margins[req]:.3g} -> {best.margins[req]:.3g}{mark}")
+    for knob in best.values:
+        lines.append(f"  {knob}: {_number_or_poles(initial.values[knob])} -> {_number_or_poles(best.values[knob])}")
+    if result.at_bounds:
+        lines.append("at an end of its range (widen tune.ranges to go further): " + ", ".join(result.at_bounds))
+    if result.conflict is not None:
+        lines.append("conflict: " + result.conflict.sentence)
+    if result.bound is not None:
+        lines.append("minimum time: " + result.bound.sentence)
+    if not best.certified and best.failed:
+        lines.append("certificates failing at the best compromise: " + ", ".join(best.failed))
+    if result.verify is not None:
+        lines.append(_checks_table(result.verify.checks))
+    for key in ("spec", "html"):
+        if key in result.files:
+            lines.append(f"{'tuned spec' if key == 'spec' else 'report'}: {result.files[key]}")
+    lines.append("TUNED AND VERIFIED" if result.verified else
+                 "NOT VERIFIED: the tuned spec's checks fail" if result.met else
+                 "NOT MET: no tuning found meets every requirement")
+    print("\n".join(lines))
+    return EXIT_OK if result.verified else EXIT_CHECK_FAILED
+
+
+def _number_or_poles(value: object) -> str:
+    import numpy as np
+
+    arr = np.asarray(value)
+    if np.iscomplexobj(arr):
+        return "[" + _poles(arr.ravel()) + "]"
+    return _number(arr)
+
+
 def _spec_name(path: str) -> str | None:
     """The spec's ``name`` (the sweep's folder under ``--out``), None when it cannot be read (the sweep says why)."""
     try:
@@ -463,6 +510,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object (samples, passed, pass_fraction, "
                    "confidence, requirements, worst)")
     p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("tune", help="tune the controller's knobs (poles, zeros, gains) so that every requirement "
+                       "holds with the largest worst-case margin over plant.uncertainty, every certificate passing; "
+                       "write the tuned spec and an HTML report")
+    p.add_argument("spec", help="path of the YAML spec (with requirements; an optional tune: section)")
+    p.add_argument("--out", default=".", help="output directory (default: the current folder): <name>-tuned.yaml "
+                   "and <name>-tuning.html")
+    p.add_argument("--budget", type=_seconds, default=60.0, metavar="SECONDS",
+                   help="wall time the search may take (default 60 s)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (method, margins before and after, "
+                   "tuned values, checks, conflict)")
+    p.set_defaults(func=cmd_tune)
 
     p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")
     p.add_argument("robot", help="zoo robot name, e.g. planar2r or puma560")

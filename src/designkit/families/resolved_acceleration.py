@@ -45,7 +45,7 @@ from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.friction_layer import DEFAULT_LAYER, coulomb_levels, layer_formulas, layer_words, smoothed
-from designkit.synthesis.knobs import gain_knobs
+from designkit.synthesis.knobs import Knob, gain_knobs
 from designkit.synthesis.law import Law, stateless_law
 from designkit.synthesis.model import controller_model
 from designkit.synthesis.pole_placement import error_gains
@@ -255,7 +255,8 @@ FAMILY = Family(
     references=("line", "circle"),
     motion=motion,
     knobs=gain_knobs({"K1": ("1/s^2", "task position error gain (wn^2)"),
-                      "K2": ("1/s", "task velocity error gain (2 zeta wn)")}, ("K1", "K2")),
+                      "K2": ("1/s", "task velocity error gain (2 zeta wn)")}, ("K1", "K2")) + (
+        Knob("poles", "1/s", "error poles of each task coordinate (sets K1, K2)", 1e-3, 1e5, path="controller.poles"),),
     traits=("model_based",),
     per_joint_fields=PER_JOINT_FIELDS,
 )

@@ -40,6 +40,7 @@ from designkit.spec.sections import (
     TrapezoidalTrajectory,
     ViaPointsTrajectory,
 )
+from designkit.spec.tune import Tune
 from designkit.synthesis.family import SETTINGS
 
 __all__ = [
@@ -75,6 +76,7 @@ class Spec(Section):
     implementation: Implementation | None = None
     numerics: Numerics = Numerics()
     studies: Studies | None = None
+    tune: Tune | None = None
 
     @model_validator(mode="after")
     def _family_rules(self) -> Spec:

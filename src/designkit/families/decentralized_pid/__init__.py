@@ -46,7 +46,7 @@ from designkit.spec.workspace import Workspace, joint_limits_word, workspace_box
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
-from designkit.synthesis.knobs import gain_knobs
+from designkit.synthesis.knobs import Knob, gain_knobs
 from designkit.synthesis.law import Law, integral_law
 from designkit.synthesis.pid import GAIN_INFO, SERVO_FORMULAS
 from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
@@ -233,6 +233,11 @@ def regain(design: Design, gains: Gains, anti_windup: Any = None) -> Design:
     return dataclasses.replace(arm, loops=tuple(loops))
 
 
+def _one_pole_set(design: Design) -> bool:
+    """Every joint places the same poles (the ``poles`` knob moves that one set; a set per joint is not a knob)."""
+    return len({tuple(np.round(np.asarray(loop.poles, dtype=complex), 12)) for loop in design.loops}) <= 1
+
+
 FAMILY = Family(
     kind=KIND,
     spec=DecentralizedPidSpec,
@@ -252,7 +257,10 @@ FAMILY = Family(
                 "model (Km_i = 1/f_i, τ_i = D_ii(q*)/f_i); a centralized feed-forward cancels gravity.",
     ),
     validate=poles_or_requirements,
-    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")),
+    knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
+        Knob("poles", "1/s", "closed-loop poles each joint's gains place on its simplified link", 1e-3, 1e6,
+             path="controller.poles", when=_one_pole_set),
+        Knob("zero", "1/s", "zero of each joint's q_i/qD_i (sets K4)", 1e-6, 1e6, path="controller.zero")),
     traits=("pid",),
     regain=regain,
     diagnoses=(diagnose,),
