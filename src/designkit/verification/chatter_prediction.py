@@ -9,7 +9,8 @@ command was held (:func:`timing_of`).  The **prediction** (:func:`predict`):
   ``k`` (:func:`~designkit.verification.limit_cycle.sampled_orbit`): frequency ``1/(2 k Ts)`` (Hz), amplitude of
   ``s``, the command a square wave of amplitude ``M`` (behind an actuator lag, the lag's output amplitude);
 * a continuous command with an actuator lag or a delay: the exact continuous orbit when there is one, else the
-  describing function's;
+  describing function's; a lag alone on a loop of relative degree one (relative degree two in all) has neither:
+  no finite limit cycle, the swing decaying while the frequency grows until the integration step stops it;
 * neither: no finite limit cycle (the run's chatter is set by its integration step).
 
 The orbit is symmetric: it is the chatter where the equivalent control is 0.  Where the averaged (equivalent)
@@ -45,6 +46,7 @@ from designkit.verification.limit_cycle import (
     describing_function,
     layer_for_gain,
     no_cycle_words,
+    relative_degree,
     sampled_orbit,
 )
 
@@ -176,7 +178,8 @@ def predict(loop: Loop, amplitude: float, timing: Timing, s_unit: str, u_unit: s
                                     f"the describing function of the relay{lag_words} balances at "
                                     f"{cycle.hertz:.4g} Hz with {name} of amplitude {cycle.amplitude:.3g} {s_unit} "
                                     f"(the command's fundamental 4M/π = {cycle.command:.3g} {u_unit})")
-    return ChatterPredicted("none", None, None, None, None, None, no_cycle_words(timing.step))
+    return ChatterPredicted("none", None, None, None, None, None,
+                            no_cycle_words(timing.step, relative_degree(lagged) if timing.bandwidth else 1))
 
 
 @dataclass(frozen=True)
