@@ -50,8 +50,8 @@ from designkit.verification.limit_cycle import (
     sampled_orbit,
 )
 
-__all__ = ["LAYER_SHARE", "ChatterMeasured", "ChatterPredicted", "Timing", "layer_fix", "measure", "predict",
-           "timing_of", "words"]
+__all__ = ["LAYER_SHARE", "ChatterMeasured", "ChatterPredicted", "Timing", "layer_fix", "layer_words", "limit_of",
+           "measure", "predict", "timing_of", "verdict", "words"]
 
 LAYER_SHARE = 0.5
 """The boundary layer's linear gain ``M/eps`` is this share of the loop's critical gain (a gain margin of 2)."""
@@ -214,6 +214,14 @@ class ChatterMeasured:
                 "chatter_amplitude": self.command, "frequency_hz": self.frequency,
                 "equivalent_control": self.equivalent}
 
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> ChatterMeasured | None:
+        """The measurement from its JSON form (:meth:`to_dict`); None from None."""
+        if d is None:
+            return None
+        return cls(float(d["window_s"][0]), float(d["window_s"][1]), float(d["s_amplitude"]),
+                   float(d["chatter_amplitude"]), float(d["frequency_hz"]), float(d["equivalent_control"]))
+
 
 def _half_swing(s: np.ndarray) -> float:
     """The mean over the complete half cycles (runs of one sign, the first and last cut by the window left out)
@@ -272,3 +280,34 @@ def layer_fix(loops: list[Loop], amplitude: float, timing: Timing) -> tuple[floa
     if not math.isfinite(k):
         return None
     return layer_for_gain(amplitude, k, LAYER_SHARE), k
+
+
+def limit_of(spec: Any) -> float | None:
+    """``requirements.max_chatter_amplitude`` (the input's unit), None when the spec does not bound it."""
+    req = getattr(spec, "requirements", None)
+    limit = getattr(req, "max_chatter_amplitude", None) if req is not None else None
+    return None if limit is None else float(limit)
+
+
+def verdict(meas: ChatterMeasured | None, limit: float, unit: str) -> tuple[bool, float | None, str]:
+    """``(passed, achieved, words)``: the measured chatter amplitude (half the peak-to-peak command on the
+    settled window, the input's ``unit``) against ``limit``; without a settled window it fails, unmeasured."""
+    if meas is None:
+        return False, None, "no settled window to measure the chatter amplitude on"
+    ok = meas.command <= limit
+    return ok, meas.command, (f"chatter amplitude (half the peak-to-peak command over the settled window) "
+                              f"{meas.command:.4g} {unit} {'within' if ok else 'over'} the limit {limit:.4g} {unit}")
+
+
+def layer_words(amplitude: float, eps: float, k_c: float, timing: Timing, s_unit: str, u_unit: str,
+                where: str) -> str:
+    """Why the layer ``eps`` (the unit of ``s``) removes the relay's (``amplitude``, the input's unit) chatter: its
+    gain against the critical gain ``k_c`` of the loop held as the run holds it (``where``: which loops)."""
+    hold = (f"sampled every {timing.period:.3g} s" if timing.period > 0 else
+            f"held over the integration step {timing.step:.3g} s")
+    extra = "".join((f", a delay of {timing.delay:.3g} s" if timing.delay > 0 else "",
+                     f", the actuator lag of {timing.bandwidth:.4g} rad/s" if timing.bandwidth else ""))
+    return (f"inside the layer the relay is the linear gain {amplitude:.4g}/ε = {amplitude / eps:.4g} {u_unit}/"
+            f"({s_unit}), {LAYER_SHARE:g} of the critical gain {k_c:.4g} {u_unit}/({s_unit}) of {where} "
+            f"({hold}{extra}), so the predicted oscillation vanishes and the command settles to the equivalent "
+            "control")
