@@ -96,14 +96,17 @@ def test_requirement_fails_and_the_layer_fixes_it(text):
     assert m / eps <= 0.5 * 2 / (g_max * hold) * 1.05
 
 
-def test_requirement_refused_on_the_elastic_joint():
-    """Measured on the link only: on the elastic joint the key is refused, named (exit code 2)."""
+@pytest.mark.parametrize("where", ["elastic", "robot"])
+def test_requirement_refused_off_the_link(where):
+    """Measured on the link only: on the elastic joint and the robot the key is refused, named (exit code 2)."""
     from designkit.errors import SpecError
     from designkit.pipeline import run
     from designkit.schema.loader import parse_spec
+    from tests.families.pid_sliding_mode.cases import ROBOT
     from tests.families.pid_sliding_mode.test_elastic import SPEC
 
-    body = SPEC.replace("requirements: {", "requirements: {max_chatter_amplitude: 1.0, ", 1)
+    body = (SPEC.replace("requirements: {", "requirements: {max_chatter_amplitude: 1.0, ", 1) if where == "elastic"
+            else ROBOT.replace("simulation:", "requirements: {max_chatter_amplitude: 1.0}\nsimulation:", 1))
     assert "max_chatter_amplitude" in body
     with pytest.raises(SpecError, match="requirements.max_chatter_amplitude"):
         run(parse_spec(body))
