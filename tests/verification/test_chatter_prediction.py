@@ -157,3 +157,14 @@ def test_lag_alone_has_no_finite_cycle_and_the_step_sets_the_chatter():
     assert pred.kind == "none" and "relative degree two" in pred.sentence and "2e-05 s" in pred.sentence
     coarse, fine = _rk4_relay_lag(300.0, 4e-5, 0.0, 0.2), _rk4_relay_lag(300.0, 1e-5, 0.0, 0.2)
     assert fine[0] > 1.5 * coarse[0] and fine[1] < 0.5 * coarse[1]
+
+
+def test_bias_estimate_only_for_the_sampled_orbit():
+    """Behind a lag and a delay the load's equivalent control does not scale the orbit by (1 - r): the words say
+    the orbit is not the symmetric one rather than give the held-integrator estimate."""
+    meas = ChatterMeasured(0.0, 1.0, 3e-3, 1.2, 57.0, -1.0)
+    lagged = predict(link(), 1.2, Timing(0.0, 5e-4, 300.0, True, 2e-5), "rad/s", "N·m")
+    said = words(lagged, meas, 1.2, "rad/s", "N·m")
+    assert "not the symmetric one" in said and "first-order estimate is" not in said
+    held = predict(link(), 1.2, Timing(1e-3, 0.0, None, False, 1e-4), "rad/s", "N·m")
+    assert f"first-order estimate is {held.frequency * (1 - 1 / 1.2):.4g} Hz" in words(held, meas, 1.2, "rad/s", "N·m")

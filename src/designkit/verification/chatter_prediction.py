@@ -17,7 +17,8 @@ The orbit is symmetric: it is the chatter where the equivalent control is 0.  Wh
 control ``u_eq`` takes a share ``r = |u_eq|/M`` of the relay, the relay spends ``(1 - r)/2`` of the time on the
 minority side; when the loop is an integrator at the chatter's frequency (relative degree one: ``s' ~ b v``) the
 minority side keeps its ``k`` samples and the other side lengthens to ``k (1 + r)/(1 - r)``: the frequency
-falls to ``f (1 - r)`` and the swing of ``s`` grows to ``A (1 + r)`` (a first-order estimate, stated as such).
+falls to ``f (1 - r)`` and the swing of ``s`` grows to ``A (1 + r)`` (a first-order estimate, stated as such, for
+the sampled orbit only: behind a lag or a delay the words say that the orbit is not the symmetric one).
 
 The **measurement** (:func:`measure`) is read on a settled window of the run (the family chooses it): the half
 swing of ``s`` (the mean over its half cycles of the largest ``|s|`` in each), the half peak-to-peak of the
@@ -261,7 +262,10 @@ def words(pred: ChatterPredicted, meas: ChatterMeasured | None, amplitude: float
         return f"predicted: {pred.sentence}; {seen}"
     r = min(abs(meas.equivalent) / amplitude, 1.0) if amplitude > 0 else 0.0
     bias = ""
-    if 1e-3 < r < 1 and pred.s_amplitude is not None:
+    if 1e-3 < r < 1 and pred.s_amplitude is not None and pred.kind != "sampled":
+        bias = (f"; the equivalent control takes r = {r:.3g} of M, so the orbit is not the symmetric one predicted "
+                "(the first-order estimate holds for a held relay on an integrator, not behind a lag or a delay)")
+    elif 1e-3 < r < 1 and pred.s_amplitude is not None:
         bias = (f"; with the equivalent control taking r = {r:.3g} of M the first-order estimate is "
                 f"{pred.frequency * (1 - r):.4g} Hz and ±{pred.s_amplitude * (1 + r):.3g} {s_unit}")
     ratio = meas.frequency / pred.frequency
