@@ -276,12 +276,12 @@ def layer_fix(loops: list[Loop], amplitude: float, timing: Timing) -> tuple[floa
     """``(eps, K_c)``: the boundary layer (the unit of ``s``) whose gain ``M/eps`` is :data:`LAYER_SHARE` of the
     smallest critical gain ``K_c`` (the input's unit per unit of ``s``) over ``loops`` (the loop at the corners
     of a parameter box, say), held as the run holds it (its sampling period, or its integration step, and its
-    delay); None when no gain destabilises any of them."""
+    delay); None when no gain destabilises any of them, or one of them is not stable at a small gain."""
     hold = timing.period if timing.period > 0 else timing.step
     gains = [critical_gain(loop.with_lag(timing.bandwidth) if timing.bandwidth else loop, hold, timing.delay)
              for loop in loops]
     k = min(gains)
-    if not math.isfinite(k):
+    if not math.isfinite(k) or k <= 0:
         return None
     return layer_for_gain(amplitude, k, LAYER_SHARE), k
 

@@ -391,7 +391,8 @@ def critical_gain(loop: Loop, period: float = 0.0, delay: float = 0.0, ceiling: 
     """The smallest gain ``K`` of the linear feedback ``v = -K s`` at which the loop stops being stable (the
     relay's unit per unit of ``s``): on the sampled loop (spectral radius of the closed loop reaching 1), or, when
     continuous, at the first crossing of -180 deg by ``G(jw)`` (with the delay); ``inf`` when no gain up to
-    ``ceiling`` destabilises it (a continuous loop of relative degree one without a delay)."""
+    ``ceiling`` destabilises it (a continuous loop of relative degree one without a delay); 0 when a sampled loop
+    is not stable at a small gain already."""
     if period > 0:
         phi, g0, g1, m = _sampled_matrices(loop, period, delay)
         n = phi.shape[0]
@@ -415,7 +416,11 @@ def critical_gain(loop: Loop, period: float = 0.0, delay: float = 0.0, ceiling: 
                     big[n + i, n + i - 1] = 1.0
             return float(np.max(np.abs(np.linalg.eigvals(big))))
 
-        lo, hi = 1e-12, 1e-12
+        # start where a small gain has moved the loop's slowest pole by 1e-6 of the unit circle (an integrator's
+        # pole at 1 then reads inside it above round-off); a loop that gain does not make stable has no margin
+        lo = hi = 1e-6 / max(abs(float(loop.c @ loop.b)) * period, 1e-300)
+        if radius(hi) >= 1:
+            return 0.0
         while radius(hi) < 1 and hi < ceiling:
             lo, hi = hi, hi * 2
         if hi >= ceiling:
