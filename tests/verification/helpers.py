@@ -62,3 +62,31 @@ def step_result(time, x1, u, *, amplitude: float = 1.0, u_applied=None, kind: st
         u_command=u, u_applied=u if u_applied is None else np.asarray(u_applied, float),
         perturbation=np.zeros(n), measured=state.copy(), kind=kind,
     )
+
+
+def rk4_relay_lag(a: float, b: float, c: float, m: float, bandwidth: float, dt: float, delay: float,
+                  span: float) -> tuple[float, float, float]:
+    """Our own RK4 run of the link along ``s = c e + x2`` (``e' = x2``, ``x2' = -a x2 + b u_a``) behind the lag
+    ``u_a' = bandwidth (v - u_a)``, the relay ``v = -m sign(s)`` read at the start of every step ``dt`` (s) and
+    applied ``delay`` (s) later, from ``e = 0.01``, for ``span`` (s): the frequency (Hz, the mean period between
+    the upward sign changes of ``s`` over the last half), half the peak-to-peak of ``s`` and of ``u_a`` there."""
+
+    def f(x: np.ndarray, v: float) -> np.ndarray:
+        return np.array([x[1], -a * x[1] + b * x[2], bandwidth * (v - x[2])])
+
+    n, late = int(round(span / dt)), int(round(delay / dt))
+    x, line = np.array([0.01, 0.0, 0.0]), [0.0] * late
+    s_out, ua = np.empty(n), np.empty(n)
+    for i in range(n):
+        s = c * x[0] + x[1]
+        line.append(-m * np.sign(s))
+        v = line.pop(0)
+        k1 = f(x, v)
+        k2 = f(x + dt / 2 * k1, v)
+        k3 = f(x + dt / 2 * k2, v)
+        k4 = f(x + dt * k3, v)
+        x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        s_out[i], ua[i] = s, x[2]
+    w = slice(n // 2, n)
+    up = np.flatnonzero((s_out[w][:-1] < 0) & (s_out[w][1:] >= 0))
+    return (len(up) - 1) / ((up[-1] - up[0]) * dt), float(np.ptp(s_out[w])) / 2, float(np.ptp(ua[w])) / 2

@@ -20,6 +20,7 @@ from designkit.verification.chatter_prediction import (
     words,
 )
 from designkit.verification.limit_cycle import Loop
+from tests.verification.helpers import rk4_relay_lag
 
 A_, B_, C_ = 2.0, 4.0, 5.0
 """The link along s = x2 + c e: b (p + c)/(p (p + a)), a = 1/tau, b = Km/tau."""
@@ -107,7 +108,7 @@ def test_timing_reads_the_run_and_the_implementation():
     spec = SimpleNamespace(implementation=SimpleNamespace(actuator=SimpleNamespace(bandwidth=[200.0])))
     t = timing_of(spec, sim)
     assert (t.period, t.bandwidth, t.lag_in_run) == (1e-3, 200.0, False)
-    sim.settings["actuator"] = {"bandwidth": [200.0]}
+    sim.settings["implementation"] = "as implemented: sampled every 1 ms, a 200 rad/s first-order lag"
     assert timing_of(spec, sim).lag_in_run
 
 
@@ -124,3 +125,46 @@ def test_layer_fix_on_the_held_link():
     assert np.max(np.abs(np.linalg.eigvals(closed))) < 1
     closed = ad - bd @ np.array([[C_, 1]]) * (1.05 * k_c)
     assert np.max(np.abs(np.linalg.eigvals(closed))) > 1
+
+
+def _rk4_relay_lag(bandwidth: float, dt: float, delay: float, span: float) -> tuple[float, float, float]:
+    return rk4_relay_lag(A_, B_, C_, 1.2, bandwidth, dt, delay, span)
+
+
+def test_continuous_lag_and_delay_exact_orbit_against_own_run():
+    """A continuous relay behind a 300 rad/s lag with a 0.5 ms delay: our RK4 run reads sign(s) at the start of
+    each 20 µs step, so it switches between L and L + dt after s crosses 0; its frequency and swings lie between
+    the exact orbits for those two delays (0.5 % slack for the sampled peaks).  The describing function is the
+    approximation: 6 % off the exact orbit here."""
+    from designkit.verification.limit_cycle import continuous_orbit, describing_function
+
+    dt, late = 2e-5, 5e-4
+    pred = predict(link(), 1.2, Timing(0.0, late, 300.0, True, dt), "rad/s", "N·m")
+    assert pred.kind == "continuous"
+    slow = continuous_orbit(link().with_lag(300.0), 1.2, delay=late + dt)
+    f, s_amp, ua_amp = _rk4_relay_lag(300.0, dt, late, 0.4)
+    assert slow.frequency * 0.995 <= f <= pred.frequency * 1.005
+    assert pred.s_amplitude * 0.995 <= s_amp <= slow.amplitude * 1.005
+    assert pred.command * 0.995 <= ua_amp <= slow.peak("actuator") * 1.005
+    df = describing_function(link().with_lag(300.0), 1.2, delay=late)
+    assert df.hertz == pytest.approx(pred.frequency, rel=0.10) and df.hertz != pytest.approx(pred.frequency, rel=0.02)
+
+
+def test_lag_alone_has_no_finite_cycle_and_the_step_sets_the_chatter():
+    """Relative degree two (the link along s behind the lag): no orbit predicted; in our own RK4 run the frequency
+    grows and the swing of s shrinks as the step shrinks (no finite cycle the step would converge to)."""
+    pred = predict(link(), 1.2, Timing(0.0, 0.0, 300.0, True, 2e-5), "rad/s", "N·m")
+    assert pred.kind == "none" and "relative degree two" in pred.sentence and "2e-05 s" in pred.sentence
+    coarse, fine = _rk4_relay_lag(300.0, 4e-5, 0.0, 0.2), _rk4_relay_lag(300.0, 1e-5, 0.0, 0.2)
+    assert fine[0] > 1.5 * coarse[0] and fine[1] < 0.5 * coarse[1]
+
+
+def test_bias_estimate_only_for_the_sampled_orbit():
+    """Behind a lag and a delay the load's equivalent control does not scale the orbit by (1 - r): the words say
+    the orbit is not the symmetric one rather than give the held-integrator estimate."""
+    meas = ChatterMeasured(0.0, 1.0, 3e-3, 1.2, 57.0, -1.0)
+    lagged = predict(link(), 1.2, Timing(0.0, 5e-4, 300.0, True, 2e-5), "rad/s", "N·m")
+    said = words(lagged, meas, 1.2, "rad/s", "N·m")
+    assert "not the symmetric one" in said and "first-order estimate is" not in said
+    held = predict(link(), 1.2, Timing(1e-3, 0.0, None, False, 1e-4), "rad/s", "N·m")
+    assert f"first-order estimate is {held.frequency * (1 - 1 / 1.2):.4g} Hz" in words(held, meas, 1.2, "rad/s", "N·m")

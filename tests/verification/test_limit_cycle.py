@@ -190,3 +190,33 @@ def test_bad_arguments_are_named():
         sampled_orbits(first_order(), -1.0, 0.1)
     with pytest.raises(SpecError, match="^num: "):
         Loop.transfer([1.0, 0.0], [1.0, 1.0])
+
+
+def test_critical_gain_with_an_integrator_among_fast_modes():
+    """A loop with a pole at 0 among lightly damped ones (s (s + 5)(s^2 + 24 s + 369) against (s + 1)(s^2 + 20 s +
+    300), relative degree one): the integrator's pole sits on the unit circle at zero gain, where round-off must
+    not read the loop as unstable; the critical gain against our own scan of the closed loop's spectral radius
+    (scipy's cont2discrete, ZOH)."""
+    from scipy.signal import cont2discrete
+
+    from designkit.verification.limit_cycle import critical_gain
+
+    den = np.polymul([1, 0], np.polymul([1, 5], [1, 24, 369]))
+    num = np.polymul([1, 1], [1, 20, 300])
+    a = np.zeros((4, 4))
+    a[:3, 1:] = np.eye(3)
+    a[3] = -den[:0:-1]
+    b = np.array([0, 0, 0, 1.0])
+    c = num[::-1].astype(float)
+    loop = Loop.of(a, b, c)
+    h = 7.2e-5
+    ad, bd, *_ = cont2discrete((a, b.reshape(-1, 1), c.reshape(1, -1), np.zeros((1, 1))), h)
+
+    def radius(k: float) -> float:
+        return float(np.max(np.abs(np.linalg.eigvals(ad - k * bd @ c.reshape(1, -1)))))
+
+    grid = np.geomspace(1.0, 1e6, 4001)
+    first = next(k for k in grid if radius(k) >= 1)
+    got = critical_gain(loop, h)
+    assert 0 < got < math.inf
+    assert got == pytest.approx(first, rel=grid[1] / grid[0] - 1)

@@ -9,14 +9,16 @@ command was held (:func:`timing_of`).  The **prediction** (:func:`predict`):
   ``k`` (:func:`~designkit.verification.limit_cycle.sampled_orbit`): frequency ``1/(2 k Ts)`` (Hz), amplitude of
   ``s``, the command a square wave of amplitude ``M`` (behind an actuator lag, the lag's output amplitude);
 * a continuous command with an actuator lag or a delay: the exact continuous orbit when there is one, else the
-  describing function's;
+  describing function's; a lag alone on a loop of relative degree one (relative degree two in all) has neither:
+  no finite limit cycle, the swing decaying while the frequency grows until the integration step stops it;
 * neither: no finite limit cycle (the run's chatter is set by its integration step).
 
 The orbit is symmetric: it is the chatter where the equivalent control is 0.  Where the averaged (equivalent)
 control ``u_eq`` takes a share ``r = |u_eq|/M`` of the relay, the relay spends ``(1 - r)/2`` of the time on the
 minority side; when the loop is an integrator at the chatter's frequency (relative degree one: ``s' ~ b v``) the
 minority side keeps its ``k`` samples and the other side lengthens to ``k (1 + r)/(1 - r)``: the frequency
-falls to ``f (1 - r)`` and the swing of ``s`` grows to ``A (1 + r)`` (a first-order estimate, stated as such).
+falls to ``f (1 - r)`` and the swing of ``s`` grows to ``A (1 + r)`` (a first-order estimate, stated as such, for
+the sampled orbit only: behind a lag or a delay the words say that the orbit is not the symmetric one).
 
 The **measurement** (:func:`measure`) is read on a settled window of the run (the family chooses it): the half
 swing of ``s`` (the mean over its half cycles of the largest ``|s|`` in each), the half peak-to-peak of the
@@ -45,11 +47,12 @@ from designkit.verification.limit_cycle import (
     describing_function,
     layer_for_gain,
     no_cycle_words,
+    relative_degree,
     sampled_orbit,
 )
 
-__all__ = ["LAYER_SHARE", "ChatterMeasured", "ChatterPredicted", "Timing", "layer_fix", "measure", "predict",
-           "timing_of", "words"]
+__all__ = ["LAYER_SHARE", "ChatterMeasured", "ChatterPredicted", "Timing", "layer_fix", "layer_words", "limit_of",
+           "measure", "predict", "timing_of", "verdict", "words"]
 
 LAYER_SHARE = 0.5
 """The boundary layer's linear gain ``M/eps`` is this share of the loop's critical gain (a gain margin of 2)."""
@@ -176,7 +179,8 @@ def predict(loop: Loop, amplitude: float, timing: Timing, s_unit: str, u_unit: s
                                     f"the describing function of the relay{lag_words} balances at "
                                     f"{cycle.hertz:.4g} Hz with {name} of amplitude {cycle.amplitude:.3g} {s_unit} "
                                     f"(the command's fundamental 4M/π = {cycle.command:.3g} {u_unit})")
-    return ChatterPredicted("none", None, None, None, None, None, no_cycle_words(timing.step))
+    return ChatterPredicted("none", None, None, None, None, None,
+                            no_cycle_words(timing.step, relative_degree(lagged) if timing.bandwidth else 1))
 
 
 @dataclass(frozen=True)
@@ -210,6 +214,14 @@ class ChatterMeasured:
         return {"window_s": [self.start, self.stop], "s_amplitude": self.s_amplitude,
                 "chatter_amplitude": self.command, "frequency_hz": self.frequency,
                 "equivalent_control": self.equivalent}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> ChatterMeasured | None:
+        """The measurement from its JSON form (:meth:`to_dict`); None from None."""
+        if d is None:
+            return None
+        return cls(float(d["window_s"][0]), float(d["window_s"][1]), float(d["s_amplitude"]),
+                   float(d["chatter_amplitude"]), float(d["frequency_hz"]), float(d["equivalent_control"]))
 
 
 def _half_swing(s: np.ndarray) -> float:
@@ -250,7 +262,10 @@ def words(pred: ChatterPredicted, meas: ChatterMeasured | None, amplitude: float
         return f"predicted: {pred.sentence}; {seen}"
     r = min(abs(meas.equivalent) / amplitude, 1.0) if amplitude > 0 else 0.0
     bias = ""
-    if 1e-3 < r < 1 and pred.s_amplitude is not None:
+    if 1e-3 < r < 1 and pred.s_amplitude is not None and pred.kind != "sampled":
+        bias = (f"; the equivalent control takes r = {r:.3g} of M, so the orbit is not the symmetric one predicted "
+                "(the first-order estimate holds for a held relay on an integrator, not behind a lag or a delay)")
+    elif 1e-3 < r < 1 and pred.s_amplitude is not None:
         bias = (f"; with the equivalent control taking r = {r:.3g} of M the first-order estimate is "
                 f"{pred.frequency * (1 - r):.4g} Hz and ±{pred.s_amplitude * (1 + r):.3g} {s_unit}")
     ratio = meas.frequency / pred.frequency
@@ -261,11 +276,42 @@ def layer_fix(loops: list[Loop], amplitude: float, timing: Timing) -> tuple[floa
     """``(eps, K_c)``: the boundary layer (the unit of ``s``) whose gain ``M/eps`` is :data:`LAYER_SHARE` of the
     smallest critical gain ``K_c`` (the input's unit per unit of ``s``) over ``loops`` (the loop at the corners
     of a parameter box, say), held as the run holds it (its sampling period, or its integration step, and its
-    delay); None when no gain destabilises any of them."""
+    delay); None when no gain destabilises any of them, or one of them is not stable at a small gain."""
     hold = timing.period if timing.period > 0 else timing.step
     gains = [critical_gain(loop.with_lag(timing.bandwidth) if timing.bandwidth else loop, hold, timing.delay)
              for loop in loops]
     k = min(gains)
-    if not math.isfinite(k):
+    if not math.isfinite(k) or k <= 0:
         return None
     return layer_for_gain(amplitude, k, LAYER_SHARE), k
+
+
+def limit_of(spec: Any) -> float | None:
+    """``requirements.max_chatter_amplitude`` (the input's unit), None when the spec does not bound it."""
+    req = getattr(spec, "requirements", None)
+    limit = getattr(req, "max_chatter_amplitude", None) if req is not None else None
+    return None if limit is None else float(limit)
+
+
+def verdict(meas: ChatterMeasured | None, limit: float, unit: str) -> tuple[bool, float | None, str]:
+    """``(passed, achieved, words)``: the measured chatter amplitude (half the peak-to-peak command on the
+    settled window, the input's ``unit``) against ``limit``; without a settled window it fails, unmeasured."""
+    if meas is None:
+        return False, None, "no settled window to measure the chatter amplitude on"
+    ok = meas.command <= limit
+    return ok, meas.command, (f"chatter amplitude (half the peak-to-peak command over the settled window) "
+                              f"{meas.command:.4g} {unit} {'within' if ok else 'over'} the limit {limit:.4g} {unit}")
+
+
+def layer_words(amplitude: float, eps: float, k_c: float, timing: Timing, s_unit: str, u_unit: str,
+                where: str) -> str:
+    """Why the layer ``eps`` (the unit of ``s``) removes the relay's (``amplitude``, the input's unit) chatter: its
+    gain against the critical gain ``k_c`` of the loop held as the run holds it (``where``: which loops)."""
+    hold = (f"sampled every {timing.period:.3g} s" if timing.period > 0 else
+            f"held over the integration step {timing.step:.3g} s")
+    extra = "".join((f", a delay of {timing.delay:.3g} s" if timing.delay > 0 else "",
+                     f", the actuator lag of {timing.bandwidth:.4g} rad/s" if timing.bandwidth else ""))
+    return (f"inside the layer the relay is the linear gain {amplitude:.4g}/ε = {amplitude / eps:.4g} {u_unit}/"
+            f"({s_unit}), {LAYER_SHARE:g} of the critical gain {k_c:.4g} {u_unit}/({s_unit}) of {where} "
+            f"({hold}{extra}), so the predicted oscillation vanishes and the command settles to the equivalent "
+            "control")

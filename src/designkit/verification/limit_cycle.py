@@ -24,7 +24,10 @@ Three predictions, each for a symmetric orbit (``x(t + T/2) = -x(t)``, half a pe
 
 Without a hold, a lag or a delay (a relay on a loop of relative degree one) the continuous switch has no finite
 limit cycle: the ideal relay then slides, switching infinitely often, and a simulation's chatter is set by its
-integration step (:func:`no_cycle_words`).
+integration step (:func:`no_cycle_words`).  Behind a first-order lag alone (relative degree two, the poles real) it
+has none either: the phase of ``G(jw)`` tends to -180 deg without crossing it, the swing decays while the
+switching frequency grows, and a simulation's chatter is again set by its step.  A finite continuous cycle needs
+a delay, a hysteresis or a relative degree of three or more.
 
 :func:`critical_gain` and :func:`layer_for_gain` size a boundary layer: inside ``|s| < eps`` the relay becomes
 the linear gain ``M/eps``, and the oscillation vanishes when that gain is below the loop's critical gain (the
@@ -40,7 +43,8 @@ from typing import Any
 import numpy as np
 
 __all__ = ["ContinuousOrbit", "DescribingCycle", "Loop", "SampledOrbit", "continuous_orbit", "critical_gain",
-           "describing_function", "layer_for_gain", "no_cycle_words", "sampled_orbit", "sampled_orbits"]
+           "describing_function", "layer_for_gain", "no_cycle_words", "relative_degree", "sampled_orbit",
+           "sampled_orbits"]
 
 MAX_HALF_PERIOD = 200
 """The sampled orbits searched: ``k`` from 1 to this many samples per half period."""
@@ -387,7 +391,8 @@ def critical_gain(loop: Loop, period: float = 0.0, delay: float = 0.0, ceiling: 
     """The smallest gain ``K`` of the linear feedback ``v = -K s`` at which the loop stops being stable (the
     relay's unit per unit of ``s``): on the sampled loop (spectral radius of the closed loop reaching 1), or, when
     continuous, at the first crossing of -180 deg by ``G(jw)`` (with the delay); ``inf`` when no gain up to
-    ``ceiling`` destabilises it (a continuous loop of relative degree one without a delay)."""
+    ``ceiling`` destabilises it (a continuous loop of relative degree one without a delay); 0 when a sampled loop
+    is not stable at a small gain already."""
     if period > 0:
         phi, g0, g1, m = _sampled_matrices(loop, period, delay)
         n = phi.shape[0]
@@ -411,7 +416,11 @@ def critical_gain(loop: Loop, period: float = 0.0, delay: float = 0.0, ceiling: 
                     big[n + i, n + i - 1] = 1.0
             return float(np.max(np.abs(np.linalg.eigvals(big))))
 
-        lo, hi = 1e-12, 1e-12
+        # start where a small gain has moved the loop's slowest pole by 1e-6 of the unit circle (an integrator's
+        # pole at 1 then reads inside it above round-off); a loop that gain does not make stable has no margin
+        lo = hi = 1e-6 / max(abs(float(loop.c @ loop.b)) * period, 1e-300)
+        if radius(hi) >= 1:
+            return 0.0
         while radius(hi) < 1 and hi < ceiling:
             lo, hi = hi, hi * 2
         if hi >= ceiling:
@@ -435,8 +444,29 @@ def layer_for_gain(amplitude: float, gain: float, share: float) -> float:
     return float(amplitude) / (share * gain)
 
 
-def no_cycle_words(step: float) -> str:
-    """Why a continuous switch has no finite limit cycle, and what the run's chatter then is (``step`` in s)."""
+def relative_degree(loop: Loop) -> int:
+    """The relative degree of ``C (pI - A)^-1 B``: the smallest ``r`` with ``C A^(r-1) B != 0`` (relative to the
+    loop's scale), ``n + 1`` when every Markov parameter vanishes."""
+    n = loop.a.shape[0]
+    scale = max(float(np.max(np.abs(loop.a))), 1e-300)
+    v = loop.b.copy()
+    ref = float(np.linalg.norm(loop.c)) * float(np.linalg.norm(loop.b))
+    for r in range(1, n + 1):
+        if abs(float(loop.c @ v)) > 1e-12 * ref * scale ** (r - 1):
+            return r
+        v = loop.a @ v
+    return n + 1
+
+
+def no_cycle_words(step: float, degree: int = 1) -> str:
+    """Why a continuous switch has no finite limit cycle, and what the run's chatter then is (``step`` in s,
+    ``degree`` the loop's relative degree: 1, or 2 behind a first-order lag)."""
+    if degree == 2:
+        return ("the continuous-time switch on a loop of relative degree two (the loop of relative degree one "
+                "behind the actuator's first-order lag), without a hold or a delay, has no finite limit cycle in "
+                "theory: the phase of G(jω) tends to −180° without crossing it, so the describing function has no "
+                "balance and the exact orbit none; the swing of s decays while its frequency grows without bound, "
+                f"until the run's integration step {step:.3g} s stops it: the run's chatter is set by that step")
     return ("the continuous-time switch on a loop of relative degree one, without a hold, a lag or a delay, has no "
             "finite limit cycle in theory (it slides, switching infinitely often); the run's chatter is set by its "
             f"integration step {step:.3g} s")

@@ -49,3 +49,64 @@ def test_pid_sm_link_prediction_and_measurement(sampled):
     assert meas["frequency_hz"] == pytest.approx(500 * (1 - r), rel=0.05)
     assert meas["s_amplitude"] == pytest.approx(pred["s_amplitude"] * (1 + r), rel=0.05)
     assert "slm" in chat.detail and "500 Hz" in chat.detail
+
+
+LIMIT = 0.5
+"""A chatter limit (N*m) below the relay M (about 5.7 N*m)."""
+
+
+def _limited(text: str) -> str:
+    return text.replace("steady_state_error: 0.005}", f"steady_state_error: 0.005, max_chatter_amplitude: {LIMIT}}}")
+
+
+@pytest.mark.parametrize("text", [(ROOT / "specs" / "pid-sm-link.yaml").read_text(), SAMPLED],
+                         ids=["continuous", "sampled"])
+def test_requirement_fails_and_the_layer_fixes_it(text):
+    """Over the limit: pid_sm_chattering is required and fails with the amplitude counted here (the whole command
+    u = u0 + du on the window); the diagnosis proposes sat(slm/eps) whose re-run passes every required check, the
+    chatter amplitude under the limit."""
+    from designkit.analysis.diagnosis import diagnose
+    from designkit.pipeline import run
+    from designkit.schema.loader import parse_spec
+
+    result = run(parse_spec(_limited(text)))
+    chat = next(c for c in result.checks if c.name == "pid_sm_chattering")
+    meas = chat.certificate["limit_cycle"]["measured"]
+    sim = result.simulation
+    t = np.asarray(sim.time)
+    w = (t >= meas["window_s"][0]) & (t <= meas["window_s"][1])
+    u = np.asarray(sim.u_command[:, 0])[w]
+    assert chat.required and chat.passed is False
+    assert chat.achieved == pytest.approx((u.max() - u.min()) / 2) and chat.achieved > LIMIT
+    m = float(result.design.data.M)
+    # the relay switches by M; the PID part u0 follows the chatter of the state by a few per cent more (sampled)
+    assert 0.99 * m <= chat.achieved <= 1.05 * m
+    d = diagnose(result)
+    finding = next(f for f in d.findings if f.check == "pid_sm_chattering")
+    assert "controller.epsilon" in finding.fix and "critical gain" in finding.fix
+    trials = [tr for p in d.proposed for tr in p.trials if tr.remedy.changes[0][0] == "controller.epsilon"]
+    assert len(trials) == 1 and trials[0].passed and not trials[0].error, trials
+    again = next(o for o in trials[0].outcomes if o.name == "pid_sm_chattering")
+    assert again.failed_before and again.value is not None and again.value < 0.01 * LIMIT
+    # the layer's gain M/eps at most half the critical gain of the held g/(p - p3) at the largest g on the box
+    # (a2 Km/tau up to a2 2.6/0.35): for |p3| h small it is stable below 2/(g h)
+    eps = trials[0].remedy.changes[0][1]
+    hold = float(sim.settings.get("sampling_period") or sim.settings["dt"])
+    g_max = float(result.design.data.a2) * 2.6 / 0.35
+    assert m / eps <= 0.5 * 2 / (g_max * hold) * 1.05
+
+
+@pytest.mark.parametrize("where", ["elastic", "robot"])
+def test_requirement_refused_off_the_link(where):
+    """Measured on the link only: on the elastic joint and the robot the key is refused, named (exit code 2)."""
+    from designkit.errors import SpecError
+    from designkit.pipeline import run
+    from designkit.schema.loader import parse_spec
+    from tests.families.pid_sliding_mode.cases import ROBOT
+    from tests.families.pid_sliding_mode.test_elastic import SPEC
+
+    body = (SPEC.replace("requirements: {", "requirements: {max_chatter_amplitude: 1.0, ", 1) if where == "elastic"
+            else ROBOT.replace("simulation:", "requirements: {max_chatter_amplitude: 1.0}\nsimulation:", 1))
+    assert "max_chatter_amplitude" in body
+    with pytest.raises(SpecError, match="requirements.max_chatter_amplitude"):
+        run(parse_spec(body))

@@ -123,3 +123,59 @@ def test_continuous_switch_layer_keeps_the_step_and_the_error():
     m, c, xi = float(result.design.gains["M"]), 5.0, 1.0
     assert eps * xi / (m * c) <= 0.5 * 0.005 * (1 + 1e-3)
     assert "no finite limit cycle" in next(f for f in d.findings if f.check == "chattering").cause
+
+
+LAGGED = (LINK_SPEC.read_text().replace("  duration: 3.0\n", "  duration: 1.5\n")
+          .replace("  perturbation: {value: 1.0, time: 1.0}\n", "")
+          .replace("  margin: 0.2\n", "  margin: 0.2\n  perturbation_bound: 1.0\n")
+          .replace("requirements:", "implementation: {delay: 0.0005, actuator: {bandwidth: 300}}\nrequirements:"))
+
+
+def test_continuous_relay_behind_the_lag_and_a_delay():
+    """The law computed continuously, applied 0.5 ms late through a 300 rad/s lag, no load (the equivalent control
+    near 0, the orbit symmetric): the exact orbit of the loop with the lag and the delay is predicted; the run
+    reads sign(s) at each step dt, so it switches between L and L + dt after s crosses 0: its frequency and
+    swings, counted here on the run's own signals, lie between the exact orbits for those two delays (1 % slack
+    for the sampled peaks), and so does our own RK4 run of the same loop."""
+    from designkit.families.sliding_mode.chatter import loop_of
+    from designkit.verification.limit_cycle import continuous_orbit
+    from tests.verification.helpers import rk4_relay_lag
+
+    result = run_text(LAGGED)
+    chat = check(result, "chattering")
+    cyc = chat.certificate["limit_cycle"]
+    pred, meas = cyc["predicted"], cyc["measured"]
+    assert pred["kind"] == "continuous" and cyc["compared"] and cyc["actuator_bandwidth_rad_s"] == 300.0
+    sim = result.simulation
+    dt = float(sim.settings["dt"])
+    t = np.asarray(sim.time)
+    a, b = meas["window_s"]
+    w = (t >= a) & (t <= b)
+    s, ua, tw = np.asarray(sim.signals["s"])[w], np.asarray(sim.u_applied[:, 0])[w], t[w]
+    up = np.flatnonzero((s[:-1] < 0) & (s[1:] >= 0))
+    freq = (len(up) - 1) / (tw[up[-1]] - tw[up[0]])
+    assert abs(meas["equivalent_control"]) < 0.05
+    # the relay's amplitude on the window: M and the structure switch's (alpha - beta)/2 mean|e|
+    g = result.design.gains
+    e = (np.asarray(sim.state[:, 0]) - np.asarray(sim.reference[:, 0, 0]))[w]
+    m = float(g["M"]) + (float(g["alpha"]) - float(g["beta"])) / 2 * float(np.mean(np.abs(e)))
+    loop = loop_of(KM, TAU, C).with_lag(300.0)
+    on_time, late = (continuous_orbit(loop, m, delay=d) for d in (5e-4, 5e-4 + dt))
+    assert pred["frequency_hz"] == pytest.approx(on_time.frequency, rel=1e-9)
+    assert pred["command_amplitude"] == pytest.approx(on_time.peak("actuator"), rel=1e-9)
+    assert late.frequency * 0.99 <= freq <= on_time.frequency * 1.01
+    assert on_time.amplitude * 0.99 <= meas["s_amplitude"] <= late.amplitude * 1.01
+    assert on_time.peak("actuator") * 0.99 <= float(np.ptp(ua)) / 2 <= late.peak("actuator") * 1.01
+    own_f, own_s, own_ua = rk4_relay_lag(1 / TAU, KM / TAU, C, m, 300.0, dt, 5e-4, 0.4)
+    assert own_f == pytest.approx(freq, rel=0.02) and own_ua == pytest.approx(float(np.ptp(ua)) / 2, rel=0.02)
+    assert "112.9 Hz" in chat.detail and "300 rad/s" in chat.detail
+
+
+def test_lag_alone_predicts_no_finite_cycle():
+    """The lag without a delay: the link along s behind it has relative degree two, so no finite orbit; the words
+    name the run's step as what sets the chatter."""
+    result = run_text(LAGGED.replace("delay: 0.0005, ", ""))
+    chat = check(result, "chattering")
+    cyc = chat.certificate["limit_cycle"]
+    assert cyc["predicted"]["kind"] == "none" and cyc["compared"] and cyc["actuator_bandwidth_rad_s"] == 300.0
+    assert "relative degree two" in chat.detail and f"{float(result.simulation.settings['dt']):.3g} s" in chat.detail

@@ -14,7 +14,8 @@
 ``pid_sm_run`` (order 127) measures the run (:mod:`~designkit.families.pid_sliding_mode.measure`):
 ``pid_sm_in_band`` (required: after reaching, ``|slm|`` stays in the band), ``pid_sm_precision`` and
 ``pid_sm_chattering`` (informational: the command's switching judged as physics by
-:func:`designkit.verification.switching.judge`).
+:func:`designkit.verification.switching.judge`, the chatter predicted against measured; required with
+``requirements.max_chatter_amplitude``, the measured chatter amplitude against it).
 """
 
 from __future__ import annotations
@@ -114,7 +115,13 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     if run.reach is None:
         band = Check(IN_BAND, False, f"|slm| <= {run.band:.4g} rad*s after reaching", None, None, "rad*s",
                      f"|slm| never entered {what} ({run.band:.4g} rad*s): the loop does not slide", cert)
-        return (band,)
+        from designkit.verification.chatter_prediction import limit_of
+
+        limit = limit_of(ctx.spec)
+        if limit is None:
+            return (band,)
+        return band, Check(CHATTERING, False, f"chatter amplitude <= {limit:g} N*m", None, None, "N*m",
+                           "no sliding phase to measure the chatter amplitude on", {**cert, "limit": limit})
     ok = run.worst <= run.band * (1 + 1e-9)
     how = ("stays within it" if ok else f"leaves it: |slm| = {run.worst:.4g} rad*s at t = {run.worst_at:.4g} s, "
            f"{run.worst / run.band:.3g} times the band")
@@ -131,22 +138,30 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         {**cert, "deviation": run.deviation, "bound": run.deviation_bound, "bound_at_band": run.deviation_at_band,
          "l1": info.l1}, required=False)
     from designkit.families.pid_sliding_mode.chatter import chatter as chatter_of
+    from designkit.verification.chatter_prediction import ChatterMeasured, limit_of, verdict
     from designkit.verification.switching import judge_run
 
     freq = run.switching_frequency
     calm, words, physics = judge_run(design, ctx.simulation, ctx.spec, "N*m")
     cycle_words, cycle = chatter_of(design, ctx.simulation, ctx.spec, run)
-    chatter = Check(
-        CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not set by the step",
-        freq, None, "1/s",
-        f"{words}; after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
-        f"({0.0 if freq is None else freq:.4g} per s); total variation of u {run.total_variation:.4g} N*m, of the "
-        f"switching part {run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of the "
-        f"run {run.relay_ptp_tail:.4g} N*m; {cycle_words} [informational]",
-        {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
-         run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail,
-         "switching": physics, "limit_cycle": cycle},
-        required=False)
+    seen = (f"after reaching slm changes sign {run.switches} times in {run.sliding_time:.4g} s "
+            f"({0.0 if freq is None else freq:.4g} per s); total variation of u {run.total_variation:.4g} N*m, of the "
+            f"switching part {run.relay_variation:.4g} N*m; the switching part's peak-to-peak over the last tenth of "
+            f"the run {run.relay_ptp_tail:.4g} N*m")
+    cert_c = {**cert, "switches": run.switches, "sliding_time": run.sliding_time, "total_variation_u":
+              run.total_variation, "total_variation_relay": run.relay_variation, "relay_ptp_tail": run.relay_ptp_tail,
+              "switching": physics, "limit_cycle": cycle}
+    limit = limit_of(ctx.spec)
+    if limit is None:
+        chatter = Check(CHATTERING, calm if ok else None, "switching part within the equivalent control, rate not "
+                        "set by the step", freq, None, "1/s", f"{words}; {seen}; {cycle_words} [informational]",
+                        cert_c, required=False)
+        return band, precision, chatter
+    fine, achieved, said = verdict(ChatterMeasured.from_dict(cycle["measured"]), limit, "N·m")
+    prefix = "" if ok else "the run leaves the band, so this is not only chattering: "
+    chatter = Check(CHATTERING, fine, f"chatter amplitude <= {limit:g} N*m", achieved,
+                    None if achieved is None else limit - achieved, "N*m",
+                    f"{prefix}{said}; {cycle_words}; {words}; {seen}", {**cert_c, "limit": limit})
     return band, precision, chatter
 
 
@@ -158,5 +173,7 @@ RUN_RULE = CheckRule(
     labels={IN_BAND: "The run stays in the band around slm = 0",
             PRECISION: "Distance from the sliding motion (measured)",
             CHATTERING: "Chattering (measured)"},
-    glossary=(("band", "|slm| ≤ δ: the boundary layer, or how far the relay held over a step can leave slm"),),
+    glossary=(("band", "|slm| ≤ δ: the boundary layer, or how far the relay held over a step can leave slm"),
+              ("chatter amplitude", "half the peak-to-peak command over the last tenth of the run after reaching")),
+    reads=("requirements.max_chatter_amplitude",),
 )

@@ -15,7 +15,12 @@ negative for every ``slm != 0`` only when ``M > |xi|``.  Where the perturbation 
 * Robot (the hierarchy of control): ``pid_sm_hierarchy`` failed (some ``M_i`` below its proven ``sup|xi_i|``), and
   ``pid_sm_robot_xi`` / ``pid_sm_robot_in_band`` failing with it: the ``|xi_i|`` the run meets inside the box.
 
-The fix, declared as changes of the spec (:class:`~designkit.synthesis.spec_change.SpecChange`): ``M`` at
+* Link, ``pid_sm_chattering`` over ``requirements.max_chatter_amplitude``: the relay switches the command by
+  ``M`` whatever the equivalent control; the fix is the boundary layer ``sat(slm/epsilon)`` whose gain ``M/epsilon``
+  is half the smallest critical gain of ``g/(p - p3)`` over the box's corners held as the run holds the command
+  (:func:`~designkit.verification.chatter_prediction.layer_fix`), ``controller.epsilon``, re-simulated.
+
+The relay's fix, declared as changes of the spec (:class:`~designkit.synthesis.spec_change.SpecChange`): ``M`` at
 ``(1 + margin) sup|xi|`` (the largest over the joints on a robot, whose spec gives one ``M``), the value the design
 chooses without an ``M``; and, on a robot, ``M`` left out so that the design chooses it per joint.
 """
@@ -29,7 +34,7 @@ import numpy as np
 
 from designkit.display.numbers import fmt_number, quantity
 from designkit.families.pid_sliding_mode.data import LinkSlidingData, RobotSlidingData
-from designkit.families.pid_sliding_mode.spec import IN_BAND
+from designkit.families.pid_sliding_mode.spec import CHATTERING, IN_BAND
 from designkit.synthesis.spec_change import SpecChange
 
 __all__ = ["diagnose", "run_xi"]
@@ -160,12 +165,42 @@ def _robot(result: Any, check: Any, info: RobotSlidingData) -> tuple[str, str, t
     return (cause[0].upper() + cause[1:], *_robot_fix(info))
 
 
+def _chattering(result: Any, check: Any, info: LinkSlidingData) -> tuple[str, str, tuple[SpecChange, ...]] | None:
+    """The boundary layer that removes the chatter the requirement refuses."""
+    import itertools
+
+    from designkit.families.pid_sliding_mode.chatter import loop_of
+    from designkit.verification.chatter_prediction import layer_fix, layer_words, timing_of
+
+    sim, limit = result.simulation, check.certificate.get("limit")
+    if sim is None or limit is None or check.achieved is None or info.epsilon is not None:
+        return None
+    m, box = float(info.M), info.box
+    loops = [loop_of(float(info.p3), float(info.a2) * km / tau) for km, tau in itertools.product(box["Km"], box["tau"])]
+    timing = timing_of(result.loaded.spec, sim)
+    fix = layer_fix(loops, m, timing)
+    if fix is None:
+        return None
+    eps, k_c = fix
+    cause = (f"The relay M = {quantity(m, 'N*m')} switches the command by ±M whatever the equivalent control: "
+             f"measured ±{quantity(float(check.achieved), 'N*m')} against the limit {quantity(float(limit), 'N*m')}; "
+             "a sign(slm) relay cannot chatter less.")
+    fix_words = (f"A boundary layer ε = {eps:.4g} rad·s (controller.epsilon, sat(slm/ε)): "
+                 + layer_words(m, eps, k_c, timing, "rad·s", "N·m", "g/(p − p3) over the box's corners") + ".")
+    change = SpecChange(f"a boundary layer ε = {eps:.4g} rad·s",
+                        (("controller.epsilon", float(f"{eps:.4g}")), ("controller.layer", "saturation"),
+                         ("controller.switching_band", None)))
+    return cause, fix_words, (change,)
+
+
 def diagnose(result: Any, check: Any) -> tuple[str, str, tuple[SpecChange, ...]] | None:
     """``(cause, fix, changes)`` for a failed relay condition of a PID/sliding-mode design and the run checks that
     fail with it (module docstring), else None."""
     if check.passed is not False:
         return None
     data = result.design.data
+    if check.name == CHATTERING and isinstance(data, LinkSlidingData):
+        return _chattering(result, check, data)
     if check.name in LINK and isinstance(data, LinkSlidingData):
         return _link(result, check, data)
     if check.name in ROBOT and isinstance(data, RobotSlidingData):

@@ -369,7 +369,12 @@ def extend(family: Any) -> Any:
     base_synth, base_law, base_json = family.synthesize, family.law, family.json
 
     def synth(spec: Any, plant: Any) -> Design:
-        return synthesize(spec, plant) if plant.kind == "elastic_joint" else base_synth(spec, plant)
+        if plant.kind == "elastic_joint":
+            from designkit.families.pid_sliding_mode.spec import refuse_chatter_limit
+
+            refuse_chatter_limit(spec, plant.kind)
+            return synthesize(spec, plant)
+        return base_synth(spec, plant)
 
     def law_of(design: Design, anti_windup: Any = None) -> Law:
         if isinstance(design.data, ElasticSlidingData):

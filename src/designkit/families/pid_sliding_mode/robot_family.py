@@ -143,7 +143,12 @@ def extend(family: Any) -> Any:
     base_synth, base_law, base_json = family.synthesize, family.law, family.json
 
     def synth(spec: Any, plant: Any) -> Any:
-        return synthesize(spec, plant) if plant.kind == "robot" else base_synth(spec, plant)
+        if plant.kind == "robot":
+            from designkit.families.pid_sliding_mode.spec import refuse_chatter_limit
+
+            refuse_chatter_limit(spec, plant.kind)
+            return synthesize(spec, plant)
+        return base_synth(spec, plant)
 
     def law_of(design: Any, anti_windup: Any = None) -> Any:
         return law(design, anti_windup) if isinstance(design.data, RobotSlidingData) else base_law(design, anti_windup)

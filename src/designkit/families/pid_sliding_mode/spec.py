@@ -151,3 +151,15 @@ def validate(spec: Any) -> None:
     if key is not None:
         raise ValueError(f"{key}: the reference does not move (amplitude 0): there is no error to slide to 0 (the "
                          "switching band and the integration step are sized on the reference's displacement)")
+
+
+def refuse_chatter_limit(spec: Any, plant_kind: str) -> None:
+    """``requirements.max_chatter_amplitude`` is judged on the link only (its ``pid_sm_chattering`` check): refused,
+    naming the key, on the ``plant_kind`` (elastic joint, robot) whose checks do not measure it."""
+    req = getattr(spec, "requirements", None)
+    if req is not None and getattr(req, "max_chatter_amplitude", None) is not None:
+        from designkit.errors import SpecError
+
+        raise SpecError("requirements.max_chatter_amplitude", f"the pid_sliding_mode controller measures the chatter "
+                        f"amplitude on the link only, not on the {plant_kind} plant")
+

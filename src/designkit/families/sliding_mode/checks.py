@@ -182,10 +182,10 @@ def _chatter_check(design: Any, ctx: Context, run: Any, cert: dict[str, Any], sl
     (:mod:`~designkit.families.sliding_mode.chatter`) and, with ``requirements.max_chatter_amplitude``, the
     measured chatter amplitude against it (then required)."""
     from designkit.families.sliding_mode.chatter import chatter as chatter_of
+    from designkit.verification.chatter_prediction import limit_of, verdict
     from designkit.verification.switching import judge_run
 
-    req = getattr(ctx.spec, "requirements", None)
-    limit = getattr(req, "max_chatter_amplitude", None) if req is not None else None
+    limit = limit_of(ctx.spec)
     sim = ctx.simulation
     if run.switching_frequency is None:
         return Check("chattering", False if limit is not None else None, "reported" if limit is None else
@@ -208,11 +208,7 @@ def _chatter_check(design: Any, ctx: Context, run: Any, cert: dict[str, Any], sl
         return Check("chattering", calm if sliding else None, "switching part within the equivalent control, rate "
                      "not set by the step", run.switching_frequency, None, "1/s",
                      f"{prefix}{words}; {measured}; {cyc.sentence} [informational]", full, required=False)
-    achieved = cyc.measured.command if cyc.measured is not None else None
-    ok = achieved is not None and achieved <= float(limit)
-    said = ("no settled sliding window to measure the chatter amplitude on" if achieved is None else
-            f"chatter amplitude (half the peak-to-peak command over the settled window) {achieved:.4g} N·m "
-            f"{'within' if ok else 'over'} the limit {float(limit):.4g} N·m")
+    ok, achieved, said = verdict(cyc.measured, float(limit), "N·m")
     return Check("chattering", ok, f"chatter amplitude <= {float(limit):g} N*m", achieved,
                  None if achieved is None else float(limit) - achieved, "N*m",
                  f"{prefix}{said}; {cyc.sentence}; {words}; {measured}", {**full, "limit": float(limit)})

@@ -21,19 +21,49 @@ from designkit.verification.chatter_prediction import measure as measure_chatter
 from designkit.verification.chatter_prediction import predict, timing_of, words
 from designkit.verification.limit_cycle import Loop
 
-__all__ = ["chatter", "loop_of"]
+__all__ = ["box_loops", "chatter", "loop_of", "relay_amplitude"]
 
 TAIL = 10
 """The settled window is the last ``1/TAIL`` of the run after reaching (at least two samples)."""
 
 
-def loop_of(design: Any) -> Loop:
-    """The nominal plant along ``sigma`` with the structure's mean gains fed back (module docstring)."""
+def loop_of(design: Any, model: tuple[Any, Any] | None = None) -> Loop:
+    """The plant ``model = (A, B)`` (default: the nominal one) along ``sigma`` with the structure's mean gains fed
+    back (module docstring)."""
     info = design.data
-    a, b = (np.asarray(x, float) for x in info.nominal_model[:2])
+    a, b = (np.asarray(x, float) for x in (model or info.nominal_model[:2]))
     b = b.reshape(-1)
     m = (np.asarray(info.alpha, float) + np.asarray(info.beta, float)) / 2
     return Loop.of(a + np.outer(b, m), b, np.asarray(info.c, float))
+
+
+def box_loops(design: Any) -> list[Loop]:
+    """:func:`loop_of` at the nominal plant and at every corner of the design's parameter box (the plant linearised
+    at rest there)."""
+    import itertools
+
+    from designkit.synthesis.state_space import linear_model
+
+    box = design.data.box
+    model = linear_model(design.plant)
+    names = list(box)
+    corners = [dict(zip(names, v, strict=True)) for v in itertools.product(*(box[k] for k in names))]
+    return [loop_of(design)] + [loop_of(design, model.at(c)[:2]) for c in corners]
+
+
+def relay_amplitude(design: Any, run: Any) -> tuple[float, float, int]:
+    """``(delta + structure, structure, n)``: the relay's amplitude (the input's unit) with the structure's share
+    ``sum |h_i| mean|x~_i|`` over the settled window, the last ``n`` samples (module docstring); ``delta`` and 0
+    without a reaching."""
+    info = design.data
+    delta = float(info.delta)
+    if run.reach is None:
+        return delta, 0.0, 0
+    d = run.data
+    n = max(2, (len(d["time"]) - run.reach) // TAIL)
+    h = np.abs(np.asarray(info.alpha, float) - np.asarray(info.beta, float)) / 2
+    structure = float(np.mean(np.abs(d["xt"][-n:]) @ h))
+    return delta + structure, structure, n
 
 
 def chatter(design: Any, sim: Any, spec: Any, run: Any) -> tuple[str, dict[str, Any]]:
@@ -45,14 +75,11 @@ def chatter(design: Any, sim: Any, spec: Any, run: Any) -> tuple[str, dict[str, 
     unit = input_unit(design, 0).replace("N*m", "N·m") or "N·m"
     delta = float(info.delta)
     timing = timing_of(spec, sim)
-    meas, amplitude, structure = None, delta, 0.0
-    if run.reach is not None:
+    meas = None
+    amplitude, structure, n = relay_amplitude(design, run)
+    if n:
         d = run.data
-        n = max(2, (len(d["time"]) - run.reach) // TAIL)
         meas = measure_chatter(d["time"][-n:], d["sigma"][-n:], d["u"][-n:])
-        h = np.abs(np.asarray(info.alpha, float) - np.asarray(info.beta, float)) / 2
-        structure = float(np.mean(np.abs(d["xt"][-n:]) @ h))
-        amplitude = delta + structure
     pred = predict(loop_of(design), amplitude, timing, "rad/s", unit, "σ")
     compared = timing.bandwidth is None or timing.lag_in_run
     sentence = (f"the relay's amplitude on the window δ + Σ|h_i| mean|x̃_i| = {delta:.3g} + {structure:.3g} {unit}; "

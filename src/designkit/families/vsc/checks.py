@@ -14,7 +14,9 @@ what the run shows.
 ``vsc_run`` (order 127) measures the run (:mod:`~designkit.families.vsc.measure`): ``vsc_reaching_time``
 (informational), ``vsc_band`` (required: after reaching ``|sigma|`` stays within the hold band),
 ``vsc_sliding_poles``, ``vsc_chattering`` (the command's switching judged as physics by
-:func:`designkit.verification.switching.judge`), ``vsc_equivalent_control`` and ``vsc_offset`` (informational).
+:func:`designkit.verification.switching.judge`, the chatter predicted against measured; required with
+``requirements.max_chatter_amplitude``, the measured chatter amplitude against it),
+``vsc_equivalent_control`` and ``vsc_offset`` (informational).
 """
 
 from __future__ import annotations
@@ -160,7 +162,13 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                       "sigma never entered the hold band [informational]", cert, required=False)
         band = Check("vsc_band", False, "|sigma| <= hold band after reaching", None, None, "1",
                      "the run never reached the hold band: it does not slide", cert)
-        return reach, band
+        from designkit.verification.chatter_prediction import limit_of
+
+        limit = limit_of(ctx.spec)
+        if limit is None:
+            return reach, band
+        return reach, band, Check("vsc_chattering", False, f"chatter amplitude <= {limit:g}", None, None, "",
+                                  "no sliding phase to measure the chatter amplitude on", {**cert, "limit": limit})
     reach = Check("vsc_reaching_time", True, "reported: first |sigma| <= hold band", run.reaching_time, None, "s",
                   f"sigma entered the hold band after {run.reaching_time:.4g} s [informational]", cert, required=False)
     ok = run.worst_ratio <= 1 + 1e-9
@@ -189,17 +197,27 @@ def _run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                          {**cert, "poles": [[z.real, z.imag] for z in got],
                           "expected": [[z.real, z.imag] for z in want]}, required=False))
     from designkit.families.vsc.chatter import chatter
-    from designkit.verification.switching import judge_run
+    from designkit.verification.chatter_prediction import ChatterMeasured, limit_of, verdict
+    from designkit.verification.switching import input_unit, judge_run
 
     calm, words, physics = judge_run(design, ctx.simulation, ctx.spec)
     cycle_words, cycle = chatter(design, ctx.simulation, ctx.spec, run)
-    out.append(Check("vsc_chattering", calm, "switching part within the equivalent control, rate not set by the "
-                     "step", run.switching_frequency, None, "1/s",
-                     f"{words}; after reaching sigma changes sign {run.switches} times in {run.sliding_time:.4g} s "
-                     f"({run.switching_frequency or 0:.4g} per s); total variation of u {run.total_variation:.4g}; "
-                     f"{cycle_words} [informational]",
-                     {"switches": run.switches, "total_variation": run.total_variation,
-                      "switching": physics, "limit_cycle": cycle}, required=False))
+    seen = (f"after reaching sigma changes sign {run.switches} times in {run.sliding_time:.4g} s "
+            f"({run.switching_frequency or 0:.4g} per s); total variation of u {run.total_variation:.4g}")
+    cert_c = {"switches": run.switches, "total_variation": run.total_variation, "switching": physics,
+              "limit_cycle": cycle}
+    limit = limit_of(ctx.spec)
+    if limit is None:
+        out.append(Check("vsc_chattering", calm, "switching part within the equivalent control, rate not set by the "
+                         "step", run.switching_frequency, None, "1/s",
+                         f"{words}; {seen}; {cycle_words} [informational]", cert_c, required=False))
+    else:
+        unit = input_unit(design, 0) or "N*m"
+        ok, achieved, said = verdict(ChatterMeasured.from_dict(cycle["measured"]), limit,
+                                     unit.replace("N*m", "N·m"))
+        out.append(Check("vsc_chattering", ok, f"chatter amplitude <= {limit:g} {unit}", achieved,
+                         None if achieved is None else limit - achieved, unit,
+                         f"{said}; {cycle_words}; {words}; {seen}", {**cert_c, "limit": limit}))
     if run.ueq_fraction is not None:
         okf = run.ueq_fraction >= UEQ_FRACTION
         out.append(Check("vsc_equivalent_control", okf, f"u_eq in [min(u+, u-), max(u+, u-)] on at least "
@@ -228,5 +246,6 @@ RUN_RULE = CheckRule(
             "vsc_sliding_poles": "Sliding poles (measured)", "vsc_chattering": "Chattering (measured)",
             "vsc_equivalent_control": "Equivalent control between the switched controls (theorem 1)",
             "vsc_offset": "Offset left by the disturbance (theorem 4)"},
+    reads=("requirements.max_chatter_amplitude",),
     glossary=(("hold band", "h S(x̃): how far one held step can move σ"),),
 )
