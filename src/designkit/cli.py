@@ -304,10 +304,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_tune(args: argparse.Namespace) -> int:
     """Tune the controller's knobs for the spec's requirements over its uncertainty box (:mod:`designkit.tuning`)."""
+    import numpy as np
+
     from designkit.schema.loader import load_spec
     from designkit.tuning import tune
 
-    result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget)
+    result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget, sweep_samples=args.sweep_samples,
+                  scheduler=args.scheduler)
     if args.json:
         print(json.dumps(result.to_json(), indent=2, default=str))
         return EXIT_OK if result.verified else EXIT_CHECK_FAILED
@@ -322,6 +325,14 @@ def cmd_tune(args: argparse.Namespace) -> int:
         lines.append(f"  {knob}: {_number_or_poles(initial.values[knob])} -> {_number_or_poles(best.values[knob])}")
     if result.at_bounds:
         lines.append("at an end of its range (widen tune.ranges to go further): " + ", ".join(result.at_bounds))
+    if result.confirmation is not None:
+        lines.append("sweep: " + result.confirmation.sentence)
+    if result.trade is not None:
+        t = result.trade
+        lines.append("trade-off along the final direction (worst normalised margin at steps "
+                     + ", ".join(f"{s:g}" for s in t.steps) + "; 0 initial, 1 tuned):")
+        for k, m in t.margins.items():
+            lines.append(f"  {k}: " + ", ".join("-" if not np.isfinite(v) else f"{v:.3g}" for v in m))
     if result.conflict is not None:
         lines.append("conflict: " + result.conflict.sentence)
     if result.bound is not None:
@@ -366,6 +377,16 @@ def _samples(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
+def _sweep_samples(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer from 0 to 10000, got {text[:40]!r}") from None
+    if not 0 <= value <= 10_000:
+        raise argparse.ArgumentTypeError(f"must be an integer from 0 to 10000, got {text[:40]!r}")
+    return value
 
 
 def _jobs(text: str) -> int:
@@ -519,8 +540,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "and <name>-tuning.html")
     p.add_argument("--budget", type=_seconds, default=60.0, metavar="SECONDS",
                    help="wall time the search may take (default 60 s)")
+    p.add_argument("--sweep-samples", type=_sweep_samples, default=64, metavar="N",
+                   help="samples of the confirming sweep of the tuned spec over plant.uncertainty (default 64; 0: "
+                   "none)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run the confirming sweep on the Dask scheduler at this "
+                   "address (tcp://host:8786, or tls:// with the Dask TLS configuration); default: in this process")
     p.add_argument("--json", action="store_true", help="print one JSON object (method, margins before and after, "
-                   "tuned values, checks, conflict)")
+                   "tuned values, checks, conflict, sweep, trade_off)")
     p.set_defaults(func=cmd_tune)
 
     p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")
