@@ -35,7 +35,8 @@ class Confirmation:
         The worst sample: ``sample``, ``parameters`` (its plant values), ``margins`` (each requirement's margin in
         its unit, None undefined) and ``worst_normalized_margin`` (empty when refused or no sample).
     engine : str
-        Where it ran (``"process"``, or the scheduler's address).
+        Where it ran, as the sweep reports it (``"this process"``, or ``"dask.distributed at <address>, <k>
+        workers"``).
     seconds : float
         Wall time of the sweep (s).
     refused : str or None
@@ -48,7 +49,7 @@ class Confirmation:
     pass_fraction: float | None = None
     confidence: tuple[float, ...] = ()
     worst: dict[str, Any] = field(default_factory=dict)
-    engine: str = "process"
+    engine: str = "this process"
     seconds: float = 0.0
     refused: str | None = None
 
@@ -125,7 +126,7 @@ def confirm(tuned: Any, *, samples: int = DEFAULT_SAMPLES, seed: int = 0, schedu
                     report=False)
     except DesignkitError as exc:
         reason = (f"{exc.path}: {exc.message}" if exc.path else exc.message) or str(exc)
-        return Confirmation(samples=0, seed=seed, engine=scheduler or "process", refused=reason,
+        return Confirmation(samples=0, seed=seed, engine=scheduler or "this process", refused=reason,
                             seconds=time.monotonic() - start)
     worst: dict[str, Any] = {}
     if res.worst:
@@ -133,4 +134,11 @@ def confirm(tuned: Any, *, samples: int = DEFAULT_SAMPLES, seed: int = 0, schedu
         worst = {k: w[k] for k in ("sample", "parameters", "margins", "worst_normalized_margin")}
     return Confirmation(samples=res.samples, seed=seed, passed=res.n_passed, pass_fraction=res.pass_fraction,
                         confidence=tuple(float(c) for c in np.asarray(res.confidence, dtype=float)), worst=worst,
-                        engine=scheduler or "process", seconds=time.monotonic() - start, refused=None)
+                        engine=_where(res.engine), seconds=time.monotonic() - start, refused=None)
+
+
+def _where(engine: dict[str, Any]) -> str:
+    """The sweep's own statement of where it ran, in words."""
+    if "scheduler" not in engine:
+        return str(engine.get("engine", "this process"))
+    return f"{engine['engine']} at {engine['scheduler']}, {engine.get('workers', 0)} workers"
