@@ -99,7 +99,7 @@ def test_the_confirming_sweep_runs_on_the_scheduler_given(tmp_path, capsys):
         code = main(["tune", str(spec), "--out", str(tmp_path / "out"), "--budget", "1", "--sweep-samples", "12",
                      "--scheduler", lc.scheduler_address, "--json"])
     data = json.loads(capsys.readouterr().out)
-    assert code in (0, 1) and data["sweep"]["engine"] == f"dask.distributed at {lc.scheduler_address}, 1 workers"
+    assert code in (0, 1) and data["sweep"]["engine"] == f"dask.distributed at {lc.scheduler_address}, 1 worker"
     tuned = load_spec(tmp_path / "out" / "link-tune-tuned.yaml")
     sw = dk.sweep(tuned, 12, seed=0, engine="process", falsification=False, report=False)
     assert data["sweep"]["samples"] == 12 and data["sweep"]["passed"] == _own_count(sw)

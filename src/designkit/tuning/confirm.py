@@ -141,4 +141,5 @@ def _where(engine: dict[str, Any]) -> str:
     """The sweep's own statement of where it ran, in words."""
     if "scheduler" not in engine:
         return str(engine.get("engine", "this process"))
-    return f"{engine['engine']} at {engine['scheduler']}, {engine.get('workers', 0)} workers"
+    k = int(engine.get("workers", 0))
+    return f"{engine['engine']} at {engine['scheduler']}, {k} worker{'' if k == 1 else 's'}"
