@@ -304,10 +304,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_tune(args: argparse.Namespace) -> int:
     """Tune the controller's knobs for the spec's requirements over its uncertainty box (:mod:`designkit.tuning`)."""
-    import numpy as np
-
     from designkit.schema.loader import load_spec
     from designkit.tuning import tune
+    from designkit.tuning.report import summary_lines
 
     result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget, sweep_samples=args.sweep_samples,
                   scheduler=args.scheduler)
@@ -325,14 +324,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
         lines.append(f"  {knob}: {_number_or_poles(initial.values[knob])} -> {_number_or_poles(best.values[knob])}")
     if result.at_bounds:
         lines.append("at an end of its range (widen tune.ranges to go further): " + ", ".join(result.at_bounds))
-    if result.confirmation is not None:
-        lines.append("sweep: " + result.confirmation.sentence)
-    if result.trade is not None:
-        t = result.trade
-        lines.append("trade-off along the final direction (worst normalised margin at steps "
-                     + ", ".join(f"{s:g}" for s in t.steps) + "; 0 initial, 1 tuned):")
-        for k, m in t.margins.items():
-            lines.append(f"  {k}: " + ", ".join("-" if not np.isfinite(v) else f"{v:.3g}" for v in m))
+    lines.extend(summary_lines(result))
     if result.conflict is not None:
         lines.append("conflict: " + result.conflict.sentence)
     if result.bound is not None:
@@ -380,13 +372,9 @@ def _samples(text: str) -> int:
 
 
 def _sweep_samples(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer from 0 to 10000, got {text[:40]!r}") from None
-    if not 0 <= value <= 10_000:
+    if not re.fullmatch(r"\d{1,5}", text) or int(text) > 10_000:
         raise argparse.ArgumentTypeError(f"must be an integer from 0 to 10000, got {text[:40]!r}")
-    return value
+    return int(text)
 
 
 def _jobs(text: str) -> int:

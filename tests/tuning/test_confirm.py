@@ -103,3 +103,16 @@ def test_the_confirming_sweep_runs_on_the_scheduler_given(tmp_path, capsys):
     tuned = load_spec(tmp_path / "out" / "link-tune-tuned.yaml")
     sw = dk.sweep(tuned, 12, seed=0, engine="process", falsification=False, report=False)
     assert data["sweep"]["samples"] == 12 and data["sweep"]["passed"] == _own_count(sw)
+
+
+@pytest.mark.parametrize("value", ["-1", "10001", "many"])
+def test_a_bad_sample_count_exits_2_in_one_line_and_writes_nothing(tmp_path, capsys, value):
+    spec = write(tmp_path, BOX)
+    out = tmp_path / "out"
+    try:
+        code = main(["tune", str(spec), "--out", str(out), "--sweep-samples", value])
+    except SystemExit as exc:
+        code = int(exc.code)
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("designkit: error: --sweep-samples: must be an integer from 0 to 10000")
+    assert err.count("\n") == 1 and not out.exists()

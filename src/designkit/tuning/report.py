@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["convergence_svg", "html_text", "write_files"]
+__all__ = ["convergence_svg", "html_text", "summary_lines", "write_files"]
 
 
 def _value(v: Any) -> str:
@@ -123,6 +123,20 @@ def html_text(result: Any) -> str:
              "" if c.margin is None else f"{c.margin:.4g}") for c in result.verify.checks], status_column=1))
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def summary_lines(result: Any) -> list[str]:
+    """The confirming sweep and the trade-off as the command line prints them."""
+    lines = []
+    if result.confirmation is not None:
+        lines.append("sweep: " + result.confirmation.sentence)
+    t = result.trade
+    if t is not None:
+        lines.append("trade-off along the final direction (worst normalised margin at steps "
+                     + ", ".join(f"{s:g}" for s in t.steps) + "; 0 initial, 1 tuned):")
+        for k, m in t.margins.items():
+            lines.append(f"  {k}: " + ", ".join("-" if not np.isfinite(v) else f"{v:.3g}" for v in m))
+    return lines
 
 
 def _sweep_part(result: Any) -> list[str]:
