@@ -116,3 +116,16 @@ def test_a_bad_sample_count_exits_2_in_one_line_and_writes_nothing(tmp_path, cap
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("designkit: error: --sweep-samples: must be an integer from 0 to 10000")
     assert err.count("\n") == 1 and not out.exists()
+
+
+def test_a_sweep_that_cannot_be_run_is_stated_not_raised(tmp_path, monkeypatch):
+    import designkit.sweep.api as api
+
+    def lost(*args, **kwargs):
+        raise OSError("Timed out during handshake while connecting to tcp://127.0.0.1:1")
+
+    monkeypatch.setattr(api, "sweep", lost)
+    found = confirm(load_spec(write(tmp_path, BOX)), samples=8)
+    assert found.refused == "not run: OSError: Timed out during handshake while connecting to tcp://127.0.0.1:1"
+    assert found.sentence.startswith("no confirming sweep: it could not be run (OSError: Timed out")
+    assert found.pass_fraction is None and found.samples == 0

@@ -13,6 +13,7 @@ __all__ = ["DEFAULT_SAMPLES", "Confirmation", "check_scheduler", "confirm"]
 
 DEFAULT_SAMPLES = 64
 """Samples of the confirming sweep by default."""
+_NOT_RUN = "not run: "
 
 
 @dataclass(frozen=True)
@@ -40,7 +41,8 @@ class Confirmation:
     seconds : float
         Wall time of the sweep (s).
     refused : str or None
-        Why the sweep kernel refused the tuned spec (its one-line error), None when it ran.
+        Why the sweep kernel refused the tuned spec (its one-line error), or, starting ``"not run: "``, why the sweep
+        could not be run (a scheduler lost after the check); None when it ran.
     """
 
     samples: int
@@ -56,6 +58,8 @@ class Confirmation:
     @property
     def sentence(self) -> str:
         """One line for the report and the command line."""
+        if self.refused is not None and self.refused.startswith(_NOT_RUN):
+            return f"no confirming sweep: it could not be run ({self.refused[len(_NOT_RUN):]})"
         if self.refused is not None:
             return f"no confirming sweep: the sweep refuses the tuned spec ({self.refused})"
         lo, hi = self.confidence
@@ -126,6 +130,10 @@ def confirm(tuned: Any, *, samples: int = DEFAULT_SAMPLES, seed: int = 0, schedu
                     report=False)
     except DesignkitError as exc:
         reason = (f"{exc.path}: {exc.message}" if exc.path else exc.message) or str(exc)
+        return Confirmation(samples=0, seed=seed, engine=scheduler or "this process", refused=reason,
+                            seconds=time.monotonic() - start)
+    except Exception as exc:  # noqa: BLE001 -- a sweep that cannot be run (a scheduler lost mid-way) is stated
+        reason = f"{_NOT_RUN}{type(exc).__name__}: {str(exc)[:300]}"
         return Confirmation(samples=0, seed=seed, engine=scheduler or "this process", refused=reason,
                             seconds=time.monotonic() - start)
     worst: dict[str, Any] = {}
