@@ -174,8 +174,8 @@ def _trade_part(result: Any) -> list[str]:
                  f"{len(result.points)} points the search ran), measured by the family's own runs at "
                  f"{len(t.steps)} points on the straight line, in the tuner's log coordinates, from the spec's own "
                  "values (step 0) to the tuned values (step 1), extended a quarter beyond each end; a point "
-                 "outside the coordinates' ranges is clipped to them. Margins below −1.5 are drawn at −1.5. "
-                 "Certificates are not run here."),
+                 "outside the coordinates' ranges is clipped to them. Margins below −3 are drawn at −3; a point "
+                 "the family refuses or whose loop diverges is marked ×. Certificates are not run here."),
             table(("step", *names, "not measured"), rows)]
 
 

@@ -10,10 +10,12 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["STEPS", "Trade", "trade_off", "trade_svg"]
+__all__ = ["FLOOR", "STEPS", "Trade", "trade_off", "trade_svg"]
 
 STEPS = (-0.25, 0.0, 0.25, 0.5, 0.75, 1.0, 1.25)
 """Steps along the direction (0: the spec's values, 1: the tuned values)."""
+FLOOR = -3.0
+"""Margins below it are drawn at it (already compressed below -1 by the cost, ``-1 - ln(-m)``)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,8 +89,15 @@ def trade_svg(trade: Any) -> str:
 
     fig, (ax,) = new_figure(6.4, 3.0)
     for k, m in trade.margins.items():
-        (line,) = ax.plot(trade.steps, np.maximum(m, -1.5), "o-", markersize=3, linewidth=1.2, label=k)
+        (line,) = ax.plot(trade.steps, np.maximum(m, FLOOR), "o-", markersize=3, linewidth=1.2, label=k)
         tag(fig, f"margin-{k}", line)
+    lost = np.array([bool(f) for f in trade.failed])
+    if lost.any():
+        (gone,) = ax.plot(trade.steps[lost], np.full(int(lost.sum()), FLOOR), "x", color="#b3261e", markersize=7,
+                          label="not measured (refused or diverged)")
+        tag(fig, "not-measured", gone)
+    pad = 0.05 * float(trade.steps[-1] - trade.steps[0])
+    ax.set_xlim(float(trade.steps[0]) - pad, float(trade.steps[-1]) + pad)
     zero = ax.axhline(0.0, color="#b3261e", linewidth=0.8, linestyle="--", label="requirement's limit")
     tag(fig, "limit", zero)
     for s, text in ((0.0, "initial"), (1.0, "tuned")):
@@ -96,5 +105,5 @@ def trade_svg(trade: Any) -> str:
         ax.annotate(text, (s, 1.0), fontsize=7, ha="center", va="bottom", xycoords=("data", "axes fraction"))
     ax.set_xlabel("step along the line from the initial to the tuned values (log coordinates)")
     ax.set_ylabel("worst normalised margin")
-    ax.legend(loc="lower right", fontsize=7)
+    ax.legend(loc="best", fontsize=7)
     return to_svg(fig)
