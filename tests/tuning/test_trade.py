@@ -59,3 +59,17 @@ def test_the_report_draws_it_and_the_json_carries_it(tuned):
     data = tuned.to_json()["trade_off"]
     assert len(data["steps"]) == 7 and set(data["margins"]) == set(tuned.best.margins)
     assert data["scores"][5] == pytest.approx(min(tuned.best.margins.values()), abs=1e-9)
+
+
+def test_no_direction_no_curve_and_a_refused_point_is_not_measured(tmp_path):
+    from designkit.schema.loader import load_spec
+    from designkit.tuning.api import prepare
+    from designkit.tuning.trade import trade_off
+
+    problem, space = prepare(load_spec(write(tmp_path, LINK)))
+    assert trade_off(problem, space, space.x0, space.x0.copy()) is None
+    # poles [-4, -5, -20] towards [-3, -3, -3] (the zero's modulus, fixed at -3): step 1 puts the poles on the zero
+    target = np.log(np.full_like(space.x0, 3.0))
+    t = trade_off(problem, space, space.x0, target, steps=(0.0, 1.0))
+    assert not t.failed[0] and np.isfinite(t.scores[0])
+    assert t.failed[1] and np.isnan(t.scores[1]) and all(np.isnan(m[1]) for m in t.margins.values())
