@@ -306,8 +306,10 @@ def cmd_tune(args: argparse.Namespace) -> int:
     """Tune the controller's knobs for the spec's requirements over its uncertainty box (:mod:`designkit.tuning`)."""
     from designkit.schema.loader import load_spec
     from designkit.tuning import tune
+    from designkit.tuning.report import summary_lines
 
-    result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget)
+    result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget, sweep_samples=args.sweep_samples,
+                  scheduler=args.scheduler)
     if args.json:
         print(json.dumps(result.to_json(), indent=2, default=str))
         return EXIT_OK if result.verified else EXIT_CHECK_FAILED
@@ -322,6 +324,7 @@ def cmd_tune(args: argparse.Namespace) -> int:
         lines.append(f"  {knob}: {_number_or_poles(initial.values[knob])} -> {_number_or_poles(best.values[knob])}")
     if result.at_bounds:
         lines.append("at an end of its range (widen tune.ranges to go further): " + ", ".join(result.at_bounds))
+    lines.extend(summary_lines(result))
     if result.conflict is not None:
         lines.append("conflict: " + result.conflict.sentence)
     if result.bound is not None:
@@ -366,6 +369,12 @@ def _samples(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
+def _sweep_samples(text: str) -> int:
+    if not re.fullmatch(r"\d{1,5}", text) or int(text) > 10_000:
+        raise argparse.ArgumentTypeError(f"must be an integer from 0 to 10000, got {text[:40]!r}")
+    return int(text)
 
 
 def _jobs(text: str) -> int:
@@ -519,8 +528,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "and <name>-tuning.html")
     p.add_argument("--budget", type=_seconds, default=60.0, metavar="SECONDS",
                    help="wall time the search may take (default 60 s)")
+    p.add_argument("--sweep-samples", type=_sweep_samples, default=64, metavar="N",
+                   help="samples of the confirming sweep of the tuned spec over plant.uncertainty (default 64; 0: "
+                   "none)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="run the confirming sweep on the Dask scheduler at this "
+                   "address (tcp://host:8786, or tls:// with the Dask TLS configuration); default: in this process")
     p.add_argument("--json", action="store_true", help="print one JSON object (method, margins before and after, "
-                   "tuned values, checks, conflict)")
+                   "tuned values, checks, conflict, sweep, trade_off)")
     p.set_defaults(func=cmd_tune)
 
     p = sub.add_parser("model", help="summarise a zoo robot's model (joints, parameters, cost)")

@@ -41,6 +41,11 @@ class TuneResult:
         The actuator's minimum-time bound, where it applies.
     files : dict
         ``"spec"``, ``"html"`` -> the files written.
+    confirmation : Confirmation or None
+        The confirming sweep of the tuned spec over ``plant.uncertainty`` (None without uncertainty or when not
+        asked for).
+    trade : Trade or None
+        The requirements' margins along the final direction (None when the tuned point is the initial one).
     """
 
     loaded: Any
@@ -53,6 +58,8 @@ class TuneResult:
     conflict: Any
     bound: Any
     files: dict[str, Path] = field(default_factory=dict)
+    confirmation: Any = None
+    trade: Any = None
 
     @property
     def best(self) -> Any:
@@ -122,6 +129,8 @@ class TuneResult:
                 "reach": self.bound.reach, "rest_to_rest": self.bound.rest_to_rest, "proves": self.bound.proves,
                 "sentence": self.bound.sentence},
             "history": self.search.history[:, 1].tolist(),
+            "sweep": None if self.confirmation is None else self.confirmation.to_json(),
+            "trade_off": None if self.trade is None else self.trade.to_json(),
             "files": {k: str(v) for k, v in self.files.items()},
         }
 
@@ -208,7 +217,7 @@ def prepare(loaded: Any) -> tuple[Any, Any]:
 
 
 def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BUDGET, seed: int = 0,
-         write: bool = True) -> TuneResult:
+         write: bool = True, sweep_samples: int = 64, scheduler: str | None = None) -> TuneResult:
     """Tune the knobs of a spec's controller for its requirements over its uncertainty box (docs/tuning.md).
 
     Parameters
@@ -223,6 +232,11 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         Seed of the random restarts.
     write : bool
         Write the tuned spec and the report.
+    sweep_samples : int
+        Samples of the confirming sweep of the tuned spec over ``plant.uncertainty`` (0: none; at most 10 000).
+    scheduler : str, optional
+        Address of a Dask scheduler the confirming sweep runs on (``tcp://host:8786``), checked before the search
+        as ``designkit sweep --scheduler`` checks it; without it the sweep runs in this process.
 
     Returns
     -------
@@ -231,23 +245,28 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     Raises
     ------
     SpecError
-        A bad argument, a spec without requirements, a comparison spec, or a ``tune`` section naming no knob of the
-        family (each with its key path).
+        A bad argument, a spec without requirements, a comparison spec, a ``tune`` section naming no knob of the
+        family (each with its key path), or a ``scheduler`` that is no address or answers no Dask handshake
+        (``--scheduler``).
     OutputError
         ``out`` cannot be a folder (a file in the way, no permission); checked before anything runs.
     """
     from designkit import arguments
     from designkit.runner.variants import changed_spec
+    from designkit.tuning.confirm import check_scheduler, confirm
     from designkit.tuning.evaluate import evaluate
     from designkit.tuning.infeasible import conflict, minimum_time
     from designkit.tuning.search import nelder_mead
+    from designkit.tuning.trade import trade_off
 
     budget = arguments.number(budget, "budget", positive=True)
     seed = arguments.integer(seed, "seed", low=0, high=2**32 - 1)
     write = arguments.flag(write, "write")
+    sweep_samples = arguments.integer(sweep_samples, "sweep_samples", low=0, high=10_000)
     folder = _destination(out)
     loaded = _loaded(spec)
     problem, space = prepare(loaded)
+    check_scheduler(scheduler)
     search = nelder_mead(lambda x, above: evaluate(problem, space, x, above=above), space.x0, space.bounds,
                          budget=budget, seed=seed)
     initial = search.evaluations[0]
@@ -260,7 +279,12 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         verify = run(tuned)
     found = None if best.feasible else conflict(search.evaluations, best)
     bound = minimum_time(loaded.spec)
-    result = TuneResult(loaded, space, problem.points, search, initial, tuned, verify, found, bound)
+    confirmation = None
+    if sweep_samples and getattr(loaded.spec.plant, "uncertainty", None) is not None:
+        confirmation = confirm(tuned, samples=sweep_samples, seed=seed, scheduler=scheduler)
+    trade = trade_off(problem, space, space.x0, best.x)
+    result = TuneResult(loaded, space, problem.points, search, initial, tuned, verify, found, bound,
+                        confirmation=confirmation, trade=trade)
     if write:
         from designkit.tuning.report import write_files
 

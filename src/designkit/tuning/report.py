@@ -2,8 +2,10 @@
 
 The report says, in this order: the verdict; the requirements' worst normalised margins over the box before and
 after, and which one is active (limits the design); the tuned values beside the initial ones, with their ranges;
-the method, iterations, candidates, simulations and time; the convergence history as a figure; the conflict and
-the minimum-time bound when no tuning met every requirement; and the tuned spec's checks (its full verify).
+the method, iterations, candidates, simulations and time; the convergence history as a figure; the confirming sweep
+of the box (pass fraction, samples, worst sample); the trade-off along the final direction as a figure with its
+table; the conflict and the minimum-time bound when no tuning met every requirement; and the tuned spec's checks (its
+full verify).
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["convergence_svg", "html_text", "write_files"]
+__all__ = ["convergence_svg", "html_text", "summary_lines", "write_files"]
 
 
 def _value(v: Any) -> str:
@@ -101,6 +103,8 @@ def html_text(result: Any) -> str:
                       "of the box; every candidate that could become the best also ran through the family's own run "
                       "with every check (its certificates)."))
     parts.append(convergence_svg(result))
+    parts.extend(_sweep_part(result))
+    parts.extend(_trade_part(result))
     if result.conflict is not None:
         parts.append(heading("Why no tuning meets every requirement"))
         parts.append(para(result.conflict.sentence))
@@ -119,6 +123,60 @@ def html_text(result: Any) -> str:
              "" if c.margin is None else f"{c.margin:.4g}") for c in result.verify.checks], status_column=1))
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def summary_lines(result: Any) -> list[str]:
+    """The confirming sweep and the trade-off as the command line prints them."""
+    lines = []
+    if result.confirmation is not None:
+        lines.append("sweep: " + result.confirmation.sentence)
+    t = result.trade
+    if t is not None:
+        lines.append("trade-off along the final direction (worst normalised margin at steps "
+                     + ", ".join(f"{s:g}" for s in t.steps) + "; 0 initial, 1 tuned):")
+        for k, m in t.margins.items():
+            lines.append(f"  {k}: " + ", ".join("-" if not np.isfinite(v) else f"{v:.3g}" for v in m))
+    return lines
+
+
+def _sweep_part(result: Any) -> list[str]:
+    """The confirming sweep: its sentence and, when it ran, the worst sample's margins."""
+    from designkit.display.html import heading, para, table
+
+    c = result.confirmation
+    if c is None:
+        return []
+    parts = [heading("Confirming sweep of the box (designkit sweep)"), para(c.sentence + ".")]
+    if c.refused is None:
+        parts.append(para("Samples drawn uniformly over plant.uncertainty by the sweep's own seeded sampling, each "
+                          "run through the sweep's batched kernel and scored on every time-domain requirement; "
+                          "the box points the search ran are not among them."))
+        if c.worst:
+            parts.append(table(("requirement", "margin at the worst sample"), [
+                (k, "undefined" if v is None else f"{v:.4g}") for k, v in c.worst["margins"].items()]))
+    return parts
+
+
+def _trade_part(result: Any) -> list[str]:
+    """The trade-off along the final direction: figure, caption and table."""
+    from designkit.display.html import heading, para, table
+    from designkit.tuning.trade import trade_svg
+
+    t = result.trade
+    if t is None:
+        return []
+    names = list(t.margins)
+    rows = [(f"{s:+.2f}" + (" (clipped)" if c else ""),
+             *("" if not np.isfinite(t.margins[k][i]) else f"{t.margins[k][i]:.3g}" for k in names),
+             t.failed[i]) for i, (s, c) in enumerate(zip(t.steps, t.clipped, strict=True))]
+    return [heading("Trade-off along the final direction"), trade_svg(t),
+            para("Each requirement's worst normalised margin over the box's points (the nominal plant and the "
+                 f"{len(result.points)} points the search ran), measured by the family's own runs at "
+                 f"{len(t.steps)} points on the straight line, in the tuner's log coordinates, from the spec's own "
+                 "values (step 0) to the tuned values (step 1), extended a quarter beyond each end; a point "
+                 "outside the coordinates' ranges is clipped to them. Margins below −3 are drawn at −3; a point "
+                 "the family refuses or whose loop diverges is marked ×. Certificates are not run here."),
+            table(("step", *names, "not measured"), rows)]
 
 
 def write_files(result: Any, out: Path) -> Any:
