@@ -63,7 +63,7 @@ def test_every_subcommand_parser_answers_in_one_line():
     """Each subcommand's own parser has the one-line error (argparse builds them with the top parser's class)."""
     parser = build_parser()
     subs = next(a for a in parser._actions if a.dest == "command").choices
-    assert set(subs) == {"synth", "verify", "simulate", "schema", "codegen", "sweep", "model"}
+    assert set(subs) == {"synth", "verify", "simulate", "schema", "codegen", "sweep", "model", "tune"}
     for name, sub in subs.items():
         with pytest.raises(SystemExit) as exc:
             sub.parse_args(["--no-such-option"])
