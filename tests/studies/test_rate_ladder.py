@@ -97,3 +97,15 @@ def test_a_members_rate_study_runs_once_and_is_kept_for_its_own_studies():
     assert study_of(result, "rate") is first
     assert next(st for st in run_studies(result) if st.name == "rate") is first
     assert study_of(result, "lab3") is None  # a comparison study is no run's own
+
+
+def test_a_law_that_declares_its_period_is_studied_about_its_own_rate():
+    from designkit.studies.rate.ladder import DEFAULT_RATES, OWN_FACTORS, default_rates
+
+    smid = _fake((SPECS / "smid-link.yaml").read_text(),
+                 {"sampling_period": 0.002, "sampling_period_source": "controller.sampling_period"})
+    rates, words = default_rates(smid, sampling_key(smid))
+    assert rates == pytest.approx([2000.0, 1000.0, 500.0, 250.0, 125.0], rel=1e-12)  # 500 Hz times 4 .. 1/4
+    assert len(OWN_FACTORS) == 5 and "controller.sampling_period" in words
+    link = _fake(_link())
+    assert default_rates(link, sampling_key(link)) == (DEFAULT_RATES, "")

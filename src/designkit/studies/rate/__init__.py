@@ -5,7 +5,7 @@ A switching law designed in continuous time switches as fast as its simulation l
 a controller computes it once a sampling period and holds it.  For a family declaring the trait ``switching``
 (:attr:`designkit.synthesis.family.Family.traits`), the study runs the spec through the family's own run
 (:func:`designkit.runner.variants.vary_spec`: its design, its simulation, every check it offers) with the command
-sampled at each rate of a ladder (:data:`~designkit.studies.rate.ladder.DEFAULT_RATES`, or the spec's
+sampled at each rate of a ladder (:func:`~designkit.studies.rate.ladder.default_rates`, or the spec's
 ``studies.rate.rates``), the key and the integration step chosen by :mod:`~designkit.studies.rate.ladder`.  Each
 run is a row: its verdict (the outcome of its required checks), its steady error, the switching component of its
 command, its reversal rate, its control effort and whether it diverged (:mod:`~designkit.studies.rate.measure`).
@@ -30,7 +30,7 @@ from designkit.spec.fields import PositiveFinite, Section
 from designkit.spec.ranges import Ranged
 from designkit.studies.core.members import amount
 from designkit.studies.core.study import Entry, Row, Study, StudyContext, StudyResult
-from designkit.studies.rate.ladder import DEFAULT_RATES, divides, own_rate, rung_changes, sampling_key
+from designkit.studies.rate.ladder import default_rates, divides, own_rate, rung_changes, sampling_key
 from designkit.studies.rate.words import holding, rate_text, row_sentences, summary, table
 
 __all__ = ["MAX_RATES", "STUDY", "TITLE", "RateSettings", "rung_cost"]
@@ -42,7 +42,7 @@ MAX_RATES = 12
 
 class RateSettings(Section):
     """``studies.rate``: the sampling rates to run (``rates``, Hz, 1e-3 to 1e6, distinct; default
-    :data:`~designkit.studies.rate.ladder.DEFAULT_RATES`)."""
+    :func:`~designkit.studies.rate.ladder.default_rates`)."""
 
     rates: list[Ranged(1e-3, 1e6, "Hz", base=PositiveFinite)] | None = Field(default=None, min_length=1,
                                                                              max_length=MAX_RATES)
@@ -165,9 +165,13 @@ def _run(ctx: StudyContext) -> StudyResult:
     from designkit.studies.rate.measure import units_of
 
     result = ctx.result
-    rates = sorted(ctx.settings.rates if ctx.settings is not None and ctx.settings.rates else DEFAULT_RATES,
-                   reverse=True)
     key = sampling_key(result)
+    given = ctx.settings is not None and bool(ctx.settings.rates)
+    ladder, ladder_words = (ctx.settings.rates, "") if given else default_rates(result, key)
+    if not given:  # a default rate whose period is not shorter than the run is no rate of the run
+        duration = _duration(result.loaded.spec)[0]
+        ladder = tuple(r for r in ladder if 1.0 / r < duration) or ladder
+    rates = sorted(ladder, reverse=True)
     own, own_words = own_rate(result)
     rungs = [rung_changes(result, key, r) for r in rates]
     kept, left, budget = _plan(ctx, rungs)
@@ -202,7 +206,8 @@ def _run(ctx: StudyContext) -> StudyResult:
            f"period and held in between ({key} set to 1/rate), each through the family's own run and judged by "
            f"every check it offers. The integration step simulation.dt: {step} (measured: "
            f"{', '.join(dts) or '—'}). The spec's own run is {own_words} ({rate_text(own)}; the row's factor is the "
-           f"rate over that): {outcome_words(*outcome_of(result))}.")
+           f"rate over that): {outcome_words(*outcome_of(result))}."
+           + (f" The rates: {ladder_words}." if ladder_words else ""))
     clocks = []
     for r in rows:
         period, dt = r.metrics.get("sampling_period"), r.metrics.get("dt")

@@ -3,7 +3,10 @@ and which integration step goes with it.
 
 The command of a switching law is computed once per sampling period and held in between; the spec key that says so
 is :data:`SAMPLING_KEYS`'s first unless the spec already samples its command through another (the key its run was
-sampled by, :func:`sampling_key`).  The integration step ``simulation.dt`` must divide the period into whole steps:
+sampled by, :func:`sampling_key`).  The default ladder (:func:`default_rates`) is :data:`DEFAULT_RATES` for a law
+designed in continuous time; a law that declares its own sampling period (a key of its controller section, such as
+the sliding-mode identification's ``controller.sampling_period``) was designed for that rate, and its default
+ladder is :data:`OWN_FACTORS` times it.  The integration step ``simulation.dt`` must divide the period into whole steps:
 left out, the simulator's default does (it takes the largest step not above its rule that divides the sampling
 period); given, it is kept where it divides the period and otherwise replaced, for that rung, by the largest step
 not above it that does (:func:`rung_changes`).
@@ -17,10 +20,14 @@ from typing import Any
 
 from designkit.studies.core.members import amount
 
-__all__ = ["DEFAULT_RATES", "SAMPLING_KEYS", "Rung", "divides", "own_rate", "rung_changes", "sampling_key"]
+__all__ = ["DEFAULT_RATES", "OWN_FACTORS", "SAMPLING_KEYS", "Rung", "default_rates", "divides", "own_rate",
+           "rung_changes", "sampling_key"]
 
 DEFAULT_RATES = (20_000.0, 10_000.0, 5_000.0, 2_000.0, 1_000.0, 500.0)
-"""The rates run when the spec's ``studies.rate.rates`` is not given (Hz)."""
+"""The rates run when the spec's ``studies.rate.rates`` is not given (Hz), for a law designed in continuous time."""
+OWN_FACTORS = (4.0, 2.0, 1.0, 0.5, 0.25)
+"""The default ladder of a law that declares its own sampling period: these multiples of its own rate (a law designed
+for 500 Hz is run at 2 kHz, 1 kHz, 500 Hz, 250 Hz and 125 Hz)."""
 
 SAMPLING_KEYS = ("implementation.sampling_period", "simulation.sampling_period")
 """Where a spec gives the period its command is computed at and held over (s); the study sets the first when the
@@ -87,3 +94,15 @@ def rung_changes(result: Any, key: str, rate: float) -> Rung:
         note = (f"the spec's simulation.dt = {amount(float(dt), 's', 4)} does not divide the period "
                 f"{amount(period, 's', 4)}: replaced by {amount(new, 's', 4)} ({steps} steps a period)")
     return Rung(float(rate), period, tuple(changes), note)
+
+
+def default_rates(result: Any, key: str) -> tuple[tuple[float, ...], str]:
+    """The ladder run when the spec gives no ``studies.rate.rates`` (Hz, highest first) and where it comes from, in
+    words: :data:`OWN_FACTORS` times the own rate when ``key`` (:func:`sampling_key`) is a key of the controller
+    section (the law declares its period), else :data:`DEFAULT_RATES`."""
+    if key.startswith("controller."):
+        own, _ = own_rate(result)
+        factors = ", ".join(f"{f:g}" for f in OWN_FACTORS)
+        return (tuple(own * f for f in OWN_FACTORS),
+                f"the law declares its own sampling period ({key}): the default ladder is {factors} times its rate")
+    return DEFAULT_RATES, ""
