@@ -35,5 +35,6 @@ EXAMPLES = {
     "selftune-speed": 0,
     "selftune-position": 0,
     "selftune-no-forgetting": 1,  # lambda = 1: the estimates stay between the links before and after the change
+    "selftune-aw-indirect": 0,
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
