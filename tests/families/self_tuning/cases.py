@@ -19,6 +19,16 @@ RANGES = {
     for key in ("sampling_period", "forgetting", "initial_covariance", "max_trace", "observer", "excitation_window",
                 "nominal.Km", "nominal.tau")
 }
+ARX = """\
+name: ranges-self-tuning-arx
+plant: {kind: transfer_function, num: [1], den: [1, 1, 0]}
+controller: {kind: self_tuning, sampling_period: 0.5, poles: [-1, -1.2], observer: {polynomial: [1, 0]},
+             initial_estimates: [0, 0, 0.01, 0.2]}
+simulation: {duration: 100, trajectory: {kind: square, amplitude: 1, period: 50}}
+"""
+RANGES["controller.initial_estimates[]"] = [(ARX, "controller.initial_estimates.1", "controller.initial_estimates[1]")]
+RANGES["controller.observer.polynomial[]"] = [(ARX, "controller.observer.polynomial.1",
+                                               "controller.observer.polynomial[1]")]
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
 CONFORMANCE = {

@@ -81,7 +81,7 @@ class ArxOrders(Section):
 class Observer(Section):
     """The observer polynomial ``Ao(z)`` of the ARX form: ``poles`` (continuous, 1/s, mapped by ``z = exp(p h)``) or
     ``polynomial`` (coefficients in ``z``, highest power first, monic: ``[1, 0]`` is the deadbeat ``Ao = z``,
-    ``[1]`` no observer)."""
+    ``[1]`` no observer; its roots inside the unit circle, checked at the design)."""
 
     poles: list[Pole] | None = None
     polynomial: list[Ranged(-1e6, 1e6, "", base=float)] | None = Field(default=None, min_length=1, max_length=16)
@@ -92,16 +92,6 @@ class Observer(Section):
             raise ValueError("observer: give either poles (1/s) or polynomial (coefficients in z)")
         if self.poles is not None:
             check_conjugates(self.poles)
-        if self.polynomial is not None:
-            if self.polynomial[0] != 1.0:
-                raise ValueError(f"observer.polynomial: must be monic (leading coefficient 1), got "
-                                 f"{self.polynomial[0]:g}")
-            import numpy as np
-
-            roots = np.roots(self.polynomial) if len(self.polynomial) > 1 else np.array([])
-            if roots.size and np.max(np.abs(roots)) >= 1.0:
-                raise ValueError(f"observer.polynomial: a root of modulus {np.max(np.abs(roots)):.4g} is not inside "
-                                 "the unit circle: the observer must be stable")
         return self
 
 
@@ -146,6 +136,28 @@ class SelfTuningSpec(Section):
         """The excitation window (s): the given one or :func:`default_window`."""
         return float(self.excitation_window) if self.excitation_window is not None else \
             default_window(float(self.sampling_period))
+
+    @field_validator("observer", mode="before")
+    @classmethod
+    def _observer(cls, v: Any) -> Any:
+        """A mapping is an :class:`Observer`; its errors name their key under ``observer``."""
+        if not isinstance(v, dict):
+            return v
+        from pydantic import ValidationError
+
+        try:
+            return Observer.model_validate(v)
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            where = "".join(f"[{p}]" if isinstance(p, int) else (("." if i else "") + str(p))
+                            for i, p in enumerate(err.get("loc", ())))
+            msg = str(err.get("msg", "invalid value")).removeprefix("Value error, ")
+            if err.get("type") == "extra_forbidden":
+                msg = "unknown key"
+            value = err.get("input")
+            if isinstance(value, int | float | str | bool) and "got" not in msg and err.get("type") != "missing":
+                msg = f"{msg}, got {value!r}"
+            raise ValueError(f"{where}: {msg}" if where else msg) from None
 
     @field_validator("poles")
     @classmethod
@@ -317,6 +329,20 @@ def observer_polynomial(spec: Any) -> tuple[float, ...]:
     return tuple(float(v) for v in desired([fast] * k, Ts))
 
 
+def _check_observer(ao: tuple[float, ...]) -> None:
+    """``Ao`` monic and stable (:class:`~designkit.errors.SpecError` at ``controller.observer.polynomial``)."""
+    import numpy as np
+
+    from designkit.errors import SpecError
+
+    if ao[0] != 1.0:
+        raise SpecError("controller.observer.polynomial", f"must be monic (leading coefficient 1), got {ao[0]:g}")
+    roots = np.roots(ao) if len(ao) > 1 else np.array([])
+    if roots.size and np.max(np.abs(roots)) >= 1.0:
+        raise SpecError("controller.observer.polynomial", f"a root of modulus {np.max(np.abs(roots)):.4g} is not "
+                        "inside the unit circle: the observer must be stable")
+
+
 def _arx_settings(spec: Any, plant: Any) -> Settings:
     import numpy as np
 
@@ -337,6 +363,7 @@ def _arx_settings(spec: Any, plant: Any) -> Settings:
         theta0 = tuple(float(v) for v in exact)
     am = tuple(float(v) for v in desired(c.poles, Ts))
     ao = observer_polynomial(spec)
+    _check_observer(ao)
     cancel = c.zeros == "cancel"
     try:
         first = place(theta0, o, am, ao, cancel)

@@ -160,7 +160,12 @@ def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
     excited = excitation_summary(design, ctx)["final"] >= EXCITATION_MIN
     names = design.data.parameters
     parts = ", ".join(f"{n} {_f(a, 6)} against {_f(b, 6)}" for n, a, b in zip(names, s.theta[-1], true, strict=True))
-    detail = (f"final estimates against the exactly discretized true link: {parts}; largest relative error "
+    what = "plant" if design.data.settings.form == "arx" else "link"
+    if not np.all(np.isfinite(true)):
+        return (Check("estimate_convergence", None, f"≤ {CONVERGED_REL:g}", None, None, "",
+                      "the ARX orders do not hold the true sampled plant exactly: there are no exact parameters to "
+                      "converge to", {"theta_hat": [_num(v) for v in s.theta[-1]]}, required=False),)
+    detail = (f"final estimates against the exactly discretized true {what}: {parts}; largest relative error "
               f"{_f(worst, 3)}")
     if not excited:
         detail += " (informational: the excitation over the last window is too low to expect convergence)"
@@ -184,6 +189,12 @@ def reconvergence_time(design: Any, ctx: Context) -> tuple[float | None, float]:
 
 
 def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if design.data.settings.form == "arx":
+        s = samples(ctx.simulation, design)
+        if not np.all(np.isfinite(true_theta(ctx.spec, ctx.true_plant(design), design, s.t))):
+            return (Check("parameter_step", None, "re-converged", None, None, "",
+                          "the ARX orders do not hold the true sampled plant exactly (before or after the change): "
+                          "there are no exact parameters to re-converge to", {}, required=False),)
     took, t0 = reconvergence_time(design, ctx)
     left = float(ctx.simulation.time[-1]) - t0
     change = ctx.spec.simulation.plant_change
