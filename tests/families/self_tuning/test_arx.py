@@ -254,3 +254,17 @@ simulation: {duration: 80, trajectory: {kind: prbs, amplitude: 1, bit: 2, seed: 
         assert checks[name].passed, (name, checks[name].detail)
     b, a = _zoh_tf([2.0], [1.0, 1.0, 0.0], H)
     assert samples(res.simulation, res.design).theta[-1] == pytest.approx([a[1], a[2], b[1], b[2]], rel=0.05)
+
+
+def test_the_arx_form_on_the_link_is_the_same_self_tuner(aw_run):
+    """The link Km = 1, tau = 1 is 1/(s(s + 1)): the ARX form on it (not the link's default forms) estimates what the
+    transfer function's run estimates."""
+    text = SPEC.read_text().replace("plant:\n  kind: transfer_function\n  num: [1]\n  den: [1, 1, 0]",
+                                    "plant: {kind: link, Km: 1.0, tau: 1.0}")
+    assert "kind: link" in text
+    loaded = parse_spec(text)
+    true = plant_of(loaded)
+    design = synthesize(loaded.spec, true)
+    link = samples(build(loaded.spec, design, plant=true).run(), design)
+    tf = samples(*aw_run)
+    assert link.theta == pytest.approx(tf.theta, rel=1e-7, abs=1e-12)

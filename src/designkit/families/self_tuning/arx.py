@@ -27,15 +27,14 @@ Matching the ``m + o`` coefficients below the leading one gives a square linear 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Orders", "Placement", "causality", "controller_degrees", "desired", "mul", "parameter_names",
-           "place", "polynomials", "sylvester", "true_arx", "zoh"]
+__all__ = ["EXACT_TOL", "Orders", "Placement", "causality", "controller_degrees", "desired", "link_matrices", "mul",
+           "parameter_names", "place", "polynomials", "solve_design", "sylvester", "true_arx", "zoh"]
 
 
 @dataclass(frozen=True)
@@ -244,14 +243,3 @@ def link_matrices(Km: float, tau: float) -> tuple[np.ndarray, np.ndarray, np.nda
     """``(F, G, C, D)`` of the link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau) u``, ``y = x1``."""
     return (np.array([[0.0, 1.0], [0.0, -1.0 / tau]]), np.array([0.0, Km / tau]), np.array([[1.0, 0.0]]),
             np.zeros((1, 1)))
-
-
-def zeros_stable(theta: Sequence[float], o: Orders) -> float:
-    """Largest modulus of the zeros of ``B`` (0 without zeros)."""
-    _, B = polynomials([float(v) for v in theta], o)
-    z = np.roots(B) if len(B) > 1 and B[0] != 0 else np.array([])
-    return float(np.max(np.abs(z))) if z.size else 0.0
-
-
-def _isclose(a: float, b: float) -> bool:
-    return math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-15)

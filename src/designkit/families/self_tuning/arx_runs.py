@@ -11,7 +11,7 @@ import numpy as np
 
 from designkit.families.self_tuning.arx import Orders, link_matrices, polynomials, sylvester, true_arx
 
-__all__ = ["arx_characteristic_error", "arx_designed", "arx_sylvester_condition", "arx_true_loop_poles",
+__all__ = ["arx_characteristic_error", "controller_polynomials", "arx_designed", "arx_sylvester_condition", "arx_true_loop_poles",
            "arx_true_theta", "plant_matrices"]
 
 
@@ -78,6 +78,15 @@ def _split(coefs: np.ndarray, design: Any) -> tuple[np.ndarray, np.ndarray, np.n
 
     nr, ns, _ = degrees(design.data.settings)
     return (np.r_[1.0, coefs[:nr]], np.asarray(coefs[nr:nr + ns + 1]), np.asarray(coefs[nr + ns + 1:]))
+
+
+def controller_polynomials(coefs: np.ndarray, design: Any) -> dict[str, list[float | None]]:
+    """``{"R": ..., "S": ..., "T": ...}`` (highest power first) from one sample's recorded coefficients."""
+    def num(v: float) -> float | None:
+        return float(v) if np.isfinite(v) else None
+
+    return {k: [num(v) for v in p] for k, p in zip("RST", _split(np.asarray(coefs, dtype=float), design),
+                                                      strict=True)}
 
 
 def arx_characteristic_error(s: Any, design: Any) -> np.ndarray:
