@@ -38,6 +38,13 @@ CONFORMANCE = {
              "{duration: 24.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
              "plant_change: {time: 10.0, values: {Km: 1.6}}}",
              "{max_control: 50}"),
+    # the same link as a transfer function and as a state-space model: the ARX form (na = nb = 2, d = 1), its
+    # default observer pole, the initial estimates the exact ARX of the spec's plant
+    **{kind: ("{kind: self_tuning, sampling_period: 0.05, forgetting: 0.98, initial_covariance: 100, "
+              "poles: [-4, -5]}",
+              "{duration: 24.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+              "plant_change: {time: 10.0, values: {Km: 1.6}}}",
+              "{max_control: 50}") for kind in ("transfer_function", "state_space")},
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 

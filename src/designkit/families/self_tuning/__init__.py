@@ -1,6 +1,10 @@
-"""Self-tuning regulator of one link (notes section 4.3, the SELFTUNE simulator, figures 4.1 and 4.2): ``self_tuning``.
+"""Self-tuning regulator of one link (notes section 4.3, the SELFTUNE simulator, figures 4.1 and 4.2) or of any SISO
+linear plant (Astrom and Wittenmark, *Adaptive Control*, 2nd ed., chapter 3, the indirect self-tuner): ``self_tuning``.
 
-Plant: the link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)``.  Controller: a sampled law
+Plant: the link ``x1' = x2``, ``x2' = -x2/tau + (Km/tau)(u + xi)``, or a ``transfer_function`` or single-input
+``state_space`` plant (the ARX form, ``estimator: arx``, :mod:`designkit.families.self_tuning.arx`: orders ``na``,
+``nb``, delay ``d``; pole placement with a given observer polynomial, the zeros kept or cancelled).  Controller: a
+sampled law
 (period ``controller.sampling_period``) that at each sample
 
 1. estimates the parameters of the exactly (zero-order-hold) discretized link by recursive least
@@ -491,8 +495,9 @@ def _family() -> Family:
             law=("θ̂(k) = θ̂(k−1) + K(k) (y(k) − φ(k)ᵀ θ̂(k−1))  (recursive least squares, forgetting λ)",
                  "R̂(z) u = T̂(z) xD − Ŝ(z) x1,  Â R̂ + B̂ Ŝ = Am Ao  (pole placement on the estimated model)",
                  "or u = −K̂1 (x1 − xD) − K̂2 x2 − K̂3 Σ Ts (x1 − xD)  (PID on the estimated Km, τ)"),
-            summary="Notes §4.3 and the SELFTUNE simulator: a sampled regulator that estimates the link's discrete "
-                    "model by recursive least squares and redesigns itself for the estimate at every sample."),
+            summary="Notes §4.3 and the SELFTUNE simulator, and Åström–Wittenmark's indirect self-tuner: a sampled "
+                    "regulator that estimates the plant's discrete model by recursive least squares and redesigns "
+                    "itself for the estimate at every sample."),
         validate=validate, references=("step", "square", "prbs"),
         figures=figures.FIGURES, sections=(report.section,), diagnoses=(checks.diagnose,), json=report.json,
         knobs=(Knob("forgetting", "", "forgetting factor λ of the least squares (1 − λ sets its memory)", 0.5, 1.0,

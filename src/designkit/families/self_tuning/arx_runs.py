@@ -11,8 +11,8 @@ import numpy as np
 
 from designkit.families.self_tuning.arx import Orders, link_matrices, polynomials, sylvester, true_arx
 
-__all__ = ["arx_characteristic_error", "controller_polynomials", "arx_designed", "arx_sylvester_condition", "arx_true_loop_poles",
-           "arx_true_theta", "plant_matrices"]
+__all__ = ["arx_characteristic_error", "arx_designed", "arx_sylvester_condition", "arx_true_loop_poles",
+           "arx_true_theta", "controller_polynomials", "plant_matrices", "wanted_poles"]
 
 
 def _orders(design: Any) -> Orders:

@@ -1,5 +1,7 @@
 """The self-tuning regulator as one sampled CasADi law: recursive least squares, then a certainty-equivalence
-design, then the command, once per sample (notes section 4.3 and the SELFTUNE simulator).
+design, then the command, once per sample (notes section 4.3 and the SELFTUNE simulator).  This module builds the
+link's forms; the ARX form's law is :mod:`designkit.families.self_tuning.arx_law`, chosen by
+:func:`self_tuning_law`.
 
 Discrete memory (:class:`~designkit.synthesis.law.Memory`), updated at each sample ``k`` from the
 measured position ``y(k)`` (and speed ``v(k)``) and the reference ``r(k)``:
