@@ -210,6 +210,13 @@ def test_an_observer_polynomial_not_monic_or_unstable_is_refused(poly):
         synthesize(loaded.spec, plant_of(loaded))
 
 
+def test_a_plant_above_the_largest_default_order_needs_orders():
+    den = "[" + ", ".join(["1"] * 10) + "]"
+    text = THIRD.format(kind="transfer_function", plant=f"num: [1], den: {den}", extra="")
+    with pytest.raises(SpecError, match="controller.orders"):
+        parse_spec(text)
+
+
 def test_too_few_poles_for_a_causal_controller_is_refused():
     text = THIRD.format(kind="transfer_function", plant="num: [2, 1], den: [1, 3, 3, 1]", extra="").replace(
         "poles: [-1, -1.2, -1.5]", "poles: [-1, -1.2]")

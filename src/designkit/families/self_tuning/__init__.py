@@ -56,6 +56,8 @@ DEFAULT_WINDOW = 2.0
 """The default excitation window (s), widened to :data:`DEFAULT_WINDOW_SAMPLES` samples at long sampling periods."""
 DEFAULT_WINDOW_SAMPLES = 20
 """The default excitation window spans at least this many samples."""
+MAX_DEFAULT_ORDER = 8
+"""The largest plant order whose ARX orders default to the plant's (``na``, ``nb`` are at most 8)."""
 LINK_FORMS = ("speed", "position")
 """The estimator forms of the link only."""
 
@@ -275,6 +277,9 @@ def _validate_form(spec: Any) -> None:
                          "link's forms')")
     if kind == "state_space" and len(spec.plant.B[0]) != 1:
         raise ValueError(f"plant.B: the ARX self-tuner drives one input; the plant has {len(spec.plant.B[0])}")
+    if c.orders is None and plant_order(spec) > MAX_DEFAULT_ORDER:
+        raise ValueError(f"controller.orders: the plant is of order {plant_order(spec)}; the default ARX orders "
+                         f"(na = nb = the plant's order) go to {MAX_DEFAULT_ORDER}: give orders (na, nb at most 8)")
     o = orders_of(spec)
     deg_ao = observer_degree(spec)
     why = causality(o, len(c.poles), deg_ao, c.zeros == "cancel")
