@@ -49,11 +49,12 @@ def _draw_estimates(result: Any) -> tuple[Any, dict[str, Any]]:
     s = samples(result.simulation, d)
     true = true_theta(result.loaded.spec, _plant(result), d, s.t)
     names = d.data.parameters
+    what = "plant" if d.data.settings.form == "arx" else "link"
     fig, axes = new_figure(6.8, 1.9 * len(names) + 0.8, rows=len(names))
     axes = list(np.atleast_1d(axes))
     for j, ax in enumerate(axes):
         tag(fig, "true", *plot_decimated(ax, s.t, true[:, j], color=GREEN, **LIMIT_STYLE,
-                                         label=f"{names[j]} of the true sampled link"))
+                                         label=f"{names[j]} of the true sampled {what}"))
         tag(fig, "estimate", *plot_decimated(ax, s.t, s.theta[:, j], color=BLUE, lw=1.2,
                                              label=f"{names[j]} estimated"))
         lo, hi = np.nanmin(np.r_[true[:, j], s.theta[:, j]]), np.nanmax(np.r_[true[:, j], s.theta[:, j]])
@@ -84,7 +85,7 @@ def estimates_figure(result: Any) -> Figure | None:
     if "plant-change" in keys:
         caption += (f" The dotted red line marks the step change of the link at t = {info['onset']:.4g} s, which "
                     "the controller is not told of.")
-    return Figure("Estimated against true sampled-link parameters", caption, svg, "fig-selftune-estimates.svg",
+    return Figure(f"Estimated against true sampled-{what} parameters", caption, svg, "fig-selftune-estimates.svg",
                   _present(result, ("estimate_convergence", "parameter_step")))
 
 
