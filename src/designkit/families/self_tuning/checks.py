@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.self_tuning.arx_runs import arx_true_loop_poles, wanted_poles
 from designkit.families.self_tuning.laws import KIND
 from designkit.families.self_tuning.runs import (
     characteristic_error,
@@ -52,6 +53,8 @@ CONVERGED_REL = 0.05
 """Converged: every estimate within this fraction of its true value."""
 POLE_REL = 0.10
 """The true loop's poles (as ``ln z / Ts``) within this fraction of the requested ones."""
+POLE_Z = 0.05
+"""ARX form: the true loop's poles within this distance of the requested ones in the z-plane."""
 
 
 def _applies(design: Any, ctx: Context) -> bool:
@@ -157,7 +160,12 @@ def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
     excited = excitation_summary(design, ctx)["final"] >= EXCITATION_MIN
     names = design.data.parameters
     parts = ", ".join(f"{n} {_f(a, 6)} against {_f(b, 6)}" for n, a, b in zip(names, s.theta[-1], true, strict=True))
-    detail = (f"final estimates against the exactly discretized true link: {parts}; largest relative error "
+    what = "plant" if design.data.settings.form == "arx" else "link"
+    if not np.all(np.isfinite(true)):
+        return (Check("estimate_convergence", None, f"≤ {CONVERGED_REL:g}", None, None, "",
+                      "the ARX orders do not hold the true sampled plant exactly: there are no exact parameters to "
+                      "converge to", {"theta_hat": [_num(v) for v in s.theta[-1]]}, required=False),)
+    detail = (f"final estimates against the exactly discretized true {what}: {parts}; largest relative error "
               f"{_f(worst, 3)}")
     if not excited:
         detail += " (informational: the excitation over the last window is too low to expect convergence)"
@@ -181,6 +189,12 @@ def reconvergence_time(design: Any, ctx: Context) -> tuple[float | None, float]:
 
 
 def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if design.data.settings.form == "arx":
+        s = samples(ctx.simulation, design)
+        if not np.all(np.isfinite(true_theta(ctx.spec, ctx.true_plant(design), design, s.t))):
+            return (Check("parameter_step", None, "re-converged", None, None, "",
+                          "the ARX orders do not hold the true sampled plant exactly (before or after the change): "
+                          "there are no exact parameters to re-converge to", {}, required=False),)
     took, t0 = reconvergence_time(design, ctx)
     left = float(ctx.simulation.time[-1]) - t0
     change = ctx.spec.simulation.plant_change
@@ -209,6 +223,8 @@ def _parameter_step(design: Any, ctx: Context) -> tuple[Check, ...]:
 def true_loop_poles(design: Any, theta_true: np.ndarray, coefs: np.ndarray) -> np.ndarray:
     """Poles ``z`` of the true sampled link ``B/A`` (exact ``theta_true``) under ``R u = T r - S y``."""
     x = design.data
+    if x.settings.form == "arx":
+        return arx_true_loop_poles(design, theta_true, coefs)
     a1, a2, b0, b1 = position_models(np.asarray(theta_true, dtype=float)[None, :], x.settings.Ts, x.settings.form)[0]
     R1, S0, S1 = (float(v) for v in coefs[:3])
     return np.roots([1.0, a1 + R1 + b0 * S0, a2 + a1 * R1 + b1 * S0 + b0 * S1, a2 * R1 + b1 * S1])
@@ -218,6 +234,8 @@ def _true_loop(design: Any, ctx: Context) -> tuple[Check, ...]:
     x = design.data
     s = samples(ctx.simulation, design)
     true = true_theta(ctx.spec, ctx.true_plant(design), design, s.t[-1:])[0]
+    if x.settings.form == "arx":
+        return _true_loop_z(design, s, true)
     z = true_loop_poles(design, true, s.coefs[-1])
     with np.errstate(all="ignore"):
         got = np.log(z.astype(complex)) / x.settings.Ts
@@ -237,6 +255,34 @@ def _true_loop(design: Any, ctx: Context) -> tuple[Check, ...]:
                   POLE_REL - worst if math.isfinite(worst) else None, "", detail,
                   {"z": [[float(p.real), float(p.imag)] for p in z], "stable": stable},
                   required=bool(conv)),)
+
+
+def _true_loop_z(design: Any, s: Any, true: np.ndarray) -> tuple[Check, ...]:
+    """The ARX form's true loop, in the z-plane: the poles of the true sampled plant under the final controller
+    against the roots of ``Am Ao`` (and, zeros cancelled, of the true ``B``), each within :data:`POLE_Z` (a deadbeat
+    observer's ``z = 0`` has no ``ln z``)."""
+    if not np.all(np.isfinite(true)):
+        return (Check("true_loop", None, f"≤ {POLE_Z:g}", None, None, "",
+                      "the ARX orders do not hold the true sampled plant exactly: no exact true model to close the "
+                      "loop with", {}, required=False),)
+    if not np.all(np.isfinite(s.coefs[-1])):
+        return (Check("true_loop", False, f"≤ {POLE_Z:g}", None, None, "", "the final controller is not finite",
+                      {}, required=True),)
+    z = true_loop_poles(design, true, s.coefs[-1])
+    want = list(wanted_poles(design, true))
+    pool = list(z)
+    dist = []
+    for p in want:
+        k = int(np.argmin([abs(q - p) for q in pool]))
+        dist.append(abs(pool.pop(k) - p))
+    worst = float(max(dist)) if dist else 0.0
+    stable = bool(np.all(np.abs(z) < 1))
+    conv = np.max(_relative(s.theta[-1], true)) <= CONVERGED_REL
+    detail = (f"poles z of the true sampled plant under the final controller: {_poles(z)} against the requested "
+              f"{_poles(np.asarray(want))} (roots of Am Ao{' and of the true B' if design.data.settings.cancel else ''}"
+              f"); largest distance {_f(worst, 3)}; |z| max {_f(float(np.max(np.abs(z))), 6)}")
+    return (Check("true_loop", stable and worst <= POLE_Z, f"≤ {POLE_Z:g}", worst, POLE_Z - worst, "", detail,
+                  {"z": [[float(p.real), float(p.imag)] for p in z], "stable": stable}, required=bool(conv)),)
 
 
 def _poles(ps: Any) -> str:

@@ -24,8 +24,9 @@ class SelfTuningData(FamilyData):
         The names of the estimated parameters (the estimator form's).
     units : tuple of str
         Their units.
-    nominal : (float, float)
-        The link the initial estimates are exact for: ``Km`` ((rad/s)/(N*m)) and ``tau`` (s).
+    nominal : tuple of float
+        The link the initial estimates are exact for: ``Km`` ((rad/s)/(N*m)) and ``tau`` (s); the ARX form on a plant
+        other than the link: empty.
     excitation_window : float
         The window over which the excitation and the estimates' convergence are judged (s).
     desired : tuple of float or None
@@ -36,6 +37,6 @@ class SelfTuningData(FamilyData):
     settings: Settings
     parameters: tuple[str, ...]
     units: tuple[str, ...]
-    nominal: tuple[float, float]
+    nominal: tuple[float, ...]
     excitation_window: float
     desired: tuple[float, ...] | None

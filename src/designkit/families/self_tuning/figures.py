@@ -49,11 +49,12 @@ def _draw_estimates(result: Any) -> tuple[Any, dict[str, Any]]:
     s = samples(result.simulation, d)
     true = true_theta(result.loaded.spec, _plant(result), d, s.t)
     names = d.data.parameters
+    what = "plant" if d.data.settings.form == "arx" else "link"
     fig, axes = new_figure(6.8, 1.9 * len(names) + 0.8, rows=len(names))
     axes = list(np.atleast_1d(axes))
     for j, ax in enumerate(axes):
         tag(fig, "true", *plot_decimated(ax, s.t, true[:, j], color=GREEN, **LIMIT_STYLE,
-                                         label=f"{names[j]} of the true sampled link"))
+                                         label=f"{names[j]} of the true sampled {what}"))
         tag(fig, "estimate", *plot_decimated(ax, s.t, s.theta[:, j], color=BLUE, lw=1.2,
                                              label=f"{names[j]} estimated"))
         lo, hi = np.nanmin(np.r_[true[:, j], s.theta[:, j]]), np.nanmax(np.r_[true[:, j], s.theta[:, j]])
@@ -74,15 +75,17 @@ def estimates_figure(result: Any) -> Figure | None:
     if result.simulation is None:
         return None
     svg, keys, info = render_tagged(_draw_estimates, result)
-    measured = result.design.data.settings.form == "speed"
-    form = "speed measured" if measured else "speed not measured (position differences)"
-    caption = (f"The recursive least-squares estimates ({form}, blue) against the parameters of the true link "
+    st = result.design.data.settings
+    form = {"speed": "speed measured", "position": "speed not measured (position differences)"}.get(
+        st.form, "ARX model (na = {}, nb = {}, d = {})".format(*st.orders) if st.orders else "")
+    what = "plant" if st.form == "arx" else "link"
+    caption = (f"The recursive least-squares estimates ({form}, blue) against the parameters of the true {what} "
                "discretized exactly with a zero-order hold (dashed green), one panel per parameter, at the sample "
                "instants.")
     if "plant-change" in keys:
         caption += (f" The dotted red line marks the step change of the link at t = {info['onset']:.4g} s, which "
                     "the controller is not told of.")
-    return Figure("Estimated against true sampled-link parameters", caption, svg, "fig-selftune-estimates.svg",
+    return Figure(f"Estimated against true sampled-{what} parameters", caption, svg, "fig-selftune-estimates.svg",
                   _present(result, ("estimate_convergence", "parameter_step")))
 
 
@@ -91,12 +94,13 @@ def _draw_loop(result: Any) -> tuple[Any, dict[str, Any]]:
     t = np.asarray(sim.time, dtype=float)
     fig, (ax, ax_u) = new_figure(6.8, 4.8, rows=2)
     tag(fig, "reference", *plot_decimated(ax, t, sim.desired[:, 0], color=GREY, **REFERENCE_STYLE, label="xD"))
-    tag(fig, "output", *plot_decimated(ax, t, sim.position, color=BLUE, lw=1.2, label="x1"))
+    arx = result.design.data.settings.form == "arx"
+    tag(fig, "output", *plot_decimated(ax, t, sim.position, color=BLUE, lw=1.2, label="y" if arx else "x1"))
     tag(fig, "command", *plot_decimated(ax_u, t, np.asarray(sim.u_command)[:, 0], color=ORANGE, lw=1.0,
                                         label="u (held over each sample)"))
     info = {"onset": _onset(result, (ax, ax_u), fig), "peak": float(np.nanmax(np.abs(sim.u_command)))}
-    ax.set_ylabel("position (rad)")
-    ax_u.set_ylabel("command (N·m)")
+    ax.set_ylabel("output" if arx else "position (rad)")
+    ax_u.set_ylabel("command" if arx else "command (N·m)")
     ax_u.set_xlabel("time (s)")
     ax_u.set_xlim(t[0], t[-1])
     ax.legend(loc="best", framealpha=0.9, fontsize=7)
@@ -109,10 +113,14 @@ def loop_figure(result: Any) -> Figure | None:
     if result.simulation is None:
         return None
     svg, keys, info = render_tagged(_draw_loop, result)
-    caption = ("Top: the reference xD (dash-dot) and the link's position x1 (blue) under the self-tuning regulator. "
-               f"Bottom: the command u, held between samples (peak |u| = {info['peak']:.4g} N·m).")
+    if result.design.data.settings.form == "arx":
+        caption = ("Top: the reference xD (dash-dot) and the plant's output y (blue) under the self-tuning regulator. "
+                   f"Bottom: the command u, held between samples (peak |u| = {info['peak']:.4g}).")
+    else:
+        caption = ("Top: the reference xD (dash-dot) and the link's position x1 (blue) under the self-tuning "
+                   f"regulator. Bottom: the command u, held between samples (peak |u| = {info['peak']:.4g} N·m).")
     if "plant-change" in keys:
-        caption += f" The dotted red line marks the change of the link at t = {info['onset']:.4g} s."
+        caption += f" The dotted red line marks the change of the plant at t = {info['onset']:.4g} s."
     return Figure("Self-tuning loop: output and command", caption, svg, "fig-selftune-loop.svg",
                   _present(result, ("true_loop",)))
 

@@ -1,5 +1,7 @@
 """The self-tuning regulator as one sampled CasADi law: recursive least squares, then a certainty-equivalence
-design, then the command, once per sample (notes section 4.3 and the SELFTUNE simulator).
+design, then the command, once per sample (notes section 4.3 and the SELFTUNE simulator).  This module builds the
+link's forms; the ARX form's law is :mod:`designkit.families.self_tuning.arx_law`, chosen by
+:func:`self_tuning_law`.
 
 Discrete memory (:class:`~designkit.synthesis.law.Memory`), updated at each sample ``k`` from the
 measured position ``y(k)`` (and speed ``v(k)``) and the reference ``r(k)``:
@@ -36,7 +38,9 @@ from typing import Any
 
 import casadi as ca
 
+from designkit.families.self_tuning.arx_law import arx_controller_names, arx_law, arx_memory_names, initial_arx
 from designkit.families.self_tuning.model import desired_polynomial, diophantine, position_model
+from designkit.families.self_tuning.rls import rls_step
 from designkit.synthesis.law import Law, LawSymbols, Memory, dynamic_law
 from designkit.synthesis.pid import servo_pid_gains
 
@@ -56,8 +60,9 @@ class Settings:
 
     Parameters
     ----------
-    form : {"speed", "position"}
-        Estimator form.
+    form : {"speed", "position", "arx"}
+        Estimator form: the link's two (speed measured, position differences) or the ARX model of general orders
+        (:mod:`designkit.families.self_tuning.arx`).
     Ts : float
         Sampling period (s).
     forgetting : float
@@ -79,6 +84,12 @@ class Settings:
     estimate : bool
         ``False`` switches the estimator off (the controller stays designed on ``theta0``): the
         non-adaptive comparison of the report.
+    orders : tuple of int
+        ``(na, nb, d)`` of the ARX form (empty for the link's forms).
+    am, ao : tuple of float
+        ARX form: the desired polynomial ``Am(z)`` and the observer polynomial ``Ao(z)``, monic, highest power first.
+    cancel : bool
+        ARX form: the estimated zeros are cancelled (``B+ = B/b0``), else kept.
     """
 
     form: str
@@ -92,32 +103,47 @@ class Settings:
     poles: tuple[complex, ...]
     observer: float = 0.0
     estimate: bool = True
+    orders: tuple[int, ...] = ()
+    am: tuple[float, ...] = ()
+    ao: tuple[float, ...] = ()
+    cancel: bool = False
 
     @property
     def n(self) -> int:
         """Number of estimated parameters."""
         return len(self.theta0)
 
-    def desired(self) -> tuple[float, float, float]:
-        """``(c1, c2, c3)`` of the requested discrete characteristic polynomial (pole placement)."""
+    def desired(self) -> tuple[float, ...]:
+        """``(c1, c2, c3)`` of the requested discrete characteristic polynomial (pole placement); ARX form: the
+        coefficients of ``Am Ao`` after the leading one."""
+        if self.form == "arx":
+            import numpy as np
+
+            return tuple(float(v) for v in np.polymul(self.am, self.ao)[1:])
         return desired_polynomial(self.poles, self.observer, self.Ts)
 
 
-def controller_names(design: str) -> tuple[str, ...]:
-    """The controller coefficients kept in memory for ``design``."""
+def controller_names(design: str, st: Settings | None = None) -> tuple[str, ...]:
+    """The controller coefficients kept in memory for ``design`` (the ARX form's from its settings ``st``)."""
+    if st is not None and st.form == "arx":
+        return arx_controller_names(st)
     return ("R1", "S0", "S1", "T0") if design == "pole_placement" else ("K1", "K2", "K3", "I")
 
 
 def memory_names(st: Settings) -> tuple[str, ...]:
     """Every memory entry of the law, in order (module docstring)."""
+    if st.form == "arx":
+        return arx_memory_names(st)
     n = st.n
     return (*(f"th{i + 1}" for i in range(n)), *(f"P{i + 1}{j + 1}" for i in range(n) for j in range(n)),
             *(f"phi{i + 1}" for i in range(n)), "eps", "y1", "y2", "v1", "u1", "u2", "r1", "k",
             *controller_names(st.design), "u", "held", "bounded")
 
 
-def initial_controller(st: Settings) -> tuple[float, float, float, float]:
+def initial_controller(st: Settings) -> tuple[float, ...]:
     """The controller coefficients designed on ``theta0`` (NumPy): used before any estimate is admissible."""
+    if st.form == "arx":
+        return initial_arx(st)
     model = position_model(st.theta0, st.Ts, st.form)
     if st.design == "pole_placement":
         c = st.desired()
@@ -136,22 +162,6 @@ def _link_numeric(model: Sequence[float], a22: float, Ts: float) -> tuple[float,
 
     tau = -Ts / math.log(a22)
     return (model[2] + model[3]) / (Ts * (1.0 - a22)), tau
-
-
-def _rls(st: Settings, theta: ca.SX, P: ca.SX, phi: ca.SX, out: ca.SX, active: ca.SX) -> dict[str, ca.SX]:
-    eps = out - ca.dot(phi, theta)
-    Pphi = P @ phi
-    K = Pphi / (st.forgetting + ca.dot(phi, Pphi))
-    theta_n = theta + K * eps
-    P_n = (P - K @ Pphi.T) / st.forgetting
-    P_n = 0.5 * (P_n + P_n.T)
-    bounded = ca.SX(0)
-    if st.safeguards:
-        tr = ca.trace(P_n)
-        bounded = tr > st.max_trace
-        P_n = ca.if_else(bounded, P_n * (st.max_trace / tr), P_n)
-    return {"theta": ca.if_else(active, theta_n, theta), "P": ca.if_else(active, P_n, P), "eps": eps,
-            "bounded": ca.if_else(active, bounded, 0)}
 
 
 def _model(st: Settings, theta: ca.SX) -> tuple[ca.SX, ...]:
@@ -211,7 +221,10 @@ def _pole_words(p: complex) -> str:
 
 
 def self_tuning_law(nominal: Any, st: Settings) -> Law:
-    """The sampled self-tuning law (module docstring) for the link layout of ``nominal``."""
+    """The sampled self-tuning law (module docstring) for the link layout of ``nominal`` (the ARX form: any plant's,
+    :func:`~designkit.families.self_tuning.arx_law.arx_law`)."""
+    if st.form == "arx":
+        return arx_law(KIND, nominal, st)
     n = st.n
     names = memory_names(st)
     ctrl = controller_names(st.design)
@@ -236,7 +249,7 @@ def self_tuning_law(nominal: Any, st: Settings) -> Law:
             phi, out = ca.vertcat(v1, u1), v
         else:
             phi, out = ca.vertcat(y1 - y2, u1, u2), y - y1
-        est = _rls(st, theta, P, phi, out, ca.logic_not(first) if st.estimate else ca.SX(0))
+        est = rls_step(st, theta, P, phi, out, ca.logic_not(first) if st.estimate else ca.SX(0))
         old = [mem(c) for c in ctrl]
         coefs, held = _design(st, est["theta"], old)
         if st.design == "pole_placement":

@@ -20,15 +20,24 @@ def _num(x: Any) -> float | None:
 def json(result: Any) -> dict[str, Any]:
     """``theta_hat`` (final estimates), ``theta_true`` (the exactly discretized true link at the end of the run,
     same order) and the family's own object under its kind (form, parameter names and units, initial estimates,
-    sampling period, design; after a run the samples taken, the samples where the controller was held and where
+    sampling period, design; the ARX form's orders, ``Am``, ``Ao``, zeros and, after a run, the final controller
+    polynomials ``R``, ``S``, ``T``; after a run the samples taken, the samples where the controller was held and where
     the covariance bound fired, the final excitation indicator and the final Sylvester condition number)."""
     d, sim = result.design, result.simulation
     x = d.data
-    info = {"form": x.settings.form, "parameters": list(x.parameters), "units": list(x.units),
-            "initial": list(x.settings.theta0), "sampling_period": x.settings.Ts, "design": x.settings.design}
+    st = x.settings
+    info = {"form": st.form, "parameters": list(x.parameters), "units": list(x.units),
+            "initial": list(st.theta0), "sampling_period": st.Ts, "design": st.design}
+    if st.form == "arx":
+        info.update({"orders": dict(zip(("na", "nb", "d"), st.orders, strict=True)), "Am": list(st.am),
+                     "Ao": list(st.ao), "zeros": "cancel" if st.cancel else "keep"})
     if sim is None:
-        return {"theta_hat": list(x.settings.theta0), KIND: info}
+        return {"theta_hat": list(st.theta0), KIND: info}
     s = samples(sim, d)
+    if st.form == "arx":
+        from designkit.families.self_tuning.arx_runs import controller_polynomials
+
+        info["controller"] = controller_polynomials(s.coefs[-1], d)
     plant = result.plant if result.plant is not None else d.plant
     true = true_theta(result.loaded.spec, plant, d, s.t[-1:])[0]
     window = max(1, int(round(x.excitation_window / x.settings.Ts)))

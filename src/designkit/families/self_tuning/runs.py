@@ -13,6 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.self_tuning.arx_runs import (
+    arx_characteristic_error,
+    arx_designed,
+    arx_sylvester_condition,
+    arx_true_theta,
+)
 from designkit.families.self_tuning.laws import controller_names
 from designkit.families.self_tuning.model import theta_of
 
@@ -62,7 +68,8 @@ def samples(sim: Any, design: Any) -> Samples:
     return Samples(t=np.asarray(sim.time, dtype=float)[idx],
                    theta=np.column_stack([col(f"th{i + 1}") for i in range(n)]),
                    phi=np.column_stack([col(f"phi{i + 1}") for i in range(n)]), eps=col("eps"),
-                   coefs=np.column_stack([col(c) for c in controller_names(design.data.settings.design)]),
+                   coefs=np.column_stack([col(c) for c in controller_names(design.data.settings.design,
+                                                                              design.data.settings)]),
                    held=col("held") > 0.5, bounded=col("bounded") > 0.5,
                    trace=sum(col(f"P{i + 1}{i + 1}") for i in range(n)))
 
@@ -80,8 +87,11 @@ def true_link_at(spec: Any, plant: Any, t: np.ndarray) -> np.ndarray:
 
 
 def true_theta(spec: Any, plant: Any, design: Any, t: np.ndarray) -> np.ndarray:
-    """The exactly discretized parameters of the true link at each instant, in the estimates' order."""
+    """The exactly discretized parameters of the true link (ARX form: plant) at each instant, in the estimates'
+    order (ARX form: NaN where the orders do not hold the sampled plant)."""
     x = design.data
+    if x.settings.form == "arx":
+        return arx_true_theta(spec, plant, design, t)
     links = true_link_at(spec, plant, np.asarray(t, dtype=float))
     cache: dict[tuple[float, float], tuple[float, ...]] = {}
     rows = []
@@ -111,6 +121,8 @@ def position_models(theta: np.ndarray, Ts: float, form: str) -> np.ndarray:
 
 def sylvester_condition(s: Samples, design: Any) -> np.ndarray:
     """2-norm condition number of the Sylvester matrix of the estimated model at each sample."""
+    if design.data.settings.form == "arx":
+        return arx_sylvester_condition(s, design)
     m = position_models(s.theta, design.data.settings.Ts, design.data.settings.form)
     M = np.zeros((len(m), 3, 3))
     M[:, 0, 0] = 1.0
@@ -126,8 +138,11 @@ def sylvester_condition(s: Samples, design: Any) -> np.ndarray:
 
 def characteristic_error(s: Samples, design: Any) -> np.ndarray:
     """Per sample, ``max |coef(A R + B S) - coef(Acl)| / max(1, |coef(Acl)|)`` of the estimated model and the
-    coefficients in use (pole placement; NaN where the controller was held)."""
+    coefficients in use (pole placement; NaN where the controller was held).  ARX form:
+    :func:`~designkit.families.self_tuning.arx_runs.arx_characteristic_error`."""
     x = design.data
+    if x.settings.form == "arx":
+        return arx_characteristic_error(s, design)
     m = position_models(s.theta, x.settings.Ts, x.settings.form)
     a1, a2, b0, b1 = m.T
     R1, S0, S1 = s.coefs[:, 0], s.coefs[:, 1], s.coefs[:, 2]
@@ -184,8 +199,10 @@ def designed_response(sim: Any, design: Any, spec: Any, plant: Any) -> tuple[np.
     x1 = np.asarray(sim.position, dtype=float)[idx]
     r = np.asarray(sim.desired, dtype=float)[idx, 0]
     Ts = x.settings.Ts
-    am = np.real(np.poly(np.exp(np.array(x.settings.poles) * Ts)))
     th = true_theta(spec, plant, design, s.t)
+    if x.settings.form == "arx":
+        return s.t, x1, arx_designed(r, float(x1[0]), th, design)
+    am = np.real(np.poly(np.exp(np.array(x.settings.poles) * Ts)))
     model = position_models(th, Ts, x.settings.form)
     ym = np.empty_like(r)
     y1 = y2 = float(x1[0])

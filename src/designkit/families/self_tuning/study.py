@@ -194,8 +194,8 @@ def _link_words(plant: Any) -> str:
 
 
 def section(result: Any) -> ReportSection | None:
-    """The self-tuning lab section (module docstring)."""
-    if result.simulation is None:
+    """The self-tuning lab section (module docstring); the link's forms only (the notes' experiment is on the link)."""
+    if result.simulation is None or result.design.data.settings.form == "arx":
         return None
     r = _Runner(result)
     d, spec = result.design, r.spec
