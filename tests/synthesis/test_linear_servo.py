@@ -125,7 +125,7 @@ def test_higher_order_places_three_poles_and_states_where_the_others_are_left(de
     assert np.allclose(_sorted(d.poles), cl, rtol=1e-7, atol=1e-9)  # the design states the left ones too
     assert np.allclose(_sorted(d.closed_loop.poles), cl, rtol=1e-7, atol=1e-9)
     left = [p for p in cl if np.min(np.abs(np.asarray(placed) - p)) > 1e-6 * abs(p)]
-    assert len(left) == len(den) - 4
+    assert len(left) == len(den) - 3
     assert "left where the quotient puts them" in d.notes[0]
     # the sum of the loop's poles is fixed by the plant on a relative degree 3 plant (the s^n coefficient)
     assert np.sum(cl).real == pytest.approx(-den[1] / den[0], rel=1e-9)
