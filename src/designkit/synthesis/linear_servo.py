@@ -48,7 +48,8 @@ from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.law import Law, integral_law
 
-__all__ = ["Placement", "characteristic_map", "linear_servo_design", "linear_servo_law", "pid_poles", "place", "plant_zeros"]
+__all__ = ["Placement", "characteristic_map", "linear_servo_design", "linear_servo_law", "pid_poles", "place",
+           "plant_zeros"]
 
 SINGULAR_TOL = 1e-10
 """Hadamard ratio of the placement's linear system below which it is refused (a gain would be unbounded)."""
