@@ -35,6 +35,7 @@ CONFORMANCE = {
 EXAMPLES = {
     "vsc-elastic-joint": 0,
     "vsc-link": 0,
+    "vsc-third-order-drive": 0,  # theorem 3 on a state_space plant with a gearbox resonance
     "vsc-elastic-joint-narrow-gains": 1,  # gains bracketing l_i at the nominal plant only: the certificate fails
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
