@@ -30,5 +30,6 @@ EXAMPLES = {
     "sliding-mode-link": 0,
     "sliding-mode-weak-switching": 1,  # M below the perturbation: the certificate names the M that would do
     "sliding-mode-link-implemented": 0,  # sampled at 1 kHz, 0.1 ms delay, a +-5 N*m actuator with a 300 rad/s lag
+    "sliding-mode-third-order-drive": 0,  # a state_space plant: the surface from two sliding poles, gains from the box
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
