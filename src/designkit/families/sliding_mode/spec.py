@@ -73,7 +73,6 @@ class SlidingModeSpec(Section):
         if not v:
             raise ValueError("must list the poles of the sliding motion (1 on the link: -c), got none")
         check_poles(v)
-        check_conjugates(v)
         return v
 
     @field_validator("M")
@@ -126,7 +125,13 @@ def validate(spec: Any) -> None:
         if ctl.sliding_poles[0].imag != 0:
             raise ValueError(f"controller.sliding_poles[0]: must be real (s = x2 + c e has one real pole -c), got "
                              f"{fmt_pole(ctl.sliding_poles[0])}")
-    elif spec.requirements is not None and spec.requirements.max_chatter_amplitude is not None:
+    else:
+        try:
+            check_conjugates(list(ctl.sliding_poles))
+        except ValueError as exc:
+            raise ValueError(f"controller.sliding_poles{'' if str(exc).startswith('[') else ': '}{exc}") from None
+    if spec.plant.kind != "link" and spec.requirements is not None and \
+            spec.requirements.max_chatter_amplitude is not None:
         raise ValueError(f"requirements.max_chatter_amplitude: the sliding-mode servo measures its chatter on the link "
                          f"only, not on the {spec.plant.kind} plant")
     level = perturbation_level(sim)
