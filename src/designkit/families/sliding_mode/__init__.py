@@ -74,6 +74,7 @@ from designkit.families.sliding_mode.diagnoses import diagnose
 from designkit.families.sliding_mode.figures import FIGURES
 from designkit.families.sliding_mode.linear import LINEAR, LinearSlidingData, linear_law, linear_synthesize
 from designkit.families.sliding_mode.linear_checks import LINEAR_CERTIFICATE_RULE, LINEAR_RUN_RULE
+from designkit.families.sliding_mode.linear_figures import LINEAR_FIGURES
 from designkit.families.sliding_mode.measure import json_summary
 from designkit.families.sliding_mode.spec import (
     KIND,
@@ -286,7 +287,7 @@ FAMILY = Family(
                 "corners of the (Km, τ) box and the existence and reaching conditions are certified on the box.",
     ),
     validate=validate,
-    figures=FIGURES,
+    figures=(*FIGURES, *LINEAR_FIGURES),
     diagnoses=(diagnose,),
     json=json_of,
     plant_fields=tuple(PlantField(name, ("link",), what) for name, what in (
