@@ -75,7 +75,7 @@ def test_bad_linear_plants_exit_2_naming_the_key(plant, message, tmp_path, capsy
      "plant.B: (A, B) is not controllable"),
     (TF, "{kind: state_regulator, poles: [-6, -8, -9]}", "controller.poles: the transfer_function plant has 2 states"),
     ("{kind: transfer_function, num: [1], den: [1, 3]}", "{kind: pid_servo, poles: [-4, -5, -20]}",
-     "controller.poles: a first-order plant gives a PID loop of order 2"),
+     "controller.poles: must list exactly 2 poles on a first-order transfer_function plant"),
     ("{kind: transfer_function, num: [1], den: [1, 3, 3, 1]}", "{kind: pid_tracking, poles: [-4, -5, -20]}",
      "controller.kind: pid_tracking makes y follow xD through the plant's inverse"),
     ("{kind: transfer_function, num: [1, 1], den: [1, 3, 2]}", "{kind: state_regulator, poles: [-6, -8]}",

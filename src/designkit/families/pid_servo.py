@@ -32,9 +32,8 @@ from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob, Metric, gain_knobs
 from designkit.synthesis.law import Law
-from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law, pid_poles
+from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law, pid_poles, pid_spec_rule
 from designkit.synthesis.pid import GAIN_INFO
-from designkit.synthesis.requirements import poles_or_requirements
 from designkit.synthesis.servo_loop import servo_design, servo_law
 
 KIND = "pid_servo"
@@ -259,7 +258,7 @@ FAMILY = Family(
         summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
                 "closed-loop poles and the zero of x1/xD.",
     ),
-    validate=poles_or_requirements,
+    validate=pid_spec_rule,
     knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
         Knob("poles", "1/s", "closed-loop poles the gains place", 1e-3, 1e6, path="controller.poles"),
         Knob("zero", "1/s", "closed-loop zero of the controlled position over xD (sets K4)", 1e-6, 1e6,

@@ -25,10 +25,9 @@ from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
-from designkit.synthesis.linear_servo import pid_poles
+from designkit.synthesis.linear_servo import pid_poles, pid_spec_rule
 from designkit.synthesis.linear_tracking import linear_tracking_design, linear_tracking_law
 from designkit.synthesis.pid import GAIN_INFO
-from designkit.synthesis.requirements import poles_or_requirements
 
 KIND = "pid_tracking"
 LINEAR = ("transfer_function", "state_space")
@@ -133,7 +132,7 @@ FAMILY = Family(
         summary="Notes §3.2: one link tracking a trajectory with acceleration and damping feedforward; the "
                 "error dynamics have the requested poles and x1/xD = 1 on the nominal link.",
     ),
-    validate=poles_or_requirements,
+    validate=pid_spec_rule,
     knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3")),
     traits=("pid",),
 )

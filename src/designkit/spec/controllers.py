@@ -80,7 +80,7 @@ def two_or_three_poles(poles: list[complex]) -> list[complex]:
     """Validate 2 or 3 closed-loop poles (1/s): conjugate pairs, moduli and spread as :func:`three_poles`; whether
     the plant takes 2 (a first-order linear plant) is decided when the design is made."""
     if len(poles) not in (2, 3):
-        raise ValueError(f"must list 3 poles (2 on a first-order linear plant), got {len(poles)}")
+        raise ValueError(f"must list exactly 3 poles (2 on a first-order linear plant), got {len(poles)}")
     check_poles(poles)
     check_conjugates(poles)
     return poles

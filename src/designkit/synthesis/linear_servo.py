@@ -48,8 +48,8 @@ from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Design, Gain, Gains
 from designkit.synthesis.law import Law, integral_law
 
-__all__ = ["Placement", "characteristic_map", "linear_servo_design", "linear_servo_law", "pid_poles", "place",
-           "plant_zeros"]
+__all__ = ["Placement", "characteristic_map", "linear_servo_design", "linear_servo_law", "pid_poles", "pid_spec_rule",
+           "place", "plant_zeros"]
 
 SINGULAR_TOL = 1e-10
 """Hadamard ratio of the placement's linear system below which it is refused (a gain would be unbounded)."""
@@ -234,6 +234,33 @@ def place(A: np.ndarray, b: np.ndarray, c: np.ndarray, r: np.ndarray, poles: Seq
                      + (" -- UNSTABLE: the loop diverges; slow the requested poles or use a state feedback "
                         "(state_regulator), which places one pole per state." if unstable else "."))
     return Placement(float(K[0]), float(K[1]), float(K[2]), placed, left, ratio, statement)
+
+
+def pid_spec_rule(spec: Any, linear: Sequence[str] = ("transfer_function", "state_space")) -> None:
+    """Spec rule of the PID families (read when the spec is loaded): ``controller.poles`` or the requirements
+    (:func:`~designkit.synthesis.requirements.poles_or_requirements`), and a pole count the plant takes: 2 on a
+    first-order linear plant (its order read from ``den`` or ``A``), 3 on any other.
+
+    Raises
+    ------
+    ValueError
+        ``"controller.poles: ..."`` (the loader turns it into a SpecError with that key path).
+    """
+    from designkit.synthesis.requirements import poles_or_requirements
+
+    poles_or_requirements(spec)
+    poles = spec.controller.poles
+    if poles is None:
+        return
+    plant = spec.plant
+    order = (len(plant.den) - 1 if plant.kind == "transfer_function" else len(plant.A) if plant.kind == "state_space"
+             else None)
+    want = 2 if plant.kind in linear and order == 1 else 3
+    if len(poles) != want:
+        where = (f"a first-order {plant.kind} plant (its PID loop has order 2)" if want == 2 else
+                 f"a {plant.kind} plant" + ("" if plant.kind in linear else
+                                            " (2 only on a first-order transfer_function or state_space plant)"))
+        raise ValueError(f"controller.poles: must list exactly {want} poles on {where}, got {len(poles)}")
 
 
 def pid_poles(controller: Any, requirements: Any, plant: Any,

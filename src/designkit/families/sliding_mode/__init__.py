@@ -73,7 +73,6 @@ from designkit.families.sliding_mode.design_lp import design_gains
 from designkit.families.sliding_mode.diagnoses import diagnose
 from designkit.families.sliding_mode.figures import FIGURES
 from designkit.families.sliding_mode.linear import LINEAR, LinearSlidingData, linear_law, linear_synthesize
-from designkit.families.sliding_mode.linear_checks import LINEAR_CERTIFICATE_RULE, LINEAR_RUN_RULE
 from designkit.families.sliding_mode.linear_figures import LINEAR_FIGURES
 from designkit.families.sliding_mode.measure import json_summary
 from designkit.families.sliding_mode.spec import (
@@ -276,7 +275,7 @@ FAMILY = Family(
     references=("step", "square", "prbs"),
     synthesize=synthesize,
     law=law,
-    checks=(CERTIFICATE_RULE, RUN_RULE, LINEAR_CERTIFICATE_RULE, LINEAR_RUN_RULE, "time_domain"),
+    checks=(CERTIFICATE_RULE, RUN_RULE, "time_domain"),
     display=Display(
         label="Sliding-mode position servo",
         law_of=law_lines,

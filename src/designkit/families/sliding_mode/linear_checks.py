@@ -1,7 +1,7 @@
 """The sliding-mode servo's own checks on a linear plant (:mod:`~designkit.families.sliding_mode.linear`).
 
-``sliding_linear_conditions`` (order 55), each re-deriving its proven range from the plant's own linear model over
-the box (:func:`~designkit.families.sliding_mode.linear.proven_range`):
+Run by the family's ``sliding_conditions`` rule (order 55) on a linear design, each re-deriving its proven range
+from the plant's own linear model over the box (:func:`~designkit.families.sliding_mode.linear.proven_range`):
 
 * ``sliding_linear_orientation``: ``c B > 0`` on the whole box;
 * ``sliding_linear_switching``: ``k_i >= sup |g_i / cB|`` for every state (the state-proportional gains dominate
@@ -10,7 +10,7 @@ the box (:func:`~designkit.families.sliding_mode.linear.proven_range`):
   ``eta = min cB (k0 - xi_bar - sup|w X/cB|) > 0``: the sliding mode exists on ``s = 0`` and every trajectory
   reaches it within ``|s(0)| / eta``.
 
-``sliding_linear_run`` (order 127): ``sliding_linear_reaching_time`` (informational: the first time
+Run by its ``sliding_run`` rule (order 127): ``sliding_linear_reaching_time`` (informational: the first time
 ``|s| <= h S(x~)``) and ``sliding_linear_band`` (required: after reaching, ``|s| <= h max S(x~)`` over the rest of
 the run, the band a held step can leave; with a boundary layer ``|s| <= max(epsilon, h max S)``).
 """
@@ -25,15 +25,16 @@ import numpy as np
 from designkit.families.sliding_mode.linear import LinearSlidingData, proven_range
 from designkit.synthesis.state_space import linear_model
 from designkit.verification.check import Check
-from designkit.verification.suite import CheckRule, Context
+from designkit.verification.suite import Context
 
-__all__ = ["LINEAR_CERTIFICATE_RULE", "LINEAR_RUN_RULE"]
+__all__ = ["CERTIFICATE_GLOSSARY", "CERTIFICATE_LABELS", "RUN_GLOSSARY", "RUN_LABELS", "conditions", "run_checks"]
 
 TOLERANCE = 1e-9
 """Relative slack the run's band is judged with (rounding of the recorded ``s``)."""
 
 
-def _conditions(design: Any, ctx: Context) -> tuple[Check, ...]:
+def conditions(design: Any, ctx: Context) -> tuple[Check, ...]:
+    """The certificate on a linear plant (module docstring)."""
     info: LinearSlidingData = design.data
     model = linear_model(design.plant)
     box = {k: tuple(v) for k, v in info.box.items()}
@@ -74,18 +75,15 @@ def _conditions(design: Any, ctx: Context) -> tuple[Check, ...]:
     return tuple(out)
 
 
-LINEAR_CERTIFICATE_RULE = CheckRule(
-    name="sliding_linear_conditions", order=55, applies=lambda d, c: isinstance(d.data, LinearSlidingData),
-    run=_conditions, label="Sliding-mode conditions on the linear plant's box",
-    labels={"sliding_linear_orientation": "The input moves s the same way on the whole box (c B > 0)",
-            "sliding_linear_switching": "Switching gains dominate the model error (whole box)",
-            "sliding_linear_reaching": "Every trajectory reaches s = 0 and slides (whole box)"},
-    glossary=(("s", "the sliding function c (x − x* xD), c from the sliding poles"),
-              ("reaching", "s s' ≤ −η |s|: s = 0 is met in finite time and kept")),
-)
+CERTIFICATE_LABELS = {"sliding_linear_orientation": "The input moves s the same way on the whole box (c B > 0)",
+                      "sliding_linear_switching": "Switching gains dominate the model error (whole box)",
+                      "sliding_linear_reaching": "Every trajectory reaches s = 0 and slides (whole box)"}
+CERTIFICATE_GLOSSARY = (("linear plant's s", "c (x − x* xD), c from the sliding poles"),
+                        ("linear plant's reaching", "s s' ≤ −η |s|: s = 0 is met in finite time and kept"))
 
 
-def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
+def run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
+    """What the run on a linear plant shows (module docstring)."""
     info: LinearSlidingData = design.data
     sim = ctx.simulation
     t = np.asarray(sim.time, float)
@@ -123,11 +121,6 @@ def _run(design: Any, ctx: Context) -> tuple[Check, ...]:
     return reach, band
 
 
-LINEAR_RUN_RULE = CheckRule(
-    name="sliding_linear_run", order=127,
-    applies=lambda d, c: c.simulation is not None and isinstance(d.data, LinearSlidingData),
-    run=_run, label="Sliding mode in the simulated run (linear plant)",
-    labels={"sliding_linear_reaching_time": "Reaching time (measured)",
-            "sliding_linear_band": "The run stays in the band"},
-    glossary=(("band", "|s| ≤ h S(x̃): how far from s = 0 a command held over a step can leave s"),),
-)
+RUN_LABELS = {"sliding_linear_reaching_time": "Reaching time (measured)",
+              "sliding_linear_band": "The run stays in the band h S(x̃)"}
+RUN_GLOSSARY = (("h S(x̃)", "how far from s = 0 a command held over a step can leave s on a linear plant"),)
