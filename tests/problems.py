@@ -53,6 +53,10 @@ CASES = {
     "pid_tracking": {
         "link": ("{kind: pid_tracking, poles: [-10, -12, -15]}",
                  "{duration: 2.0, trajectory: {kind: quintic, amplitude: 1.0, duration: 1.0}}"),
+        "transfer_function": ("{kind: pid_tracking, poles: [-10, -12, -15]}",
+                              "{duration: 2.0, trajectory: {kind: quintic, amplitude: 1.0, duration: 1.0}}"),
+        "state_space": ("{kind: pid_tracking, poles: [-10, -12, -15]}",
+                        "{duration: 2.0, trajectory: {kind: quintic, amplitude: 1.0, duration: 1.0}}"),
     },
     "computed_torque": {
         # the nominal model against the true m2 anywhere in [2.5, 3.5] kg: the corners track to 0.06 rad

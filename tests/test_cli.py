@@ -20,6 +20,8 @@ SPECS = sorted((ROOT / "specs").glob("*.yaml"))
 EXPECTED_EXIT = {
     "posspeed-link": 0,
     "dc-motor-transfer-function": 0,  # a PID servo on a transfer function with named parameters
+    "pid-servo-third-order": 0,  # three poles placed on a loop of order 4, the fourth stated
+    "pid-tracking-first-order": 0,  # the inverse fed forward on a first-order plant, two poles placed
     "posspeed-saturation": 0,
     "posspeed-dead-zone": 0,
     "posspeed-relay": 1,

@@ -74,8 +74,10 @@ def test_bad_linear_plants_exit_2_naming_the_key(plant, message, tmp_path, capsy
     ("{kind: state_space, A: [[-1, 0], [0, -2]], B: [[1, 2], [0, 0]], C: [[1, 1]]}", REG2,
      "plant.B: (A, B) is not controllable"),
     (TF, "{kind: state_regulator, poles: [-6, -8, -9]}", "controller.poles: the transfer_function plant has 2 states"),
-    ("{kind: transfer_function, num: [1], den: [1, 3, 3, 1]}", "{kind: pid_servo, poles: [-4, -5, -20]}",
-     "controller.poles: a PID places three closed-loop poles on a plant of order 2 only; this plant has order 3"),
+    ("{kind: transfer_function, num: [1], den: [1, 3]}", "{kind: pid_servo, poles: [-4, -5, -20]}",
+     "controller.poles: must list exactly 2 poles on a first-order transfer_function plant"),
+    ("{kind: transfer_function, num: [1], den: [1, 3, 3, 1]}", "{kind: pid_tracking, poles: [-4, -5, -20]}",
+     "controller.kind: pid_tracking makes y follow xD through the plant's inverse"),
     ("{kind: transfer_function, num: [1, 1], den: [1, 3, 2]}", "{kind: state_regulator, poles: [-6, -8]}",
      "plant.num: shares a root with plant.den"),
 ])

@@ -87,11 +87,56 @@ def test_a_second_order_state_space_plant_whose_output_is_a_combination():
     assert np.allclose(_sorted(np.linalg.eigvals(Acl)), _sorted(POLES), rtol=1e-8)
 
 
-def test_plants_not_of_order_two_are_refused_at_controller_poles():
-    for den in ([1.0, 1.0], [1.0, 3.0, 3.0, 1.0]):
-        with pytest.raises(SpecError) as info:
-            linear_servo_design(transfer_function_plant([1.0], den), POLES, None, kind="pid_servo")
-        assert info.value.path == "controller.poles"
+def _feedback_poles(num, den, K1, K2, K3):
+    """Closed-loop poles of python-control's ``feedback(C P, 1)`` with ``C = K1 + K2 s + K3/s`` (``r x = y'`` on an
+    all-pole plant of relative degree 2 or more; ``K2 = 0`` on a first-order one)."""
+    C = control.tf([K2, K1, K3], [1.0, 0.0]) if K2 else control.tf([K1, K3], [1.0, 0.0])
+    return _sorted(control.poles(control.feedback(C * control.tf(num, den), 1)))
+
+
+def test_a_first_order_plant_places_two_poles_with_a_pi():
+    num, den = [2.0], [0.5, 1.0]
+    d = linear_servo_design(transfer_function_plant(num, den), [-4.0, -5.0], -2.0, kind="pid_servo")
+    K1, K2, K3 = (float(d.gains[k]) for k in ("K1", "K2", "K3"))
+    assert K2 == 0.0
+    assert np.allclose(_feedback_poles(num, den, K1, K2, K3), [-5.0, -4.0], rtol=1e-9)
+    assert np.allclose(_sorted(d.closed_loop.poles), [-5.0, -4.0], rtol=1e-9)
+    with pytest.raises(SpecError) as info:
+        linear_servo_design(transfer_function_plant(num, den), POLES, None, kind="pid_servo")
+    assert info.value.path == "controller.poles" and "give 2 poles" in info.value.message
+
+
+def test_two_poles_on_a_second_order_plant_are_refused():
+    with pytest.raises(SpecError) as info:
+        linear_servo_design(transfer_function_plant([1.0], [1.0, 1.0, 0.0]), [-1.0, -2.0], None, kind="pid_servo")
+    assert info.value.path == "controller.poles" and "give 3 poles" in info.value.message
+
+
+@pytest.mark.parametrize("den", [[0.002, 0.21, 1.0, 0.0], [1.0, 12.0, 54.0, 108.0, 81.0]])
+def test_higher_order_places_three_poles_and_states_where_the_others_are_left(den):
+    num = [50.0]
+    placed = [-3.0 + 2.0j, -3.0 - 2.0j, -6.0] if len(den) == 5 else [-20.0, -30.0, -40.0]
+    d = linear_servo_design(transfer_function_plant(num, den), placed, None, kind="pid_servo")
+    K1, K2, K3 = (float(d.gains[k]) for k in ("K1", "K2", "K3"))
+    cl = _feedback_poles(num, den, K1, K2, K3)
+    assert len(cl) == len(den)  # order n + 1
+    for p in placed:  # every requested pole is a pole of python-control's loop
+        assert np.min(np.abs(cl - p)) < 1e-6 * abs(p)
+    assert np.allclose(_sorted(d.poles), cl, rtol=1e-7, atol=1e-9)  # the design states the left ones too
+    assert np.allclose(_sorted(d.closed_loop.poles), cl, rtol=1e-7, atol=1e-9)
+    left = [p for p in cl if np.min(np.abs(np.asarray(placed) - p)) > 1e-6 * abs(p)]
+    assert len(left) == len(den) - 3
+    assert "left where the quotient puts them" in d.notes[0]
+    # the sum of the loop's poles is fixed by the plant on a relative degree 3 plant (the s^n coefficient)
+    assert np.sum(cl).real == pytest.approx(-den[1] / den[0], rel=1e-9)
+
+
+def test_a_placement_that_leaves_an_unstable_pole_says_so():
+    num, den = [400.0], [1.0, 2.0, 400.0, 0.0]  # sum of the loop's poles fixed at -2
+    d = linear_servo_design(transfer_function_plant(num, den), [-3.0, -4.0, -5.0], None, kind="pid_servo")
+    cl = _feedback_poles(num, den, *(float(d.gains[k]) for k in ("K1", "K2", "K3")))
+    assert max(cl.real) == pytest.approx(10.0, rel=1e-9)
+    assert "UNSTABLE" in d.notes[0]
 
 
 def test_a_plant_zero_cancelling_a_pole_is_refused():

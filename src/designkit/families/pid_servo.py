@@ -23,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import field_validator, model_validator
 
-from designkit.spec.controllers import PoleRequirementsController
+from designkit.spec.controllers import LinearPoleRequirementsController
 from designkit.spec.fields import Finite
 from designkit.spec.ranges import Ranged
 from designkit.synthesis import pid
@@ -32,14 +32,13 @@ from designkit.synthesis.design import Design, FamilyData, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import Knob, Metric, gain_knobs
 from designkit.synthesis.law import Law
-from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law
+from designkit.synthesis.linear_servo import linear_servo_design, linear_servo_law, pid_poles, pid_spec_rule
 from designkit.synthesis.pid import GAIN_INFO
-from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 from designkit.synthesis.servo_loop import servo_design, servo_law
 
 KIND = "pid_servo"
 
-class PidServoSpec(PoleRequirementsController):
+class PidServoSpec(LinearPoleRequirementsController):
     """PID position servo ``u = -K1 (x1 - xD) - K2 x2 - K3 int(x1 - xD) + K3 K4 xD``.
 
     ``zero`` (1/s, -1e12 to -1e-12) is the closed-loop zero of ``x1/xD``; when omitted, ``K4 = 0`` and
@@ -195,9 +194,9 @@ def elastic_design(plant: Any, poles: Sequence[complex], zero: float | None, *, 
 
 def synthesize(spec: Any, plant: Any) -> Design:
     """The servo a spec asks for: poles given, or derived from the requirements (zero on the third pole)."""
-    poles, notes, extra = poles_from_spec(spec.controller, spec.requirements)
+    poles, notes, extra = pid_poles(spec.controller, spec.requirements, plant, LINEAR)
     zero = spec.controller.zero
-    if zero is None and spec.controller.poles is None:
+    if zero is None and spec.controller.poles is None and len(poles) == 3:
         zero = poles[2].real
         notes = (*notes, f"No zero given: placed on the third pole ({zero:.6g} 1/s) so that the "
                  "reference response is the dominant second-order one.")
@@ -259,7 +258,7 @@ FAMILY = Family(
         summary="Notes §3.2: one link positioned by a PID with reference feedforward; the gains place three "
                 "closed-loop poles and the zero of x1/xD.",
     ),
-    validate=poles_or_requirements,
+    validate=pid_spec_rule,
     knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3", "K4")) + (
         Knob("poles", "1/s", "closed-loop poles the gains place", 1e-3, 1e6, path="controller.poles"),
         Knob("zero", "1/s", "closed-loop zero of the controlled position over xD (sets K4)", 1e-6, 1e6,

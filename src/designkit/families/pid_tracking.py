@@ -7,6 +7,10 @@ Law, with ``e = x1 - xD`` and the integral ``x3' = e``, ``tau0``, ``Km0`` the no
 The ``x2/Km0`` term cancels the link damping, so on the nominal link the error obeys
 ``tau e''' + Km K2 e'' + Km K1 e' + Km K3 e = Km xi'``: ``x1/xD = 1`` and the gains differ from
 the servo's (``K2`` by ``1/Km``; see :mod:`designkit.synthesis.pid` and the errata page).
+
+On a ``transfer_function`` or ``state_space`` plant of any order (relative degree 1 or 2, minimum phase) the
+feedforward is the nominal plant's inverse and the gains place the error loop's poles through its characteristic
+polynomial (:mod:`designkit.synthesis.linear_tracking`): ``y/xD = 1`` on the nominal plant there too.
 """
 
 from __future__ import annotations
@@ -14,20 +18,23 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, Literal
 
-from designkit.spec.controllers import PoleRequirementsController
+from designkit.spec.controllers import LinearPoleRequirementsController
 from designkit.synthesis import pid
 from designkit.synthesis.closed_loop import with_closed_loop
 from designkit.synthesis.design import Characteristic, Design, Gain, Gains
 from designkit.synthesis.family import Display, Family
 from designkit.synthesis.knobs import gain_knobs
 from designkit.synthesis.law import Law, integral_law
+from designkit.synthesis.linear_servo import pid_poles, pid_spec_rule
+from designkit.synthesis.linear_tracking import linear_tracking_design, linear_tracking_law
 from designkit.synthesis.pid import GAIN_INFO
-from designkit.synthesis.requirements import poles_from_spec, poles_or_requirements
 
 KIND = "pid_tracking"
+LINEAR = ("transfer_function", "state_space")
+"""The general linear plant kinds, designed by :mod:`designkit.synthesis.linear_tracking`."""
 
 
-class PidTrackingSpec(PoleRequirementsController):
+class PidTrackingSpec(LinearPoleRequirementsController):
     """PID trajectory tracking ``u = (tau/Km) xD'' + x2/Km - K1 dx1 - K2 dx2 - K3 int(dx1)``."""
 
     kind: Literal["pid_tracking"]
@@ -46,7 +53,10 @@ def characteristic(nominal: Any) -> Characteristic:
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
-    """``u = (tau0/Km0) xD'' + x2/Km0 - K1 e - K2 (x2 - xD') - K3 x3``, ``x3' = e`` (N*m)."""
+    """``u = (tau0/Km0) xD'' + x2/Km0 - K1 e - K2 (x2 - xD') - K3 x3``, ``x3' = e`` (N*m); on a linear plant
+    :func:`~designkit.synthesis.linear_tracking.linear_tracking_law`."""
+    if design.plant.kind in LINEAR:
+        return linear_tracking_law(design, anti_windup)
     K1, K2, K3 = (float(design.gains[k]) for k in ("K1", "K2", "K3"))
     Km0, tau0 = float(design.plant.Km), float(design.plant.tau)
     v = design.plant.velocities[0]
@@ -79,14 +89,34 @@ def design(plant: Any, poles: Sequence[complex], *, notes: tuple[str, ...] = (),
 
 def synthesize(spec: Any, plant: Any) -> Design:
     """The tracker a spec asks for (poles given or derived from the requirements)."""
-    poles, notes, extra = poles_from_spec(spec.controller, spec.requirements)
+    poles, notes, extra = pid_poles(spec.controller, spec.requirements, plant, LINEAR)
+    if plant.kind in LINEAR:
+        return linear_tracking_design(plant, poles, kind=KIND, notes=notes, extra=extra)
     return design(plant, poles, notes=notes, extra=extra)
+
+
+def law_lines(design: Any) -> tuple[str, ...]:
+    """The law in the linear plant's signal names (``()`` on the link: the family's own)."""
+    plant = design.plant
+    if plant.kind not in LINEAR:
+        return ()
+    y = plant.states[plant.positions[0]].name
+    u = plant.inputs[0].name
+    return (f"{u} = u_ff − K1 ({y} − xD) − K2 (r x − ρ_D) − K3 ∫({y} − xD) dt,   r x = c A x,   "
+            "ρ_D = xD' − (c b) u_ff",
+            "u_ff = G⁻¹(s) xD = q0 xD + q1 xD' + q2 xD'' (+ a filter at the plant's zeros): y = xD on the nominal "
+            "plant")
+
+
+def loop_line(design: Any) -> str | None:
+    """No closed form on a linear plant (``""``); None on the link (the family's own line)."""
+    return "" if design.plant.kind in LINEAR else None
 
 
 FAMILY = Family(
     kind=KIND,
     spec=PidTrackingSpec,
-    plants=("link",),
+    plants=("link", *LINEAR),
     uses=("simulation.anti_windup", "plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
     reference="trajectory",
     synthesize=synthesize,
@@ -97,10 +127,12 @@ FAMILY = Family(
         label="PID trajectory tracking",
         law=("u = (τ/Km) xD'' + x2/Km - K1 (x1 - xD) - K2 (x2 - xD') - K3 ∫(x1 - xD) dt",),
         loop_transfer="L(s) = ((Km K2 − 1) s² + Km K1 s + Km K3) / (s² (τ s + 1))  (x2/Km cancels the link damping)",
+        law_of=law_lines,
+        loop_transfer_of=loop_line,
         summary="Notes §3.2: one link tracking a trajectory with acceleration and damping feedforward; the "
                 "error dynamics have the requested poles and x1/xD = 1 on the nominal link.",
     ),
-    validate=poles_or_requirements,
+    validate=pid_spec_rule,
     knobs=gain_knobs(GAIN_INFO, ("K1", "K2", "K3")),
     traits=("pid",),
 )

@@ -165,14 +165,51 @@ def assembled_comparison() -> type[ComparisonSpec]:
 
 def json_schema(form: str = "single") -> dict[str, Any]:
     """The JSON Schema of a spec: ``"single"`` (``controller:``), ``"comparison"`` (``controllers:``) or
-    ``"any"`` (exactly one of the two forms, ``oneOf``)."""
+    ``"any"`` (exactly one of the two forms, ``oneOf``).  Each family's section says which plant kinds it accepts
+    (:func:`with_plant_kinds`)."""
     if form == "single":
-        return Spec.model_json_schema()
+        return with_plant_kinds(Spec.model_json_schema())
     if form == "comparison":
-        return ComparisonSpec.model_json_schema()
+        return with_plant_kinds(ComparisonSpec.model_json_schema())
     from pydantic import TypeAdapter
 
     schema = TypeAdapter(Union[assembled(), assembled_comparison()]).json_schema()  # noqa: UP007
     schema["oneOf"] = schema.pop("anyOf")  # exclusive: each form forbids the other's key
     schema["title"] = "designkit spec (one controller, or a comparison of several)"
+    return with_plant_kinds(schema)
+
+
+def with_plant_kinds(schema: dict[str, Any]) -> dict[str, Any]:
+    """``schema`` with each family's section (the targets of every discriminator on ``kind`` naming a registered
+    family) given ``x-plant-kinds``, the plant kinds the family is designed for (:attr:`Family.plants`), and a
+    sentence saying so at the end of its description; the top level gets ``x-families-by-plant-kind``."""
+    defs = schema.get("$defs", {})
+    by_plant: dict[str, list[str]] = {}
+
+    def visit(node: Any) -> None:
+        if isinstance(node, dict):
+            disc = node.get("discriminator")
+            if isinstance(disc, dict) and disc.get("propertyName") == "kind":
+                for kind, ref in disc.get("mapping", {}).items():
+                    if kind not in FAMILIES:
+                        continue
+                    plants = list(FAMILIES[kind].plants)
+                    target = defs.get(ref.rsplit("/", 1)[-1])
+                    if target is not None and "x-plant-kinds" not in target:
+                        target["x-plant-kinds"] = plants
+                        target["description"] = (target.get("description", "").rstrip()
+                                                 + f"\n\nPlant kinds: {', '.join(plants)}.").lstrip()
+                    for plant in plants:
+                        by_plant.setdefault(plant, [])
+                        if kind not in by_plant[plant]:
+                            by_plant[plant].append(kind)
+            for value in node.values():
+                visit(value)
+        elif isinstance(node, list):
+            for value in node:
+                visit(value)
+
+    visit(schema)
+    if by_plant:
+        schema["x-families-by-plant-kind"] = {k: sorted(v) for k, v in sorted(by_plant.items())}
     return schema

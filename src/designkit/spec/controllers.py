@@ -17,7 +17,8 @@ from designkit.spec.fields import Finite, Pole, PositiveFinite, Section, check_c
 from designkit.spec.plants import Payload
 from designkit.spec.ranges import PARAMETER, Ranged, check_poles
 
-__all__ = ["ControllerModel", "PoleRequirementsController", "three_poles"]
+__all__ = ["ControllerModel", "LinearPoleRequirementsController", "PoleRequirementsController", "three_poles",
+           "two_or_three_poles"]
 
 
 class ControllerModel(Section):
@@ -73,3 +74,30 @@ class PoleRequirementsController(Section):
     @classmethod
     def _three_conjugate(cls, v: list[complex] | None) -> list[complex] | None:
         return v if v is None else three_poles(v)
+
+
+def two_or_three_poles(poles: list[complex]) -> list[complex]:
+    """Validate 2 or 3 closed-loop poles (1/s): conjugate pairs, moduli and spread as :func:`three_poles`; whether
+    the plant takes 2 (a first-order linear plant) is decided when the design is made."""
+    if len(poles) not in (2, 3):
+        raise ValueError(f"must list exactly 3 poles (2 on a first-order linear plant), got {len(poles)}")
+    check_poles(poles)
+    check_conjugates(poles)
+    return poles
+
+
+class LinearPoleRequirementsController(PoleRequirementsController):
+    """A :class:`PoleRequirementsController` whose family also places PID poles on linear plants of any order:
+    ``poles`` lists 3 values, or 2 on a first-order ``transfer_function`` / ``state_space`` plant (whose PID loop
+    has order 2); poles derived from requirements are then the dominant pair alone."""
+
+    poles: list[Pole] | None = Field(
+        default=None,
+        description="Closed-loop poles (1/s): three values, real or a complex-conjugate pair plus a real pole; two on "
+        "a first-order linear plant.",
+    )
+
+    @field_validator("poles")
+    @classmethod
+    def _three_conjugate(cls, v: list[complex] | None) -> list[complex] | None:
+        return v if v is None else two_or_three_poles(v)

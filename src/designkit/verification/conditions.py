@@ -18,6 +18,7 @@ read off the expression, not declared:
   ``g = sum_S c_S prod_{i in S} theta_i`` whose coefficients ``c_S`` are CasADi's mixed partial
   derivatives at ``theta = 0``; the NumPy values, less their rounding bound (Higham's
   ``gamma_m sum |c_S prod theta_i|``), decide, and the two routes must agree to that bound;
+* a set over no parameter (a plant whose entries are all numbers) is judged at its one point, as at a vertex;
 * anything else (``1/tau`` uncleared, ``Km^2``): not certified here -- undecided, naming the
   condition and its form, never a pass.
 
@@ -242,7 +243,7 @@ def certify(name: str, conditions: ConditionSet, box: Mapping[str, tuple[float, 
     entries = []
     for cond in conditions.conditions:
         expr = ca.SX(cond.expression(sym))
-        form = form_of(expr, theta)
+        form = form_of(expr, theta) if names else "multiaffine"  # no parameter: one plant, its one "vertex"
         if form == "affine":
             entries.append(_affine_entry(cond, expr, theta, names, lo, hi, eps, solver))
         elif form == "multiaffine":

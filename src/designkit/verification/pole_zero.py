@@ -23,7 +23,9 @@ first joint's channels are used (the families that place zeros have one joint).
   ``s = 0, jR/10, jR, 10jR`` -- so it has no zeros (``design.zeros == ()``); and ``xi -> x1`` must have
   its single finite zero at 0 when the law has integral action (states integrating the position error, the
   linearized law's ``integral_states``: :class:`designkit.synthesis.law.Law`; notes F2 =
-  (Km/tau) s / ((s-p1)(s-p2)(s-p3))).
+  (Km/tau) s / ((s-p1)(s-p2)(s-p3))), besides the zeros the design lists under
+  ``design.extra["disturbance_zeros"]`` (a linear plant's own zeros, and the feedforward filter's modes that
+  ``xi`` does not reach: :mod:`designkit.synthesis.linear_tracking`).
 
 ``margin = 1 - max(error / tolerance)`` over every comparison: positive when all hold.
 """
@@ -259,10 +261,12 @@ def pole_placement(design: Any) -> Check:
             ratios["requested zeros"] = np.inf
         dz, n_inf = finite_zeros(_siso(cl, 0, i_dist))
         if _integral_action(design):  # an integral of the position error rejects a constant xi
-            dm = match_roots(dz, [0.0], R)
+            expected = [0.0, *(complex(z) for z in design.extra.get("disturbance_zeros", ()))]
+            dm = match_roots(dz, expected, R)
             ratios["xi zeros"] = dm["ratio"]
             if not dm["ok"]:
-                failures.append(f"zeros of x1/xi {np.round(dz, 9).tolist()} != [0] (integral action)")
+                failures.append(f"zeros of x1/xi {np.round(dz, 9).tolist()} != {np.round(expected, 9).tolist()} "
+                                "(integral action)")
         cert.update(
             reference_transfer={"s": _pairs(points), "value": _pairs(vals), "scaled_error": errs},
             disturbance_zeros=_pairs(dz), infinite_zeros_discarded=n_inf, zeros=[],

@@ -23,6 +23,14 @@ CONFORMANCE = {
     "link": ("{kind: sliding_mode, sliding_poles: [-5], perturbation_bound: 0.5}",
              "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
              "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
+    # the link as a transfer function and as a state-space model: the surface, the nominal equivalent control and
+    # the switching gain from the box's proven model error (the minimal relay reaches s = 0 in about 0.9 s here)
+    "transfer_function": ("{kind: sliding_mode, sliding_poles: [-5], perturbation_bound: 0.5}",
+                          "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
+                          "{overshoot: 2, settling_time: 2.0, steady_state_error: 0.005}"),
+    "state_space": ("{kind: sliding_mode, sliding_poles: [-5], perturbation_bound: 0.5}",
+                    "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
+                    "{overshoot: 2, settling_time: 2.0, steady_state_error: 0.005}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
@@ -30,5 +38,6 @@ EXAMPLES = {
     "sliding-mode-link": 0,
     "sliding-mode-weak-switching": 1,  # M below the perturbation: the certificate names the M that would do
     "sliding-mode-link-implemented": 0,  # sampled at 1 kHz, 0.1 ms delay, a +-5 N*m actuator with a 300 rad/s lag
+    "sliding-mode-third-order-drive": 0,  # a state_space plant: the surface from two sliding poles, gains from the box
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -26,7 +26,9 @@ def figures(link_result):
 
 
 def test_the_family_declares_its_figures():
-    assert family("sliding_mode").figures == FIGURES and set(FIGURES) == set(EXPECTED)
+    from designkit.families.sliding_mode.linear_figures import LINEAR_FIGURES
+
+    assert family("sliding_mode").figures == (*FIGURES, *LINEAR_FIGURES) and set(FIGURES) == set(EXPECTED)
 
 
 @pytest.mark.parametrize("draw", FIGURES, ids=[f.__name__ for f in FIGURES])

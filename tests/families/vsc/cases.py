@@ -29,12 +29,20 @@ CONFORMANCE = {
     # ROBEL figure 5.3 on the default elastic joint (no uncertainty), relay given
     "elastic_joint": ("{kind: vsc, sliding_poles: [-8, -10, -12], relay_amplitude: 0.05}", "{duration: 1.5}",
                       "{overshoot: 15, settling_time: 1.2, steady_state_error: 0.01}"),
+    # the link as a transfer function and as a state-space model with named parameters, the same box and load
+    "transfer_function": ("{kind: vsc, sliding_poles: [-5], perturbation_bound: 0.5}",
+                          "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
+                          "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
+    "state_space": ("{kind: vsc, sliding_poles: [-5], perturbation_bound: 0.5}",
+                    "{duration: 3.0, perturbation: {value: 0.5, time: 1.0}}",
+                    "{overshoot: 2, settling_time: 1.5, steady_state_error: 0.005}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
 EXAMPLES = {
     "vsc-elastic-joint": 0,
     "vsc-link": 0,
+    "vsc-third-order-drive": 0,  # theorem 3 on a state_space plant with a gearbox resonance
     "vsc-elastic-joint-narrow-gains": 1,  # gains bracketing l_i at the nominal plant only: the certificate fails
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -72,6 +72,8 @@ from designkit.families.sliding_mode.data import SlidingData
 from designkit.families.sliding_mode.design_lp import design_gains
 from designkit.families.sliding_mode.diagnoses import diagnose
 from designkit.families.sliding_mode.figures import FIGURES
+from designkit.families.sliding_mode.linear import LINEAR, LinearSlidingData, linear_law, linear_synthesize
+from designkit.families.sliding_mode.linear_figures import LINEAR_FIGURES
 from designkit.families.sliding_mode.measure import json_summary
 from designkit.families.sliding_mode.spec import (
     KIND,
@@ -82,7 +84,7 @@ from designkit.families.sliding_mode.spec import (
 )
 from designkit.synthesis.closed_loop import with_law
 from designkit.synthesis.design import Design, Gain, Gains
-from designkit.synthesis.family import Display, Family
+from designkit.synthesis.family import Display, Family, PlantField
 from designkit.synthesis.knobs import COMMAND_VARIATION, SETTLED_ERROR, Knob
 from designkit.synthesis.law import Law, dynamic_law
 from designkit.synthesis.linearization import Linearization
@@ -162,7 +164,10 @@ def _max_control(spec: Any) -> float | None:
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
-    """The sliding-mode servo a spec asks for (package docstring): box, LP gains, band and step, law."""
+    """The sliding-mode servo a spec asks for (package docstring): box, LP gains, band and step, law; on a linear
+    plant :func:`~designkit.families.sliding_mode.linear.linear_synthesize`."""
+    if plant.kind in LINEAR:
+        return linear_synthesize(spec, plant, KIND)
     ctl, sim = spec.controller, spec.simulation
     c = -float(ctl.sliding_poles[0].real)
     box, notes = design_box(spec, plant)
@@ -208,6 +213,8 @@ def synthesize(spec: Any, plant: Any) -> Design:
 def law(design: Design, anti_windup: Any = None) -> Law:
     """``u = -psi e - M sign(s)`` (or ``M sat(s/epsilon)``), ``s = x2 + c e``, held over each step of at most
     ``max_step`` (N*m); records ``s`` (rad/s) and ``psi`` (N*m/rad).  ``anti_windup`` is refused at the spec."""
+    if isinstance(design.data, LinearSlidingData):
+        return linear_law(design, anti_windup)
     al, be, M, c = (float(design.gains[k]) for k in ("alpha", "beta", "M", "c"))
     info = design.data
     eps = info.boundary_layer
@@ -236,10 +243,33 @@ def law(design: Design, anti_windup: Any = None) -> Law:
     )
 
 
+def json_of(result: Any) -> dict[str, Any]:
+    """The ``sliding`` object of ``verify --json``: the link's numbers and measurements
+    (:func:`~designkit.families.sliding_mode.measure.json_summary`), or on a linear plant the surface, the gains
+    and the proven ranges they come from."""
+    info = result.design.data
+    if not isinstance(info, LinearSlidingData):
+        return json_summary(result)
+    return {"sliding": {"sliding_function": "s = c (x - x* xD)", "c": list(info.c), "k": list(info.k), "k0": info.k0,
+                        "u_rest": info.u_rest, "x_rest": list(info.x_rest), "perturbation_bound": info.xi_bar,
+                        "margin": info.margin, "box": {k: list(v) for k, v in info.box.items()},
+                        "sup_g_over_cB": list(info.g_sup), "sup_w_over_cB": info.w_sup, "cB_range": list(info.cB_range),
+                        "band_target": info.band, "boundary_layer": info.boundary_layer, "max_step": info.max_step,
+                        "S0": info.S0}}
+
+
+def law_lines(design: Any) -> tuple[str, ...]:
+    """The law on a linear plant (``()`` on the link: the family's own lines)."""
+    if not isinstance(design.data, LinearSlidingData):
+        return ()
+    return ("s = c (x − x* xD), c from the sliding poles (Ackermann, c B0 = 1)",
+            "u = u* xD − c A0 x̃ − (k0 + Σ k_i |x̃_i|) sign(s);  sat(s/ε) replaces sign(s) with a boundary layer")
+
+
 FAMILY = Family(
     kind=KIND,
     spec=SlidingModeSpec,
-    plants=("link",),
+    plants=("link", *LINEAR),
     uses=("plant.uncertainty",),
     reference="step",
     references=("step", "square", "prbs"),
@@ -248,6 +278,7 @@ FAMILY = Family(
     checks=(CERTIFICATE_RULE, RUN_RULE, "time_domain"),
     display=Display(
         label="Sliding-mode position servo",
+        law_of=law_lines,
         law=("s = x2 + c (x1 − xD)", "u = −ψ (x1 − xD) − M sign(s)",
              "ψ = α on the side (x1 − xD) s > 0 and β on the other; sat(s/ε) replaces sign(s) with a boundary layer"),
         summary="Notes §5.1: a switching law brings the link onto the sliding line s = 0, where x1 − xD decays as "
@@ -255,9 +286,13 @@ FAMILY = Family(
                 "corners of the (Km, τ) box and the existence and reaching conditions are certified on the box.",
     ),
     validate=validate,
-    figures=FIGURES,
+    figures=(*FIGURES, *LINEAR_FIGURES),
     diagnoses=(diagnose,),
-    json=json_summary,
+    json=json_of,
+    plant_fields=tuple(PlantField(name, ("link",), what) for name, what in (
+        ("alpha", "the structure gain where e s > 0 of the link's law"),
+        ("beta", "the structure gain where e s < 0 of the link's law"),
+        ("reaching_frequency", "the natural frequency of the link's alpha structure"))),
     knobs=(Knob("M", "N*m", "switching amplitude of the relay", 1e-6, 1e6, path="controller.M", role="switching",
                 boundary=True, current=lambda d: float(d.gains["M"])),
            Knob("sliding_poles", "1/s", "pole −c of the motion on the sliding line", 1e-3, 1e6,

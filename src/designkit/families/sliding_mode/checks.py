@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.sliding_mode import linear_checks
 from designkit.families.sliding_mode.conditions import (
     SlidingGains,
     condition_sets,
@@ -36,6 +37,7 @@ from designkit.families.sliding_mode.conditions import (
     vertices,
 )
 from designkit.families.sliding_mode.data import SlidingData
+from designkit.families.sliding_mode.linear import LinearSlidingData
 from designkit.families.sliding_mode.measure import POLE_FLOOR, POLE_TOLERANCE, measure
 from designkit.verification.check import Check
 from designkit.verification.conditions import certify
@@ -115,15 +117,22 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
     return tuple(out)
 
 
+def _any_certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if isinstance(design.data, LinearSlidingData):
+        return linear_checks.conditions(design, ctx)
+    return _certificates(design, ctx)
+
+
 CERTIFICATE_RULE = CheckRule(
-    name="sliding_conditions", order=55, applies=lambda d, c: isinstance(d.data, SlidingData), run=_certificates,
+    name="sliding_conditions", order=55, applies=lambda d, c: isinstance(d.data, SlidingData | LinearSlidingData),
+    run=_any_certificates,
     label="Sliding-mode conditions on the parameter box",
     labels={"sliding_existence": "Sliding mode exists on s = 0 (whole box)",
             "sliding_reaching": "Every trajectory reaches s = 0 (whole box)",
-            "sliding_perturbation": "Relay dominates the perturbation"},
+            "sliding_perturbation": "Relay dominates the perturbation", **linear_checks.CERTIFICATE_LABELS},
     glossary=(("s", "the sliding function x2 + c (x1 − xD), rad/s"),
               ("existence", "on s = 0 the equivalent control lies between the two switched controls, so s stays 0"),
-              ("reaching", "every trajectory meets s = 0 in finite time")),
+              ("reaching", "every trajectory meets s = 0 in finite time"), *linear_checks.CERTIFICATE_GLOSSARY),
 )
 
 
@@ -214,13 +223,22 @@ def _chatter_check(design: Any, ctx: Context, run: Any, cert: dict[str, Any], sl
                  f"{prefix}{said}; {cyc.sentence}; {words}; {measured}", {**full, "limit": float(limit)})
 
 
+def _any_run_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if isinstance(design.data, LinearSlidingData):
+        return linear_checks.run_checks(design, ctx)
+    return _run_checks(design, ctx)
+
+
 RUN_RULE = CheckRule(
     name="sliding_run", order=127,
-    applies=lambda d, c: c.simulation is not None and isinstance(d.data, SlidingData) and "s" in c.simulation.signals,
-    run=_run_checks, label="Sliding mode in the simulated run",
+    applies=lambda d, c: (c.simulation is not None and isinstance(d.data, SlidingData | LinearSlidingData)
+                          and "s" in c.simulation.signals),
+    run=_any_run_checks, label="Sliding mode in the simulated run",
     labels={"reaching_time": "Reaching time (measured)", "sliding_band": "The run stays in the chattering band",
-            "sliding_pole": "Pole on the sliding line (measured)", "chattering": "Chattering (measured)"},
+            "sliding_pole": "Pole on the sliding line (measured)", "chattering": "Chattering (measured)",
+            **linear_checks.RUN_LABELS},
     glossary=(("band", "|s| ≤ δ: how far from s = 0 the command held over a step can leave s"),
-              ("chatter amplitude", "half the peak-to-peak command over the last tenth of the sliding time")),
+              ("chatter amplitude", "half the peak-to-peak command over the last tenth of the sliding time"),
+              *linear_checks.RUN_GLOSSARY),
     reads=("requirements.max_chatter_amplitude",),
 )

@@ -2,9 +2,10 @@
 
 Fields (every number with its unit and range, refused with its key path otherwise):
 
-* ``sliding_poles`` (1/s): one real pole ``-c`` of the motion on the sliding line ``s = x2 + c e = 0``
-  (``e = x1 - xD``): on the line ``e' = -c e``.  A pole in the closed right half plane is refused (the line
-  would not bring ``e`` to 0); ``|p|`` 1e-12 to 1e12.
+* ``sliding_poles`` (1/s): on the link one real pole ``-c`` of the motion on the sliding line
+  ``s = x2 + c e = 0`` (``e = x1 - xD``): on the line ``e' = -c e``; on a ``transfer_function`` or ``state_space``
+  plant the ``n - 1`` poles of the sliding motion (:mod:`~designkit.families.sliding_mode.linear`).  A pole in the
+  closed right half plane is refused (the line would not bring ``e`` to 0); ``|p|`` 1e-12 to 1e12.
 * ``perturbation_bound`` (N*m, 1e-6 to 1e6): ``sup |xi|``, the input-equivalent perturbation the relay must
   dominate (notes section 5.4: "an evaluation of its upper value is required").  Default: ``|value|`` of
   ``simulation.perturbation``; with neither the spec is refused, and a bound below the simulated perturbation
@@ -31,7 +32,7 @@ from typing import Any, ClassVar, Literal
 
 from pydantic import Field, field_validator, model_validator
 
-from designkit.spec.fields import Finite, Pole, Section, fmt_pole
+from designkit.spec.fields import Finite, Pole, Section, check_conjugates, fmt_pole
 from designkit.spec.ranges import Ranged, check_poles
 
 KIND = "sliding_mode"
@@ -68,11 +69,9 @@ class SlidingModeSpec(Section):
 
     @field_validator("sliding_poles")
     @classmethod
-    def _one_real_pole(cls, v: list[complex]) -> list[complex]:
-        if len(v) != 1:
-            raise ValueError(f"must list exactly 1 pole (the sliding line's -c), got {len(v)}")
-        if v[0].imag != 0:
-            raise ValueError(f"[0]: must be real (s = x2 + c e has one real pole -c), got {fmt_pole(v[0])}")
+    def _poles(cls, v: list[complex]) -> list[complex]:
+        if not v:
+            raise ValueError("must list the poles of the sliding motion (1 on the link: -c), got none")
         check_poles(v)
         return v
 
@@ -119,6 +118,22 @@ def validate(spec: Any) -> None:
     """Cross-section rules (``ValueError("key.path: message")``): a perturbation bound must be known and cover
     the simulated perturbation; the law has no integral for an anti-windup; the reference must move."""
     ctl, sim = spec.controller, spec.simulation
+    if spec.plant.kind == "link":
+        if len(ctl.sliding_poles) != 1:
+            raise ValueError(f"controller.sliding_poles: must list exactly 1 pole on the link (the sliding line's -c), "
+                             f"got {len(ctl.sliding_poles)}")
+        if ctl.sliding_poles[0].imag != 0:
+            raise ValueError(f"controller.sliding_poles[0]: must be real (s = x2 + c e has one real pole -c), got "
+                             f"{fmt_pole(ctl.sliding_poles[0])}")
+    else:
+        try:
+            check_conjugates(list(ctl.sliding_poles))
+        except ValueError as exc:
+            raise ValueError(f"controller.sliding_poles{'' if str(exc).startswith('[') else ': '}{exc}") from None
+    if spec.plant.kind != "link" and spec.requirements is not None and \
+            spec.requirements.max_chatter_amplitude is not None:
+        raise ValueError(f"requirements.max_chatter_amplitude: the sliding-mode servo measures its chatter on the link "
+                         f"only, not on the {spec.plant.kind} plant")
     level = perturbation_level(sim)
     if ctl.perturbation_bound is None and not level:
         raise ValueError("controller.perturbation_bound: give sup |xi| (N*m), the perturbation the relay M must "

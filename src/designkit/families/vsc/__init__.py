@@ -51,7 +51,7 @@ from designkit.families.vsc.checks import CERTIFICATE_RULE, RUN_RULE
 from designkit.families.vsc.data import CornerPoles, VscData
 from designkit.families.vsc.diagnoses import diagnose
 from designkit.families.vsc.figures import FIGURES
-from designkit.families.vsc.gains import bound_ranges, design_gains, rational_forms
+from designkit.families.vsc.gains import LINEAR, bound_ranges, design_gains, rational_forms
 from designkit.families.vsc.report import json_summary, section
 from designkit.families.vsc.spec import KIND, VscSpec, perturbation_level, validate
 from designkit.families.vsc.surface import drive_index, reduced_poles, sliding_surface
@@ -90,8 +90,9 @@ def design_box(spec: Any, model: Any) -> dict[str, tuple[float, float]]:
             lo, hi = intervals.get(name, (nominal, nominal))
             values = [lo, hi, nominal] + ([changed[name]] if name in changed else [])
             box[name] = (min(values), max(values))
-    if not box:
-        box["Km"] = (float(model.nominal[model.names.index("Km")]),) * 2
+    if not box and model.names:
+        first = "Km" if "Km" in model.names else model.names[0]
+        box[first] = (float(model.nominal[model.names.index(first)]),) * 2
     if box.get("mgl", (0.0, 0.0))[1] > 0:
         raise SpecError("plant.uncertainty.mgl", "the regulator is designed for mgl = 0 (no gravity)")
     if box.get("tau2", (1.0, 1.0))[1] == float("inf"):
@@ -106,6 +107,25 @@ def _surface(spec: Any, model: Any, box: dict) -> np.ndarray:
     return sliding_surface(A, B, poles)
 
 
+def linear_rest(plant: Any, A: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, float]:
+    """``(x*, u*)`` with ``A x* + B u* = 0`` and ``C1 x* = 1``: the nominal linear plant at rest per unit of
+    reference (state units per output unit, input unit per output unit).
+
+    Raises
+    ------
+    SpecError
+        At ``plant``: a plant with a zero at ``s = 0`` (no input holds its output at a nonzero rest).
+    """
+    n = A.shape[0]
+    c = np.eye(n)[plant.positions[0]]
+    K = np.block([[A, B.reshape(n, 1)], [c[None, :], np.zeros((1, 1))]])
+    if abs(np.linalg.det(K)) <= 1e-12 * max(float(np.prod(np.linalg.norm(K, axis=1))), 1e-300):
+        raise SpecError("plant", "the plant has a zero at s = 0 (or A and B leave no rest at y = xD): no input holds "
+                        "its output at a constant reference, so there is no rest state to regulate to")
+    sol = np.linalg.solve(K, np.concatenate([np.zeros(n), [1.0]]))
+    return sol[:n], float(sol[n])
+
+
 def synthesize(spec: Any, plant: Any) -> Design:
     """The regulator a spec asks for (package docstring): ``c``, the box's ``l_i`` ranges, the gains, the law."""
     ctl, sim = spec.controller, spec.simulation
@@ -114,7 +134,17 @@ def synthesize(spec: Any, plant: Any) -> Design:
     c = _surface(spec, model, box)
     A, B, D = model.at()
     n = len(c)
-    forms = rational_forms(plant.kind, c)
+    step = sim.step if not isinstance(sim.step, list | tuple) else sim.step[0]
+    amp = float(step) if sim.trajectory is None else 2.0 * float(np.max(np.abs(sim.trajectory.amplitude)))
+    q0 = sim.initial_position if not isinstance(sim.initial_position, list | tuple) else sim.initial_position[0]
+    x_max = abs(float(q0 or 0.0)) + abs(amp)
+    if plant.kind in LINEAR:
+        x_rest, u_rest = linear_rest(plant, A, B)
+        rest_forms = (x_rest, u_rest)
+    else:
+        x_rest = np.asarray(plant.rest_state(1.0), float) - np.asarray(plant.rest_state(0.0), float)
+        u_rest, rest_forms = 0.0, None
+    forms = rational_forms(plant.kind, c, model, rest_forms, x_max)
     bounds = bound_ranges(forms, model, box)
     rho = max(abs(complex(p)) for p in ctl.sliding_poles)
     cB_nom = float(c @ B.ravel())
@@ -124,22 +154,29 @@ def synthesize(spec: Any, plant: Any) -> Design:
     d_bar = float(ctl.perturbation_bound if ctl.perturbation_bound is not None else (level or 0.0))
     ratio = bounds["cD/cB"]
     r_max = max(abs(ratio.lower), abs(ratio.upper))
-    delta = float(ctl.relay_amplitude) if ctl.relay_amplitude is not None else (1.0 + m) * d_bar * r_max
+    mismatch = bounds.get("rest")
+    w_max = max(abs(mismatch.lower), abs(mismatch.upper)) if mismatch is not None else 0.0
+    delta = (float(ctl.relay_amplitude) if ctl.relay_amplitude is not None else
+             (1.0 + m) * (d_bar * r_max + w_max))
     notes = []
     if ctl.relay_amplitude is None:
         src = "controller.perturbation_bound" if ctl.perturbation_bound is not None else "simulation.perturbation"
-        notes.append(f"delta = (1 + {m:g}) x {d_bar:g} x sup|cD/cB| = {delta:.4g} (perturbation bound from {src}).")
+        notes.append(f"delta = (1 + {m:g}) x ({d_bar:g} x sup|cD/cB| + {w_max:.4g}) = {delta:.4g} (perturbation "
+                     f"bound from {src}; {w_max:.4g}: the largest share of sigma' over cB a plant of the box leaves "
+                     f"at the nominal rest, |xD| <= {x_max:g})." if mismatch is not None else
+                     f"delta = (1 + {m:g}) x {d_bar:g} x sup|cD/cB| = {delta:.4g} (perturbation bound from {src}).")
+    if plant.kind in LINEAR and u_rest != 0.0:
+        notes.append(f"The nominal plant rests at y = xD with x* = [{', '.join(f'{v:.4g}' for v in x_rest)}] xD and "
+                     f"u* = {u_rest:.4g} xD: the law feeds u* xD forward and regulates x - x* xD.")
     given = [k for k in ("alpha", "beta", "relay_amplitude") if getattr(ctl, k) is not None]
     if given:
         notes.append(f"Given by the spec (not designed): {', '.join(given)}.")
-    rest = np.asarray(plant.rest_state(1.0), float) - np.asarray(plant.rest_state(0.0), float)
-    step = sim.step if not isinstance(sim.step, list | tuple) else sim.step[0]
-    amp = float(step) if sim.trajectory is None else 2.0 * float(np.max(np.abs(sim.trajectory.amplitude)))
+    rest = np.asarray(x_rest, float)
     x0 = -abs(amp) * rest
     G = np.array([max(bounds[f"l_{i + 1}"].upper - al[i], be[i] - bounds[f"l_{i + 1}"].lower) for i in range(n)])
     cB_max = bounds["cB"].upper
     cD_max = r_max * cB_max
-    S0 = cB_max * (np.abs(x0) @ G + delta) + cD_max * d_bar
+    S0 = cB_max * (np.abs(x0) @ G + delta + w_max) + cD_max * d_bar
     sigma0 = abs(float(c @ x0))
     eps = ctl.boundary_layer
     if eps is not None:
@@ -174,7 +211,7 @@ def synthesize(spec: Any, plant: Any) -> Design:
         cB_max=cB_max, cD_max=cD_max, cB_nominal=cB_nom, cA_nominal=tuple(cA.tolist()),
         rest_direction=tuple(rest.tolist()), position_index=position, band=band, max_step=h, S0=float(S0),
         boundary_layer=eps, plant_kind=plant.kind, nominal_model=(A, B, D), drive_index=k,
-        vertex_poles=tuple(vertex_poles))
+        vertex_poles=tuple(vertex_poles), u_rest=float(u_rest), reference_max=float(x_max))
     formulas = (
         "σ = c x̃ with c from the sliding poles (Ackermann: c = e P(A), e = last row of [B AB … A^(n−1)B]^−1), "
         "normalised c_drive = 1",
@@ -208,7 +245,12 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 
     mid, half = (al + be) / 2.0, (al - be) / 2.0
 
+    u_rest = float(data.u_rest)
+
     def command(s: Any) -> Any:
+        return u_rest * s.qD[0] + switching(s)
+
+    def switching(s: Any) -> Any:
         x, sg = error(s), sigma(s)
         if eps is None:
             u = 0
@@ -223,7 +265,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
         return ca.dot(ca.DM(mid), x) + (gap - delta) * ca.fmin(ca.fmax(sg / eps, -1.0), 1.0)
 
     def u_eq(s: Any) -> Any:
-        return -ca.dot(ca.DM(cA), error(s)) / cB
+        return u_rest * s.qD[0] - ca.dot(ca.DM(cA), error(s)) / cB
 
     reason = (f"the command is held over each step; h = {data.max_step:.4g} s moves sigma by at most "
               f"{'a tenth of the boundary layer' if eps is not None else 'the band'} ({data.band:.4g}) at the "
@@ -240,7 +282,7 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 FAMILY = Family(
     kind=KIND,
     spec=VscSpec,
-    plants=("link", "elastic_joint"),
+    plants=("link", "elastic_joint", *LINEAR),
     uses=("plant.uncertainty",),
     reference="step",
     references=("step", "square", "prbs"),

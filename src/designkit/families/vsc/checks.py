@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from designkit.families.vsc.data import VscData, bound_json
-from designkit.families.vsc.gains import VscGains, condition_sets, rational_forms
+from designkit.families.vsc.gains import LINEAR, VscGains, condition_sets, rational_forms
 from designkit.families.vsc.measure import measure
 from designkit.synthesis.state_space import linear_model
 from designkit.verification.check import Check
@@ -98,6 +98,31 @@ def _enclosed(design: Any) -> Check | None:
                  {"bounds": {k: bound_json(b) for k, b in info.bounds.items()}})
 
 
+def _linear_enclosed(info: VscData, made: set[str]) -> list[Check]:
+    """On a linear plant whose ``cB`` or rest mismatch is not multi-affine in the box's parameters: the orientation
+    ``cB > 0`` and the relay ``delta > d_bar + sup |c (A x* + B u*) X / cB|`` judged on their proven ranges (a
+    bound beyond a value attained on the box fails, one inside the enclosure's gap is undecided)."""
+    out = []
+    if NAMES["orientation"] not in made:
+        b = info.bounds["cB"]
+        ok = True if b.lower > 0 else (False if (b.min_value or 0.0) <= 0 else None)
+        out.append(Check(NAMES["orientation"], ok, "cB > 0 on the whole box (proven range of cB)", b.lower, b.lower,
+                         "", f"cB in [{b.lower:.6g}, {b.upper:.6g}] over the box (proven enclosure; ball arithmetic, "
+                         "branch and bound): alpha_i < l_i < beta_i turns sigma' against sigma",
+                         {"cB": bound_json(b)}))
+    if NAMES["relay"] not in made:
+        r = info.bounds["rest"]
+        proven = float(info.d_bar) + max(abs(r.lower), abs(r.upper))
+        seen = float(info.d_bar) + max(abs(r.min_value or 0.0), abs(r.max_value or 0.0))
+        ok = True if info.delta > proven else (False if info.delta <= seen else None)
+        out.append(Check(NAMES["relay"], ok, "delta > d_bar + sup |c (A x* + B u*) X / cB| on the whole box",
+                         info.delta, info.delta - proven, "",
+                         f"delta = {info.delta:.6g} against d_bar = {info.d_bar:.6g} plus the rest mismatch's share "
+                         f"of sigma' over cB in [{r.lower:.6g}, {r.upper:.6g}] (proven enclosure, |xD| <= "
+                         f"{info.reference_max:g})", {"rest": bound_json(r)}))
+    return out
+
+
 def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
     info: VscData = design.data
     g = gains_of(design)
@@ -105,7 +130,8 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
     model = linear_model(plant)
     box = {k: tuple(v) for k, v in info.box.items()}
     bounds = dict(info.bounds)
-    forms = rational_forms(info.plant_kind, g.c)
+    rest = (info.rest_direction, info.u_rest) if info.plant_kind in LINEAR else None
+    forms = rational_forms(info.plant_kind, g.c, model, rest, info.reference_max)
     out = []
     short = gain_shortfalls(design)
     for key, cs in condition_sets(g, forms, model, box, bounds, float(info.d_bar)).items():
@@ -119,6 +145,9 @@ def _certificates(design: Any, ctx: Context) -> tuple[Check, ...]:
                 check, detail="; ".join(shortfall_sentence(f, info.margin) for f in short) + ". " + check.detail,
                 certificate={**dict(check.certificate), "shortfalls": short})
         out.append(check)
+    made = {c.name for c in out}
+    if info.plant_kind in LINEAR:
+        out.extend(_linear_enclosed(info, made))
     enc = _enclosed(design)
     if enc is not None:
         out.append(enc)

@@ -100,6 +100,11 @@ class VscData(FamilyData):
         The state the input drives (the one whose coefficient in ``c`` is 1).
     vertex_poles : tuple of CornerPoles
         The sliding motion's poles at every corner of the box.
+    u_rest : float
+        The input holding the nominal plant at rest per unit of reference (u's unit per rad): 0 on the link and
+        the elastic joint; on a linear plant ``u*`` of ``A x* + B u* = 0``, ``C1 x* = 1``.
+    reference_max : float
+        The largest ``|xD|`` of the run (rad): the rest mismatch of a plant of the box scales with it.
     """
 
     c: tuple[float, ...]
@@ -126,3 +131,5 @@ class VscData(FamilyData):
     nominal_model: tuple[np.ndarray, np.ndarray, np.ndarray]
     drive_index: int | None
     vertex_poles: tuple[CornerPoles, ...]
+    u_rest: float = 0.0
+    reference_max: float = 0.0

@@ -51,7 +51,8 @@ import numpy as np
 
 from designkit.verification.conditions import Condition, ConditionSet, form_of
 
-__all__ = ["Bound", "VscGains", "bound_ranges", "condition_sets", "design_gains", "l_expressions", "rational_forms"]
+__all__ = ["LINEAR", "Bound", "VscGains", "bound_ranges", "condition_sets", "design_gains", "l_expressions",
+           "linear_forms", "rational_forms"]
 
 ENCLOSE_TOL = 1e-6
 """Relative tolerance of the proven enclosures (when a cleared condition is not multi-affine)."""
@@ -101,11 +102,50 @@ class Bound:
     max_value: float | None = None
 
 
-def rational_forms(plant_kind: str, c: Sequence[float]) -> dict[str, tuple[Any, Any]]:
+LINEAR = ("transfer_function", "state_space")
+"""The general linear plant kinds: their forms come from the plant's own matrices (:func:`linear_forms`)."""
+
+
+def linear_forms(model: Any, c: Sequence[float], rest: tuple[Sequence[float], float] | None = None,
+                 reference_max: float = 0.0) -> dict[str, tuple[Any, Any]]:
+    """The forms of a ``transfer_function`` or ``state_space`` plant, cleared by ``cB(p)`` (certified positive on
+    the box by the orientation set): ``l_i = -(c A)_i / cB``, ``cB = cB/1``, ``cD/cB = 1`` (the disturbance is
+    input-equivalent, ``D = B``, :mod:`designkit.models.linear_plant`) and, with ``rest = (x*, u*)``
+    (the nominal plant's rest per unit of reference), ``rest = c (A x* + B u*) X / cB``: the share of ``sigma'`` a
+    plant of the box leaves at the nominal rest at the largest reference ``X`` (zero on the nominal plant)."""
+    cv = ca.DM(np.asarray(c, float)).T
+    cA = cv @ model.A
+    cB = (cv @ model.B)[0, 0]
+    names = list(model.names)
+
+    def at(expr: Any) -> Any:
+        def f(p: Mapping[str, Any]) -> Any:
+            if not names:
+                return ca.SX(expr) + 0.0 * next(iter(p.values()), 0.0) if p else ca.SX(expr)
+            return ca.substitute(ca.SX(expr), model.p, ca.vertcat(*[ca.SX(p[n]) for n in names]))
+        return f
+
+    forms = {f"l_{i + 1}": (at(-cA[0, i]), at(cB)) for i in range(model.A.size1())}
+    forms["cB"] = (at(cB), at(ca.SX(1.0)))
+    forms["cD/cB"] = (at(ca.SX(1.0)), at(ca.SX(1.0)))  # the disturbance is input-equivalent: D = B
+    if rest is not None:
+        x_star, u_star = np.asarray(rest[0], float), float(rest[1])
+        m = (cv @ (model.A @ ca.DM(x_star) + model.B * u_star))[0, 0] * float(reference_max)
+        forms["rest"] = (at(m), at(cB))
+    return forms
+
+
+def rational_forms(plant_kind: str, c: Sequence[float], model: Any = None,
+                   rest: tuple[Sequence[float], float] | None = None,
+                   reference_max: float = 0.0) -> dict[str, tuple[Any, Any]]:
     """``{label: (N, M)}`` with ``label`` = ``N(p)/M(p)`` and ``M`` a positive monomial of the parameters: the
     ``l_i``, ``cB`` and ``cD/cB`` of the plant kinds this family designs for, written cleared of their
     denominators (derived in the module docstring of :mod:`designkit.families.vsc`; the tests check each against
-    ``-(cA)_i/(cB)`` of the plant's own linearisation).  ``N`` and ``M`` take a mapping name -> value or symbol."""
+    ``-(cA)_i/(cB)`` of the plant's own linearisation).  ``N`` and ``M`` take a mapping name -> value or symbol.
+    On a linear plant kind they are :func:`linear_forms` of ``model`` (``M = cB``, positive on the box by the
+    orientation condition), with the rest mismatch when ``rest`` is given."""
+    if plant_kind in LINEAR:
+        return linear_forms(model, c, rest, reference_max)
     c = [float(v) for v in c]
     if plant_kind == "link":
         c1 = c[0] / c[1]  # c normalised: c[1] = 1
@@ -166,6 +206,10 @@ def bound_ranges(forms: Mapping[str, tuple[Any, Any]], model: Any, box: Box) -> 
             vals = [float(f(list(v.values()))) for v in verts]
             i, j = int(np.argmin(vals)), int(np.argmax(vals))
             out[label] = Bound(label, vals[i], vals[j], verts[i], verts[j], "vertices", form, vals[i], vals[j])
+        elif not ca.depends_on(N / M, theta) if names else True:  # a constant: its range is its value, exactly
+            v = float(ca.Function("v", [theta], [N / M])(np.array([box[n][0] for n in names], float)))
+            at = {n: float(box[n][0]) for n in names}
+            out[label] = Bound(label, v, v, at, at, "enclosure", form, v, v)
         else:
             lo = np.array([box[n][0] for n in names], float)
             hi = np.array([box[n][1] for n in names], float)
@@ -211,7 +255,8 @@ def condition_sets(g: VscGains, forms: Mapping[str, tuple[Any, Any]], model: Any
                    bounds: Mapping[str, Bound], d_bar: float) -> dict[str, ConditionSet]:
     """The sets the certificate checks: ``gains`` (``N_i - alpha_i M_i > 0`` and ``beta_i M_i - N_i > 0``, i.e.
     ``alpha_i < l_i < beta_i`` cleared by the positive ``M_i``), ``relay`` (``(delta -+ d_bar cD/cB) M > 0``, or
-    ``delta > 0`` without a perturbation) and ``orientation`` (``cB > 0``).  Conditions on a bound whose cleared
+    ``delta > 0`` without a perturbation; on a linear plant ``delta cB -+ d_bar cD -+ c (A x* + B u*) X > 0``, the
+    rest mismatch included) and ``orientation`` (``cB > 0``).  Conditions on a bound whose cleared
     form is general are left out of the sets (certified on the enclosure instead)."""
     names = box_names(model, box)
 
@@ -235,7 +280,20 @@ def condition_sets(g: VscGains, forms: Mapping[str, tuple[Any, Any]], model: Any
             f"where x_{i + 1} sigma < 0 the gain beta_{i + 1} turns sigma' against sigma"))
     sets = {"gains": ConditionSet("theorem 3's gain conditions alpha_i < l_i < beta_i", names, tuple(conds))}
     num, den = forms["cD/cB"]
-    if d_bar > 0 and bounds["cD/cB"].method == "vertices":
+    if "rest" in forms:
+        if bounds["rest"].method == "vertices":
+            rnum, rden = forms["rest"]
+            conds = []
+            for sd, sr in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+                conds.append(Condition(
+                    f"(delta {'-' if sd > 0 else '+'} d_bar) cB {'-' if sr > 0 else '+'} c (A x* + B u*) X > 0 "
+                    f"(delta = {g.delta:.6g}, d_bar = {d_bar:.6g})",
+                    lambda p, sd=sd, sr=sr, rnum=rnum, rden=rden: ((g.delta - sd * d_bar) * rden(full(p))
+                                                                  - sr * rnum(full(p))), "",
+                    "the relay dominates the perturbation and the rest mismatch of the plant in sigma'"))
+            sets["relay"] = ConditionSet("the relay delta above the perturbation's and the rest mismatch's share of "
+                                         "sigma'", names, tuple(conds))
+    elif d_bar > 0 and bounds["cD/cB"].method == "vertices":
         sets["relay"] = ConditionSet("the relay delta above the perturbation's share of sigma'", names, (
             Condition(f"delta M - d_bar N > 0 (delta = {g.delta:.6g}, d_bar = {d_bar:.6g}, cD/cB = N/M)",
                       lambda p, num=num, den=den: g.delta * den(full(p)) - d_bar * num(full(p)), "",
@@ -248,6 +306,8 @@ def condition_sets(g: VscGains, forms: Mapping[str, tuple[Any, Any]], model: Any
             Condition(f"delta > 0 (delta = {g.delta:.6g})", lambda p: g.delta + 0.0 * p[names[0]], "",
                       "finite-time reaching near the origin"),))
     num, den = forms["cB"]
+    if bounds["cB"].method != "vertices":  # certified on the proven range of cB instead
+        return sets
     sets["orientation"] = ConditionSet("the orientation cB > 0 the gain conditions are written for", names, (
         Condition("N_B M_B > 0 (cB = N_B/M_B)", lambda p: num(full(p)) * den(full(p)), "",
                   "alpha_i < l_i < beta_i (not the reverse) turns sigma' against sigma"),))

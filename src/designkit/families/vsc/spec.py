@@ -3,7 +3,8 @@
 Fields (every number with its unit and range, refused with its key path otherwise):
 
 * ``sliding_poles`` (1/s): the ``n - 1`` poles of the sliding motion on ``sigma = c x = 0`` (3 on the elastic
-  joint, 1 on the link), each in the open left half plane, complex ones in conjugate pairs.
+  joint, 1 on the link, the order less one on a ``transfer_function`` or ``state_space`` plant), each in the open
+  left half plane, complex ones in conjugate pairs.
 * ``margin`` (1, above 0, at most 10; default 0.2): the designed gains clear every bound ``l_i`` by
   ``margin S_i`` (:mod:`~designkit.families.vsc.gains`) and the relay its bound by ``(1 + margin)``.
 * ``alpha``, ``beta`` (input units per state unit, one per state, within 1e9): the switching gains given instead
@@ -103,8 +104,13 @@ def perturbation_level(sim: Any) -> float | None:
 
 
 def states_of(spec: Any) -> int:
-    """Number of plant states of the spec's plant kind."""
-    return STATES[spec.plant.kind]
+    """Number of plant states of the spec's plant (the order of a ``transfer_function`` or ``state_space``)."""
+    plant = spec.plant
+    if plant.kind == "transfer_function":
+        return len(plant.den) - 1
+    if plant.kind == "state_space":
+        return len(plant.A)
+    return STATES[plant.kind]
 
 
 def validate(spec: Any) -> None:
