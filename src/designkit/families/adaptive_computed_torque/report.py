@@ -95,13 +95,22 @@ def _tracking_question(result: Any) -> Question:
     if check is None:
         return Question("Does the tracking error go to zero?", ("The run was not judged.",))
     c = check.certificate
-    if "last_window_rad" not in c:  # a run that diverged: the check says when
+    if "window_maxima_rad" not in c:  # a run that diverged: the check says when
         return Question("Does the tracking error go to zero?", (f"No: {check.detail}.",))
-    words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last "
-                      f"{_f(c['tail_s'], 3)} s" for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"],
-                                                                                 strict=True)))
+    theorem = ("The Lyapunov argument promises e → 0 as t → ∞, not a size by a given time, so the error is judged by "
+               f"a bound that decreases: the running maximum of |e| over trailing windows of {_f(c['window_s'], 4)} s "
+               f"({c['window_from']}), from the window of the run's peak to the last, must decrease (each at most "
+               f"1 + {_f(c['tolerance'], 3)} times the one before, the last below the peak), or stay below "
+               f"{_f(c['floor_rad'], 3)} rad.")
+    table = Table("The largest |e| over each window, oldest first (rad)",
+                  ("Joint", *(f"to {_f(t, 4)} s" for t in c["window_ends_s"]), "judged"),
+                  tuple((str(j + 1), *(_f(x, 3) for x in row), c["joints"][j]["why"])
+                        for j, row in enumerate(c["window_maxima_rad"])))
+    words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last window"
+                      for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"], strict=True)))
     return Question("Does the tracking error go to zero?",
-                    (("Yes" if check.passed else "Not within the run") + f": {words}.",))
+                    (("Yes, it is decreasing" if check.passed else "Not shown within the run") + f": {words}.",
+                     theorem), (table,))
 
 
 def _estimates_question(result: Any) -> Question:
