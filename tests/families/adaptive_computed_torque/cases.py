@@ -28,6 +28,10 @@ RANGES = {
     "controller.bandwidth": [(BASE, "controller.bandwidth", "controller.bandwidth")],
     "controller.Lambda": [(SLOTINE, "controller.Lambda", "controller.Lambda")],
     "controller.KD": [(SLOTINE, "controller.KD", "controller.KD")],
+    "controller.convergence.window": [(BASE, "controller.convergence.window", "controller.convergence.window")],
+    "controller.convergence.tolerance": [(BASE, "controller.convergence.tolerance",
+                                          "controller.convergence.tolerance")],
+    "controller.convergence.floor": [(BASE, "controller.convergence.floor", "controller.convergence.floor")],
 }
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
