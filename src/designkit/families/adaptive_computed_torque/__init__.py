@@ -332,7 +332,6 @@ def synthesize(spec: Any, plant: Any) -> Design:
              + "; every other parameter of the regressor is known (the arm's true value).", *scheme_notes[1:],
              *_gain_notes(a)]
     warned = start_warnings(plant, a.names, a.initial)
-    notes += list(warned)
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
         q0 = np.array(_joint_list(spec.simulation.initial_position, n, "simulation.initial_position"))

@@ -39,8 +39,8 @@ def _spr_rows(result: Any) -> list[dict[str, Any]]:
 
 
 def json(result: Any) -> dict[str, Any]:
-    """``{"adaptation": {parameters, units, initial, final, true, spr: {margin, psi_min}, excitation}}`` (SI units;
-    ``final`` and ``excitation`` null without a run)."""
+    """``{"adaptation": {parameters, units, initial, final, true, spr: {margin, psi_min}, excitation, start_warnings,
+    gain_matrix}}`` (SI units; ``final`` and ``excitation`` null without a run; ``gain_matrix`` the full ``K``)."""
     d, sim = result.design, result.simulation
     a = d.data.adaptation
     rows = [] if a.scheme == "slotine_li" else _spr_rows(result)
@@ -49,7 +49,8 @@ def json(result: Any) -> dict[str, Any]:
         "true": list(d.data.true), "acceleration": a.acceleration, "scheme": a.scheme,
         "spr": None if not rows else {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows],
                                       "psi_min_s": [r["psi_min_s"] for r in rows]},
-        "final": None, "excitation": None,
+        "final": None, "excitation": None, "start_warnings": list(d.data.start_warnings),
+        "gain_matrix": a.K().tolist(),
     }
     if sim is not None:
         out["final"] = [_num(v) for v in estimates(sim, a.names)[-1]]
