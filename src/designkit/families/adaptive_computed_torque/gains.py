@@ -40,7 +40,7 @@ class ConvergenceSpec(Section):
     """
 
     window: Ranged(1e-6, 1e9, "s") | None = None
-    tolerance: Ranged(0.0, 1.0, "", zero=True) = 0.0
+    tolerance: Ranged(0.0, 1.0, "") = 0.0
     floor: Ranged(1e-15, 1.0, "rad") = 1e-6
 
 
