@@ -20,7 +20,8 @@ controller: {kind: adaptive_computed_torque, scheme: slotine_li, Lambda: [10, 10
 simulation: {duration: 2.0, trajectory: {kind: sine, amplitude: [1.0, 1.2], frequency: 0.5}}
 """
 
-CONVERGENCE = BASE.replace("bandwidth: 200}", "bandwidth: 200,\n             convergence: {window: 0.5, tolerance: 0.1, floor: 1.0e-6}}")
+CONVERGENCE = BASE.replace("bandwidth: 200}", "bandwidth: 200,\n             "
+                                                "convergence: {window: 0.5, tolerance: 0.1, floor: 1.0e-6}}")
 
 RANGES = {
     "controller.K1": [(BASE, "controller.K1", "controller.K1")],
@@ -58,8 +59,8 @@ EXAMPLES = {
     "adaptive-ct-simnog": 0,
     "adaptive-ct-simnog-poor": 0,  # e -> 0 is met and certified; the estimates' convergence is not promised here
     "adaptive-ct-puma560": 0,
-    "adaptive-ct-not-spr": 1,
+    "adaptive-ct-not-spr": 1,  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
     "adaptive-ct-simnog-slotine-li": 0,
-    "adaptive-ct-two-link-slotine-li": 0,  # the book's run: the error decreasing, the estimates not converging  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
+    "adaptive-ct-two-link-slotine-li": 0,  # the book's run: the error decreasing, the estimates not converging
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""
