@@ -151,6 +151,14 @@ def decreasing(maxima: np.ndarray, tolerance: float, floor: float) -> tuple[bool
     return True, f"decreasing from {after[0]:.3g} to {after[-1]:.3g} rad"
 
 
+def _chain(m: np.ndarray) -> str:
+    """Window maxima as ``a → b → …`` (the first two and the last eight beyond twelve)."""
+    words = [f"{x:.3g}" for x in m]
+    if len(words) > 12:
+        words = [*words[:2], f"… ({len(words) - 10} windows) …", *words[-8:]]
+    return " → ".join(words)
+
+
 def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t = np.asarray(sim.time, dtype=float)
@@ -174,7 +182,7 @@ def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
             "last_window_rad": last.tolist(), "ratio": ratio.tolist(),
             "joints": [{"decreasing": v, "why": w} for v, w in verdicts]}
     detail = (f"running maximum of |e| over {len(ends)} trailing windows of {window:.4g} s ({source}), per joint: "
-              + "; ".join(f"joint {j + 1}: " + " → ".join(f"{x:.3g}" for x in maxima[:, j]) + f" rad ({w})"
+              + "; ".join(f"joint {j + 1}: " + _chain(maxima[:, j]) + f" rad ({w})"
                           for j, (_, w) in enumerate(verdicts)))
     target = (f"window maxima decreasing from the peak on (each ≤ (1 + {conv.tolerance:g}) × the previous, the last "
               f"below the peak) or below {conv.floor:g} rad")

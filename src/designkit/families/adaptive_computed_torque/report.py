@@ -16,7 +16,10 @@ from designkit.display.section import Question, ReportSection, Table
 from designkit.families.adaptive_computed_torque.laws import estimates
 from designkit.families.adaptive_computed_torque.words import describe, unit_text
 
-__all__ = ["json", "section"]
+__all__ = ["SHOWN", "json", "section"]
+
+SHOWN = 12
+"""Windows of the tracking judgement shown in the report's table (the first two and the last ones beyond)."""
 
 
 def _num(x: Any) -> float | None:
@@ -103,9 +106,12 @@ def _tracking_question(result: Any) -> Question:
                f"({c['window_from']}), from the window of the run's peak to the last, must decrease (each at most "
                f"1 + {_f(c['tolerance'], 3)} times the one before, the last below the peak), or stay below "
                f"{_f(c['floor_rad'], 3)} rad.")
-    table = Table("The largest |e| over each window, oldest first (rad)",
-                  ("Joint", *(f"to {_f(t, 4)} s" for t in c["window_ends_s"]), "judged"),
-                  tuple((str(j + 1), *(_f(x, 3) for x in row), c["joints"][j]["why"])
+    ends = list(c["window_ends_s"])
+    shown = list(range(len(ends))) if len(ends) <= SHOWN else [*range(2), *range(len(ends) - (SHOWN - 2), len(ends))]
+    title = "The largest |e| over each window, oldest first (rad)" + (
+        "" if len(ends) <= SHOWN else f": the first 2 and the last {SHOWN - 2} of {len(ends)} windows")
+    table = Table(title, ("Joint", *(f"to {_f(ends[k], 4)} s" for k in shown), "judged"),
+                  tuple((str(j + 1), *(_f(row[k], 3) for k in shown), c["joints"][j]["why"])
                         for j, row in enumerate(c["window_maxima_rad"])))
     words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last window"
                       for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"], strict=True)))
