@@ -15,12 +15,15 @@ accelerometer; ``filtered``: a filtered velocity derivative of bandwidth ``contr
 Gains: ``poles`` (a pair per joint, or one pair for all: ``K1 = p1 p2``, ``K2 = -(p1 + p2)``) or ``K1``,
 ``K2`` directly, per joint; ``psi`` (s) per joint, default ``2/K2`` (the SPR condition is ``psi K2 > 1``,
 :mod:`~designkit.families.adaptive_computed_torque.spr`).  ``gain``: the adaptation gains ``K`` (one, or
-one per adapted parameter).  ``bounds`` (name -> ``[l, h]``) with ``delta``: the notes' projection.
+one per adapted parameter); ``gain_matrix`` a full symmetric positive-definite ``K``, or ``combination`` ``T`` with
+``gain`` diagonal on ``a = T p`` (:mod:`.gains`).  ``bounds`` (name -> ``[l, h]``) with ``delta``: the notes'
+projection.  ``convergence``: the window, tolerance and floor of the tracking judgement.  Starting estimates no
+arm has are warned (:mod:`.consistency`).
 
 **Contract.**  ``Linearization("frozen")``: ``freeze(values)`` is the fixed computed torque with the
 estimates held; the generic ``lyapunov`` check judges the loop frozen at the initial estimates and
 ``frozen_final`` at the final ones.  The family's own checks (:mod:`.checks`): the SPR certificate,
-the tracking error converging, the Lyapunov function of the adaptive loop non-increasing along the
+the tracking error's windowed maxima decreasing, the Lyapunov function of the adaptive loop non-increasing along the
 run, and parameter convergence judged against the excitation indicator (:mod:`.excitation`).
 """
 
