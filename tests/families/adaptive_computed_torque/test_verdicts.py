@@ -123,3 +123,22 @@ def test_possible_starts_and_inconsistent_arms_are_not_warned():
     assert violations(NAMES, TRUE, _with(m1=3.0, Izz1=0.36)) == []
     bad = _with(Izz1=0.5)  # the arm itself breaks the triangle inequality: the generic warning says so
     assert violations(NAMES, bad, [*bad[:9], 0.6, bad[10]]) == []
+
+
+def test_gain_keys_through_the_spec():
+    """``gain_matrix`` reaches the design as given; ``combination`` with ``gain`` as ``T^-1 G T^-T`` (NumPy)."""
+    from designkit.pipeline import design as design_of
+    from designkit.schema.loader import parse_spec
+
+    head = ("name: g\nplant: {kind: robot, robot: planar2r}\nsimulation: {duration: 2, trajectory: {kind: sine}}\n"
+            "controller: {kind: adaptive_computed_torque, scheme: slotine_li, Lambda: 10, KD: [5, 1], "
+            "adapt: [m1, m2], initial: {m1: 7.0, m2: 4.5}, ")
+    K = [[2.0, 0.7], [0.7, 1.5]]
+    d = design_of(parse_spec(head + f"gain_matrix: {K}}}\n"))
+    np.testing.assert_array_equal(d.data.adaptation.K(), K)
+    assert [d.gains["K_m1"], d.gains["K_m2"]] == [2.0, 1.5]
+    T, G = np.array([[1.0, 1.0], [0.0, 2.0]]), np.diag([0.3, 0.4])
+    d = design_of(parse_spec(head + f"combination: {T.tolist()}, gain: [0.3, 0.4]}}\n"))
+    Tinv = np.linalg.inv(T)
+    np.testing.assert_allclose(d.data.adaptation.K(), Tinv @ G @ Tinv.T, rtol=1e-14)
+    assert any("T⁻¹ G T⁻ᵀ" in n for n in d.notes)
