@@ -125,3 +125,23 @@ def test_starting_estimates_warned_and_tracking_judged_decreasing(book_run):
     assert any("Izz1 = -2" in w and "not positive semidefinite" in w for w in warnings)
     assert any("link 2" in w and "triangle inequality" in w for w in warnings)
     assert book_run.to_json()["warnings"] == list(book_run.warnings)
+
+
+def test_error_figure_draws_the_judged_window_maxima(book_run):
+    """The short run holds less than two periods: a tenth of the run is the window; the figure's dashed steps are
+    the check's window maxima."""
+    from designkit.display import svg
+    from designkit.families.adaptive_computed_torque.figures import _draw_error, error_figure
+
+    check = next(c for c in book_run.checks if c.name == "tracking_convergence")
+    c = check.certificate
+    assert c["window_s"] == pytest.approx(0.06) and c["window_from"] == "a tenth of the run"
+    fig, _ = _draw_error(book_run)
+    steps = [a for a in fig.findobj(lambda a: svg.tag_key(a.get_gid()) == "envelope")]
+    assert len(steps) == 2
+    for line, row in zip(steps, c["window_maxima_rad"], strict=True):
+        np.testing.assert_array_equal(line.get_ydata()[::2], row)
+    e = np.abs(np.asarray(book_run.simulation.reference)[:, :, 0]
+               - np.asarray(book_run.simulation.state)[:, :2])
+    assert np.max(c["window_maxima_rad"]) == pytest.approx(np.max(e), rel=0, abs=0)
+    assert "Dashed: the largest |e|" in error_figure(book_run).caption

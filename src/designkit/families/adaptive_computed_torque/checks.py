@@ -8,7 +8,8 @@ routes disagree the check is undecided.
 
 ``tracking_convergence`` (order 126, required): the tracking error goes to zero as the theorem says, asymptotically,
 not by a given time: per joint, the running maximum of ``|e_j|`` over trailing windows of ``W`` (aligned to the run's
-end; ``controller.convergence.window``, default the reference's period when it is a sine, else a tenth of the run),
+end; ``controller.convergence.window``, default the reference's period when it is a sine and the run holds two
+periods, else a tenth of the run),
 from the window holding the run's peak to the last, decreases -- each window's maximum at most ``1 + tolerance``
 times the one before (``controller.convergence.tolerance``, default 0) and the last below the peak -- or the running
 maximum falls below ``floor`` (``controller.convergence.floor``, default 1e-6 rad) and stays there
@@ -108,14 +109,15 @@ def _errors(sim: Any) -> np.ndarray:
 
 def tracking_window(sim: Any, window: float | None) -> tuple[float, str]:
     """The window ``W`` (s) of the tracking judgement and where it came from: the spec's, else the reference's
-    period when it is a sine, else :data:`TAIL` of the run."""
+    period when it is a sine and the run holds two periods or more, else :data:`TAIL` of the run."""
     t = np.asarray(sim.time, dtype=float)
     if window is not None:
         return float(window), "controller.convergence.window"
     ref = dict(dict(getattr(sim, "settings", None) or {}).get("reference") or {})
-    if ref.get("kind") == "sine" and float(ref.get("frequency", 0.0)) > 0:
+    span = float(t[-1] - t[0])
+    if ref.get("kind") == "sine" and float(ref.get("frequency", 0.0)) > 0 and 2.0 / float(ref["frequency"]) <= span:
         return 1.0 / float(ref["frequency"]), "the reference's period"
-    return TAIL * float(t[-1] - t[0]), "a tenth of the run"
+    return TAIL * span, "a tenth of the run"
 
 
 def window_maxima(t: np.ndarray, e: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
