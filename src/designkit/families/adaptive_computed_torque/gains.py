@@ -35,8 +35,8 @@ class ConvergenceSpec(Section):
 
     ``window`` (s, 1e-6 to 1e9): the trailing window of the running maximum of ``|e_j|`` (default: the reference's
     period when it is a sine and the run holds two periods, else a tenth of the run); ``tolerance`` (0 to 1,
-    default 0): the relative rise allowed from one window's maximum to the next; ``floor`` (rad, 1e-15 to 1, default 1e-6): an error whose
-    running maximum is below it counts as converged.
+    default 0): the relative rise allowed from one window's maximum to the next; ``floor`` (rad, 1e-15 to 1,
+    default 1e-6): an error whose running maximum is below it counts as converged.
     """
 
     window: Ranged(1e-6, 1e9, "s") | None = None
