@@ -103,3 +103,31 @@ def test_dispatch_and_per_joint_lengths():
         reference_for("step", Simulation(step=[0.1, 0.2, 0.3]), n=2)
     with pytest.raises(SpecError, match="controller.kind"):
         reference_for("ramp", sim)
+
+
+def test_sine_with_offset_and_phase_is_one_minus_cosine_against_numpy():
+    """``30 deg (1 - cos 2 pi t)`` and ``45 deg (1 - cos 2 pi t)`` as a sine with offset and phase, from a spec."""
+    a = np.radians([30.0, 45.0])
+    traj = {"kind": "sine", "amplitude": a.tolist(), "frequency": 1.0, "offset": a.tolist(),
+            "phase": -np.pi / 2}
+    ref = reference_for("trajectory", Simulation(trajectory=traj), n=2)
+    t = np.linspace(0.0, 2.0, 401)
+    x = ref.evaluate(t)
+    w = 2 * np.pi
+    np.testing.assert_allclose(x[..., 0], a[None, :] * (1 - np.cos(w * t))[:, None], atol=1e-14)
+    np.testing.assert_allclose(x[..., 1], a[None, :] * (w * np.sin(w * t))[:, None], atol=1e-12)
+    np.testing.assert_allclose(x[..., 2], a[None, :] * (w**2 * np.cos(w * t))[:, None], atol=1e-10)
+    np.testing.assert_allclose(x[0], np.stack([np.zeros(2), np.zeros(2), a * w**2], axis=1), atol=1e-12)  # at rest
+    assert list(dict(ref.settings)["phase"]) == [-np.pi / 2] * 2
+    assert "offset" not in dict(reference_for("trajectory", Simulation(
+        trajectory={"kind": "sine", "amplitude": 0.3}), n=1).settings)
+
+
+def test_sine_phase_per_joint_and_its_range():
+    ref = sine([0.2, 0.4], 0.5, start=[0.1, -0.1], offset=[0.0, 0.3], phase=[0.25, -1.0])
+    t = np.linspace(0.0, 3.0, 7)
+    q = ref.evaluate(t)[..., 0]
+    np.testing.assert_allclose(q[:, 0], 0.1 + 0.2 * np.sin(np.pi * t + 0.25), atol=1e-14)
+    np.testing.assert_allclose(q[:, 1], -0.1 + 0.3 + 0.4 * np.sin(np.pi * t - 1.0), atol=1e-14)
+    with pytest.raises(ValueError, match="phase"):
+        Simulation(trajectory={"kind": "sine", "phase": 7.0})

@@ -7,7 +7,9 @@ own displacement ``A_j``; :meth:`Reference.evaluate` returns an array of shape `
 
 * ``step`` (servo controllers): ``xD = q0 + A`` for ``t >= 0``, ``xD' = xD'' = 0``;
 * ``quintic``: ``xD = q0 + A (10 s^3 - 15 s^4 + 6 s^5)`` over ``T``, rest to rest;
-* ``sine``: ``xD = q0 + A sin(w t)``, ``w = 2 pi frequency``;
+* ``sine``: ``xD = q0 + c + A sin(w t + phi)``, ``w = 2 pi frequency``, ``c`` the ``offset`` and ``phi`` the
+  ``phase`` (both 0 by default); ``c = A``, ``phi = -pi/2`` gives ``A (1 - cos w t)``, which starts at ``q0`` at
+  rest;
 * ``trapezoidal``: every joint follows ``q0 + A sigma(t)`` with one normalised trapezoid
   ``sigma`` (acceleration ``1/(ta (T - ta))`` for ``ta``, cruise, symmetric deceleration), so the
   joints start and stop together.  Limits ``|A_j| sigma'max <= vmax_j`` and
@@ -155,17 +157,31 @@ def quintic(amplitude: Any, duration: float, start: Any = 0.0, n: int | None = N
                      tuple(q0))
 
 
-def sine(amplitude: Any, frequency: float, start: Any = 0.0, n: int | None = None) -> Reference:
-    """``xD = start + amplitude sin(2 pi frequency t)`` (rad per joint, Hz)."""
+def sine(amplitude: Any, frequency: float, start: Any = 0.0, n: int | None = None, offset: Any = 0.0,
+         phase: Any = 0.0) -> Reference:
+    """``xD = start + offset + amplitude sin(2 pi frequency t + phase)`` (rad per joint, Hz, rad per joint, rad per
+    joint).
+
+    >>> r = sine([0.5], 1.0, offset=[0.5], phase=[-math.pi / 2])  # 0.5 (1 - cos 2 pi t)
+    >>> [round(float(v), 12) for v in r.evaluate(np.array([0.0, 0.5]))[:, 0, 0]]
+    [0.0, 1.0]
+    """
     n = n or np.size(amplitude)
     amp, q0, w = _vec(amplitude, n), _vec(start, n), 2.0 * math.pi * float(frequency)
+    c, phi = _vec(offset, n), _vec(phase, n)
 
     def evaluate(t: np.ndarray) -> np.ndarray:
         t = np.atleast_1d(np.asarray(t, float))
-        return _shape(t, q0, amp, np.sin(w * t), w * np.cos(w * t), -w**2 * np.sin(w * t))
+        arg = w * t[:, None] + phi[None, :]
+        out = np.empty((t.size, n, 3))
+        out[:, :, 0] = q0[None, :] + c[None, :] + amp[None, :] * np.sin(arg)
+        out[:, :, 1] = amp[None, :] * w * np.cos(arg)
+        out[:, :, 2] = -amp[None, :] * w**2 * np.sin(arg)
+        return out
 
+    extra = {k: v for k, v in (("offset", c), ("phase", phi)) if np.any(v != 0)}
     return Reference(evaluate, n, 3.0 / float(frequency), w,
-                     _settings("sine", q0, amplitude=amp, frequency=float(frequency)), tuple(q0))
+                     _settings("sine", q0, amplitude=amp, frequency=float(frequency), **extra), tuple(q0))
 
 
 def multisine(amplitude: Any, period: float, harmonics: int, start: Any = 0.0, n: int | None = None) -> Reference:
@@ -365,7 +381,8 @@ def _trajectory(traj: Any, start: np.ndarray, n: int) -> Reference:
     if traj.kind == "multisine":
         return multisine(_joints(traj.amplitude, n, "amplitude"), traj.period, traj.harmonics, start, n)
     if traj.kind == "sine":
-        return sine(_joints(traj.amplitude, n, "amplitude"), traj.frequency, start, n)
+        return sine(_joints(traj.amplitude, n, "amplitude"), traj.frequency, start, n,
+                    _joints(traj.offset, n, "offset"), _joints(traj.phase, n, "phase"))
     if traj.kind == "trapezoidal":
         try:
             return trapezoidal(_joints(traj.amplitude, n, "amplitude"), _joints(traj.max_velocity, n, "max_velocity"),

@@ -19,7 +19,7 @@ from typing import Annotated, Literal
 from pydantic import ConfigDict, Field, field_validator, model_validator
 
 from designkit.spec.fields import NonNegativeFinite, PositiveFinite, Section
-from designkit.spec.ranges import DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
+from designkit.spec.ranges import ANGLE, DURATION, TORQUE, Ranged, RangedInt, RangedPerJoint
 
 __all__ = [
     "Actuator", "AntiWindup", "CircleTrajectory", "DeadZone", "Implementation", "JOINT_TRAJECTORIES", "LineTrajectory",
@@ -165,11 +165,16 @@ class QuinticTrajectory(Section):
 
 
 class SineTrajectory(Section):
-    """``amplitude sin(2 pi frequency t)`` about the initial position (rad per joint, within 100; Hz, 1e-6 to 1e3)."""
+    """``offset + amplitude sin(2 pi frequency t + phase)`` about the initial position (rad per joint, within 100;
+    Hz, 1e-6 to 1e3; ``offset`` rad per joint, within 100, default 0; ``phase`` rad per joint, within one turn
+    either way, default 0).  ``offset = amplitude``, ``phase = -pi/2`` is ``amplitude (1 - cos 2 pi frequency t)``,
+    which starts at the initial position at rest."""
 
     kind: Literal["sine"]
     amplitude: RangedPerJoint(*_POSITION) = 1.0
     frequency: Ranged(1e-6, 1e3, "Hz", base=PositiveFinite) = 1.0
+    offset: RangedPerJoint(*_POSITION) = 0.0
+    phase: RangedPerJoint(ANGLE.low, ANGLE.high, "rad") = 0.0
 
 
 class MultisineTrajectory(Section):

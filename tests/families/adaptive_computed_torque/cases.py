@@ -20,6 +20,9 @@ controller: {kind: adaptive_computed_torque, scheme: slotine_li, Lambda: [10, 10
 simulation: {duration: 2.0, trajectory: {kind: sine, amplitude: [1.0, 1.2], frequency: 0.5}}
 """
 
+CONVERGENCE = BASE.replace("bandwidth: 200}", "bandwidth: 200,\n             "
+                                                "convergence: {window: 0.5, tolerance: 0.1, floor: 1.0e-6}}")
+
 RANGES = {
     "controller.K1": [(BASE, "controller.K1", "controller.K1")],
     "controller.K2": [(BASE, "controller.K2", "controller.K2")],
@@ -28,6 +31,11 @@ RANGES = {
     "controller.bandwidth": [(BASE, "controller.bandwidth", "controller.bandwidth")],
     "controller.Lambda": [(SLOTINE, "controller.Lambda", "controller.Lambda")],
     "controller.KD": [(SLOTINE, "controller.KD", "controller.KD")],
+    "controller.convergence.window": [(CONVERGENCE, "controller.convergence.window",
+                                       "controller.convergence.window")],
+    "controller.convergence.tolerance": [(CONVERGENCE, "controller.convergence.tolerance",
+                                          "controller.convergence.tolerance")],
+    "controller.convergence.floor": [(CONVERGENCE, "controller.convergence.floor", "controller.convergence.floor")],
 }
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 
@@ -51,7 +59,8 @@ EXAMPLES = {
     "adaptive-ct-simnog": 0,
     "adaptive-ct-simnog-poor": 0,  # e -> 0 is met and certified; the estimates' convergence is not promised here
     "adaptive-ct-puma560": 0,
-    "adaptive-ct-not-spr": 1,
-    "adaptive-ct-simnog-slotine-li": 0,  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
+    "adaptive-ct-not-spr": 1,  # psi K2 < 1: the SPR certificate fails (and V rises along the run)
+    "adaptive-ct-simnog-slotine-li": 0,
+    "adaptive-ct-two-link-slotine-li": 0,  # the book's run: the error decreasing, the estimates not converging
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -50,6 +50,29 @@ CASES = {
                             "controller.Lambda"),
     "adapted twice": (_ctrl("poles: [-10, -10], adapt: [m1, m1], initial: {m1: 7.0}"),
                       "controller.adapt[1]: 'm1' is listed twice"),
+    "gain matrix not symmetric": (_ctrl(f"poles: [-10, -10], {GOOD}, gain_matrix: [[2, 1], [0.5, 2]]"),
+                                  "controller.gain_matrix: must be symmetric"),
+    "gain matrix indefinite": (_ctrl(f"poles: [-10, -10], {GOOD}, gain_matrix: [[1, 2], [2, 1]]"),
+                               "controller.gain_matrix: must be positive definite (its Cholesky factorisation "
+                               "fails; smallest eigenvalue -1)"),
+    "gain matrix short row": (_ctrl(f"poles: [-10, -10], {GOOD}, gain_matrix: [[1, 0], [0]]"),
+                              "controller.gain_matrix[1]: must be a row of 2 numbers"),
+    "gain matrix and gain": (_ctrl(f"poles: [-10, -10], {GOOD}, gain: 1.0, gain_matrix: [[1, 0], [0, 1]]"),
+                             "controller.gain_matrix: give either gain (diagonal) or gain_matrix"),
+    "combination singular": (_ctrl(f"poles: [-10, -10], {GOOD}, combination: [[1, 1], [2, 2]]"),
+                             "controller.combination: must be invertible"),
+    "combination and gain matrix": (_ctrl(f"poles: [-10, -10], {GOOD}, combination: [[1, 0], [0, 1]], "
+                                          "gain_matrix: [[1, 0], [0, 1]]"),
+                                    "controller.combination: takes the diagonal gain"),
+    "convergence window beyond half the run": (_ctrl(f"poles: [-10, -10], {GOOD}, convergence: {{window: 1.5}}"),
+                                               "controller.convergence.window: 1.5 s is longer than half the run"),
+    "convergence tolerance beyond 1": (_ctrl(f"poles: [-10, -10], {GOOD}, convergence: {{tolerance: 2}}"),
+                                       "controller.convergence.tolerance"),
+    "convergence floor zero": (_ctrl(f"poles: [-10, -10], {GOOD}, convergence: {{floor: 0}}"),
+                               "controller.convergence.floor"),
+    "sine phase beyond a turn": ("controller: {kind: adaptive_computed_torque, poles: [-10, -10], " + GOOD + "}\n"
+                                 "simulation: {duration: 2, trajectory: {kind: sine, phase: [0, 7]}}\n",
+                                 "simulation.trajectory.phase[1]"),
 }
 
 

@@ -15,12 +15,15 @@ accelerometer; ``filtered``: a filtered velocity derivative of bandwidth ``contr
 Gains: ``poles`` (a pair per joint, or one pair for all: ``K1 = p1 p2``, ``K2 = -(p1 + p2)``) or ``K1``,
 ``K2`` directly, per joint; ``psi`` (s) per joint, default ``2/K2`` (the SPR condition is ``psi K2 > 1``,
 :mod:`~designkit.families.adaptive_computed_torque.spr`).  ``gain``: the adaptation gains ``K`` (one, or
-one per adapted parameter).  ``bounds`` (name -> ``[l, h]``) with ``delta``: the notes' projection.
+one per adapted parameter); ``gain_matrix`` a full symmetric positive-definite ``K``, or ``combination`` ``T`` with
+``gain`` diagonal on ``a = T p`` (:mod:`.gains`).  ``bounds`` (name -> ``[l, h]``) with ``delta``: the notes'
+projection.  ``convergence``: the window, tolerance and floor of the tracking judgement.  Starting estimates no
+arm has are warned (:mod:`.consistency`).
 
 **Contract.**  ``Linearization("frozen")``: ``freeze(values)`` is the fixed computed torque with the
 estimates held; the generic ``lyapunov`` check judges the loop frozen at the initial estimates and
 ``frozen_final`` at the final ones.  The family's own checks (:mod:`.checks`): the SPR certificate,
-the tracking error converging, the Lyapunov function of the adaptive loop non-increasing along the
+the tracking error's windowed maxima decreasing, the Lyapunov function of the adaptive loop non-increasing along the
 run, and parameter convergence judged against the excitation indicator (:mod:`.excitation`).
 """
 
@@ -34,10 +37,13 @@ from pydantic import Field, field_validator, model_validator
 from designkit.errors import SpecError
 from designkit.families.adaptive_computed_torque import laws as act
 from designkit.families.adaptive_computed_torque.box import check_box
+from designkit.families.adaptive_computed_torque.consistency import start_warnings
+from designkit.families.adaptive_computed_torque.gains import ConvergenceSpec, Matrix, gain_parts
 from designkit.families.adaptive_computed_torque.laws import (
     KIND,
     Adaptation,
     AdaptiveData,
+    Convergence,
     Freezer,
     parameter_units,
     state_name,
@@ -65,7 +71,10 @@ class AdaptiveComputedTorqueSpec(Section):
     ``initial``: the estimate of each at ``t = 0``; ``gain``: adaptation gains (1e-12 to 1e12, one or one per
     adapted parameter); ``bounds``: ``[l, h]`` per adapted parameter (optional projection) with ``delta`` (its
     hysteresis, in each parameter's unit); ``acceleration``: ``ideal`` or ``filtered`` (with ``bandwidth``,
-    rad/s, 1e-3 to 1e6).
+    rad/s, 1e-3 to 1e6).  ``gain_matrix``: instead of ``gain``, the full adaptation gain (rows, symmetric positive
+    definite); ``combination``: ``T`` (rows, invertible) with ``gain`` then diagonal on ``a = T p``
+    (:mod:`~designkit.families.adaptive_computed_torque.gains`).  ``convergence``: ``window``, ``tolerance`` and
+    ``floor`` of the tracking-convergence judgement (:class:`~.gains.ConvergenceSpec`).
     """
 
     step_fields: ClassVar[dict[str, int]] = {"bandwidth": -1}
@@ -88,6 +97,11 @@ class AdaptiveComputedTorqueSpec(Section):
     scheme: Literal["craig", "slotine_li"] = "craig"
     Lambda: RangedPerJoint(1e-12, 1e12, "1/s") | None = None
     KD: RangedPerJoint(1e-12, 1e12, "N*m*s/rad") | None = None
+    gain_matrix: Matrix | None = Field(default=None, description="Full adaptation gain K (symmetric positive "
+                                       "definite), rows in the order of adapt.")
+    combination: Matrix | None = Field(default=None, description="T: gain is diagonal on a = T p (rows in the "
+                                       "order of adapt; invertible).")
+    convergence: ConvergenceSpec = Field(default_factory=ConvergenceSpec)
 
     @field_validator("poles")
     @classmethod
@@ -162,10 +176,12 @@ class AdaptiveComputedTorqueSpec(Section):
                 raise ValueError(f"initial.{name}: not an adapted parameter (controller.adapt lists {self.adapt})")
             if abs(self.initial[name]) > PARAMETER_RANGE:
                 raise ValueError(f"initial.{name}: must be within 1e6 in magnitude, got {self.initial[name]:g}")
-        gains = self.gain if isinstance(self.gain, list) else [self.gain]
-        if len(gains) not in (1, len(self.adapt)):
-            raise ValueError(f"gain: must be one number or {len(self.adapt)} (one per adapted parameter), got "
-                             f"{len(gains)}")
+        for name in ("gain_matrix", "combination"):
+            for i, row in enumerate(getattr(self, name) or ()):
+                for j, x in enumerate(row):
+                    if abs(x) > GAIN_RANGE[1]:
+                        raise ValueError(f"{name}[{i}][{j}]: must be within 1e12 in magnitude, got {x:g}")
+        gain_parts(self.gain, self.gain_matrix, self.combination, len(self.adapt), "gain" in self.model_fields_set)
         for name, pair in (self.bounds or {}).items():
             if name not in self.adapt:
                 raise ValueError(f"bounds.{name}: not an adapted parameter (controller.adapt lists {self.adapt})")
@@ -221,7 +237,11 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
     else:
         K1, K2, psi, _ = gains_of(spec, n)
         Lambda = KD = ()
-    gains = c.gain if isinstance(c.gain, list) else [c.gain] * len(c.adapt)
+    try:
+        gains, K, T, G = gain_parts(c.gain, c.gain_matrix, c.combination, len(c.adapt), "gain" in c.model_fields_set)
+    except ValueError as exc:
+        key, msg = str(exc).split(": ", 1)
+        raise SpecError(f"controller.{key}", msg) from None
     bounds = None
     if c.bounds:
         bounds = tuple(tuple(float(x) for x in c.bounds[name]) if name in c.bounds else (-np.inf, np.inf)
@@ -230,7 +250,7 @@ def adaptation(spec: Any, plant: Any) -> Adaptation:
     return Adaptation(names=tuple(c.adapt), initial=tuple(float(c.initial[x]) for x in c.adapt),
                       gain=tuple(float(g) for g in gains), K1=K1, K2=K2, psi=psi, acceleration=acceleration,
                       bandwidth=float(c.bandwidth), bounds=bounds, delta=float(c.delta), scheme=c.scheme, Lambda=Lambda,
-                      KD=KD)
+                      KD=KD, gain_matrix=K, combination=T, combination_gain=G)
 
 
 def _gain_unit(unit: str) -> str:
@@ -269,6 +289,35 @@ def _scheme_parts(spec: Any, a: Adaptation) -> tuple[list[Gain], list[str], tupl
     return gains, notes, formulas, poles
 
 
+def _convergence(spec: Any) -> Convergence:
+    """``controller.convergence`` as the checks read it; a window longer than half the run is refused (the judgement
+    compares at least two windows)."""
+    c = spec.controller.convergence
+    duration = getattr(spec.simulation, "duration", None)
+    if c.window is not None and duration is not None and 2 * c.window > float(duration) * (1 + 1e-12):
+        raise SpecError("controller.convergence.window", f"{c.window:g} s is longer than half the run "
+                        f"({float(duration):g} s): the judgement compares at least two windows")
+    return Convergence(window=None if c.window is None else float(c.window), tolerance=float(c.tolerance),
+                       floor=float(c.floor))
+
+
+def _gain_notes(a: Adaptation) -> list[str]:
+    """The full adaptation gain in words when it is not diagonal."""
+    if a.gain_matrix is None:
+        return []
+
+    def rows(M: Any) -> str:
+        return "[" + "; ".join(" ".join(f"{x:.6g}" for x in r) for r in M) + "]"
+
+    order = ", ".join(a.names)
+    if a.combination is not None:
+        return [f"Adaptation gain diagonal on the combinations a = T p (p = {order}): T = {rows(a.combination)}, "
+                f"gains on a {', '.join(f'{g:.6g}' for g in a.combination_gain)}; on p, K = T⁻¹ G T⁻ᵀ = "
+                f"{rows(a.gain_matrix)} (the K_ entries of the gain table are its diagonal)."]
+    return [f"Adaptation gain K (p = {order}) = {rows(a.gain_matrix)}, symmetric positive definite (the K_ entries "
+            "of the gain table are its diagonal)."]
+
+
 def synthesize(spec: Any, plant: Any) -> Design:
     """The adaptive computed torque a spec asks for (module docstring) on the arm ``plant``."""
     a = adaptation(spec, plant)
@@ -283,14 +332,17 @@ def synthesize(spec: Any, plant: Any) -> Design:
     notes = [scheme_notes[0],
              "Adapted: " + ", ".join(f"{x} (from {v:.6g} {unit_text(u)}; true {true[i]:.6g} {unit_text(u)})"
                                      for x, v, u, i in zip(a.names, a.initial, units, idx, strict=True))
-             + "; every other parameter of the regressor is known (the arm's true value).", *scheme_notes[1:]]
+             + "; every other parameter of the regressor is known (the arm's true value).", *scheme_notes[1:],
+             *_gain_notes(a)]
+    warned = start_warnings(plant, a.names, a.initial)
     q0 = np.zeros(n)
     if spec.simulation.initial_position is not None:
         q0 = np.array(_joint_list(spec.simulation.initial_position, n, "simulation.initial_position"))
     design = Design(
         kind=KIND, plant=plant, gains=gains, poles=poles, reference="trajectory", formulas=formulas,
         notes=tuple(notes),
-        data=AdaptiveData(adaptation=a, units=tuple(units), true=tuple(float(true[i]) for i in idx)),
+        data=AdaptiveData(adaptation=a, units=tuple(units), true=tuple(float(true[i]) for i in idx),
+                          convergence=_convergence(spec), start_warnings=warned),
     )
     held = (a.Lambda, a.KD) if a.scheme == "slotine_li" else (a.K1, a.K2)
     lin = Linearization("frozen", reason="the law with the estimated parameters held (no adaptation)",
@@ -331,7 +383,8 @@ def _family() -> Family:
                     "real; or the Slotine–Li passivity-based law, which needs neither the acceleration nor D̂⁻¹."),
         validate=validate, figures=figures.FIGURES, sections=(report.section,), json=report.json,
         knobs=(Knob("gain", "", "adaptation gain K of the parameter update", 1e-9, 1e9, path="controller.gain",
-                    role="adaptation", boundary=True),
+                    role="adaptation", boundary=True,
+                    when=lambda d: d.data.adaptation.gain_matrix is None or d.data.adaptation.combination is not None),
                Knob("psi", "s", "ψ of the error filter e + ψ ė (strictly positive real when ψ K2 > 1)", 1e-9, 1e9,
                     path="controller.psi", current=lambda d: d.gains["psi"], when=lambda d: "psi" in d.gains)),
         traits=("adaptive", "model_based"),

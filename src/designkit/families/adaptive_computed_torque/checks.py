@@ -6,9 +6,14 @@ real for every joint, by the KYP lemma on the certificate core (per joint and fo
 ``psi K2 > 1`` (:mod:`.spr`).  It reads only the gains: it is not a check of a linearization.  When the
 routes disagree the check is undecided.
 
-``tracking_convergence`` (order 126, required): the tracking error converges: the largest ``|e_j|`` over
-the last :data:`TAIL` of the run is at most :data:`TRACK_FRACTION` of the largest over the run (or below
-:data:`TRACK_FLOOR` rad).
+``tracking_convergence`` (order 126, required): the tracking error goes to zero as the theorem says, asymptotically,
+not by a given time: per joint, the running maximum of ``|e_j|`` over trailing windows of ``W`` (aligned to the run's
+end; ``controller.convergence.window``, default the reference's period when it is a sine and the run holds two
+periods, else a tenth of the run),
+from the window holding the run's peak to the last, decreases -- each window's maximum at most ``1 + tolerance``
+times the one before (``controller.convergence.tolerance``, default 0) and the last below the peak -- or the running
+maximum falls below ``floor`` (``controller.convergence.floor``, default 1e-6 rad) and stays there
+(:func:`window_maxima`, :func:`decreasing`).  A run whose peak lies in its last window shows no decrease and fails.
 
 ``adaptive_lyapunov`` (order 127, required): ``V = sum_j x_j' P_j x_j + (P - P^)' K^-1 (P - P^)``
 (``x_j = (e_j, e'_j)``, ``P_j`` the closed-form KYP matrix) recorded along the run never rises by more than
@@ -35,15 +40,11 @@ from designkit.families.adaptive_computed_torque.spr import joint_spr, stacked_r
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
-__all__ = ["CONVERGED_REL", "RULES", "TAIL", "TRACK_FLOOR", "TRACK_FRACTION", "V_TOL_FILTERED", "V_TOL_IDEAL",
-           "lyapunov_rise", "spr_evidence"]
+__all__ = ["CONVERGED_REL", "RULES", "TAIL", "V_TOL_FILTERED", "V_TOL_IDEAL", "decreasing", "lyapunov_rise",
+           "spr_evidence", "tracking_window", "window_maxima"]
 
 TAIL = 0.1
-"""The tracking error's last window: this fraction of the run."""
-TRACK_FRACTION = 0.05
-"""Converging: the last window's largest error at most this fraction of the run's largest."""
-TRACK_FLOOR = 1e-6
-"""An error below this (rad) counts as converged whatever its history."""
+"""The default window of the tracking judgement, without a periodic reference: this fraction of the run."""
 V_TOL_IDEAL = 1e-6
 """Largest rise of ``V`` over its running minimum, relative to ``V(0)``, with the ideal accelerometer."""
 V_TOL_FILTERED = 1e-2
@@ -106,6 +107,60 @@ def _errors(sim: Any) -> np.ndarray:
     return ref - pos
 
 
+def tracking_window(sim: Any, window: float | None) -> tuple[float, str]:
+    """The window ``W`` (s) of the tracking judgement and where it came from: the spec's, else the reference's
+    period when it is a sine and the run holds two periods or more, else :data:`TAIL` of the run."""
+    t = np.asarray(sim.time, dtype=float)
+    if window is not None:
+        return float(window), "controller.convergence.window"
+    ref = dict(dict(getattr(sim, "settings", None) or {}).get("reference") or {})
+    span = float(t[-1] - t[0])
+    if ref.get("kind") == "sine" and float(ref.get("frequency", 0.0)) > 0 and 2.0 / float(ref["frequency"]) <= span:
+        return 1.0 / float(ref["frequency"]), "the reference's period"
+    return TAIL * span, "a tenth of the run"
+
+
+def window_maxima(t: np.ndarray, e: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(ends, maxima)``: the largest ``|e|`` (per column of ``e``, shape (N, n)) over consecutive windows of
+    ``window`` s ending at the run's end, oldest first (a first window shorter than ``window`` is dropped, its
+    samples joined to the next one)."""
+    t = np.asarray(t, dtype=float)
+    e = np.abs(np.asarray(e, dtype=float)).reshape(len(t), -1)
+    count = max(int(np.floor((t[-1] - t[0]) / window * (1 + 1e-12))), 1)
+    ends = t[-1] - window * np.arange(count)[::-1]
+    starts = np.concatenate([[t[0] - 1.0], ends[:-1]])
+    maxima = np.array([np.max(e[(t > a) & (t <= b)], axis=0) for a, b in zip(starts, ends, strict=True)])
+    return ends, maxima
+
+
+def decreasing(maxima: np.ndarray, tolerance: float, floor: float) -> tuple[bool, str]:
+    """Whether one joint's window maxima (oldest first) decrease from the peak's window on (module docstring), and
+    why not."""
+    m = np.asarray(maxima, dtype=float)
+    k0 = int(np.argmax(m))
+    after = m[k0:]
+    below = np.flatnonzero(after <= floor)
+    if below.size and np.all(after[below[0]:] <= floor):
+        return True, f"below the floor {floor:g} rad from window {k0 + below[0] + 1} of {len(m)} on"
+    if len(after) < 2:
+        return False, "its peak lies in the last window: no decrease seen within the run"
+    for k in range(1, len(after)):
+        if after[k] > (1.0 + tolerance) * after[k - 1]:
+            return False, (f"window {k0 + k + 1} of {len(m)} reaches {after[k]:.3g} rad, above window {k0 + k}'s "
+                           f"{after[k - 1]:.3g} rad" + (f" × (1 + {tolerance:g})" if tolerance else ""))
+    if not after[-1] < after[0]:
+        return False, f"the last window's {after[-1]:.3g} rad is not below the peak {after[0]:.3g} rad"
+    return True, f"decreasing from {after[0]:.3g} to {after[-1]:.3g} rad"
+
+
+def _chain(m: np.ndarray) -> str:
+    """Window maxima as ``a → b → …`` (the first two and the last eight beyond twelve)."""
+    words = [f"{x:.3g}" for x in m]
+    if len(words) > 12:
+        words = [*words[:2], f"… ({len(words) - 10} windows) …", *words[-8:]]
+    return " → ".join(words)
+
+
 def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
     sim = ctx.simulation
     t = np.asarray(sim.time, dtype=float)
@@ -115,20 +170,26 @@ def _tracking(design: Any, ctx: Context) -> tuple[Check, ...]:
         return (Check("tracking_convergence", False, "finite error", None, None, "rad",
                       f"the tracking error stopped being finite at t = {at:.6g} s: the run diverged",
                       {"diverged_at_s": at}),)
-    tail = t >= t[-1] - TAIL * (t[-1] - t[0])
+    conv = design.data.convergence
+    window, source = tracking_window(sim, conv.window)
+    ends, maxima = window_maxima(t, e, window)
+    verdicts = [decreasing(maxima[:, j], conv.tolerance, conv.floor) for j in range(e.shape[1])]
+    ok = all(v for v, _ in verdicts)
     peak = np.max(e, axis=0)
-    last = np.max(e[tail], axis=0)
+    last = maxima[-1]
     ratio = last / np.where(peak > 0, peak, 1.0)
-    ok = bool(np.all((ratio <= TRACK_FRACTION) | (last <= TRACK_FLOOR)))
     worst = int(np.argmax(ratio))
-    cert = {"peak_rad": peak.tolist(), "last_window_rad": last.tolist(), "ratio": ratio.tolist(),
-            "tail_s": float(TAIL * (t[-1] - t[0]))}
-    detail = (f"largest |e| over the last {TAIL * (t[-1] - t[0]):.3g} s against the run's largest, per joint: "
-              + ", ".join(f"{a:.3g} of {b:.3g} rad" for a, b in zip(last, peak, strict=True))
-              + f" (worst ratio {ratio[worst]:.3g}, joint {worst + 1})")
-    return (Check("tracking_convergence", ok, f"last-window |e| <= {TRACK_FRACTION:g} x peak |e| per joint",
-                  float(ratio[worst]), float(TRACK_FRACTION - ratio[worst]), "1 (ratio)", detail, cert,
-                  data={"time": t, "error": _errors(sim)}),)
+    cert = {"window_s": window, "window_from": source, "tolerance": conv.tolerance, "floor_rad": conv.floor,
+            "window_ends_s": ends.tolist(), "window_maxima_rad": maxima.T.tolist(), "peak_rad": peak.tolist(),
+            "last_window_rad": last.tolist(), "ratio": ratio.tolist(),
+            "joints": [{"decreasing": v, "why": w} for v, w in verdicts]}
+    detail = (f"running maximum of |e| over {len(ends)} trailing windows of {window:.4g} s ({source}), per joint: "
+              + "; ".join(f"joint {j + 1}: " + _chain(maxima[:, j]) + f" rad ({w})"
+                          for j, (_, w) in enumerate(verdicts)))
+    target = (f"window maxima decreasing from the peak on (each ≤ (1 + {conv.tolerance:g}) × the previous, the last "
+              f"below the peak) or below {conv.floor:g} rad")
+    return (Check("tracking_convergence", ok, target, float(ratio[worst]), None, "1 (last window / peak)", detail,
+                  cert, data={"time": t, "error": _errors(sim)}),)
 
 
 def lyapunov_rise(V: np.ndarray) -> tuple[float, int]:
@@ -171,9 +232,9 @@ def run_excitation(design: Any, sim: Any) -> Any:
     """The excitation indicators of the run's desired trajectory."""
     a = design.data.adaptation
     if a.scheme == "slotine_li":
-        return excitation(design.plant, a.names, a.KD, a.gain, np.asarray(sim.time), np.asarray(sim.reference),
+        return excitation(design.plant, a.names, a.KD, a.K(), np.asarray(sim.time), np.asarray(sim.reference),
                           scheme="slotine_li")
-    return excitation(design.plant, a.names, a.K1, a.gain, np.asarray(sim.time), np.asarray(sim.reference))
+    return excitation(design.plant, a.names, a.K1, a.K(), np.asarray(sim.time), np.asarray(sim.reference))
 
 
 def _estimates(design: Any, ctx: Context) -> tuple[Check, ...]:
@@ -194,14 +255,16 @@ def _estimates(design: Any, ctx: Context) -> tuple[Check, ...]:
             "efolds": ex.efolds, "alpha_min": ex.alpha_min, "window_s": ex.window, "exciting": ex.exciting}
     target = f"every estimate within {CONVERGED_REL * 100:g} % of the true value"
     margin = float(CONVERGED_REL - rel[worst]) if math.isfinite(rel[worst]) else None
+    warned = tuple(design.data.start_warnings)
+    cert["start_warnings"] = list(warned)
     if ex.exciting:
         return (Check("estimate_convergence", ok, target, float(rel[worst]), margin, "1 (relative)",
                       f"{words}; {pe} (≥ {EFOLDS:g}: convergence expected)", cert,
-                      data={"excitation": ex}),)
+                      data={"excitation": ex}, warnings=warned),)
     return (Check("estimate_convergence", ok, target, float(rel[worst]), margin, "1 (relative)",
                   f"{words}; {pe} (< {EFOLDS:g}: the trajectory does not excite the parameters enough to expect "
                   f"convergence; reported, {'converged anyway' if ok else 'not converged'})", cert, required=False,
-                  data={"excitation": ex}),)
+                  data={"excitation": ex}, warnings=warned),)
 
 
 RULES = (

@@ -75,7 +75,7 @@ class Excitation:
         return float(np.min(full)) if full.size else 0.0
 
 
-def excitation(plant: Any, names: Sequence[str], K1: Sequence[float], gain: Sequence[float], time: np.ndarray,
+def excitation(plant: Any, names: Sequence[str], K1: Sequence[float], gain: Any, time: np.ndarray,
                reference: np.ndarray, scheme: str = "craig") -> Excitation:
     """The indicators of the trajectory ``reference`` (``(N, n, 3)``: position, velocity, acceleration) at ``time``.
 
@@ -105,6 +105,8 @@ def excitation(plant: Any, names: Sequence[str], K1: Sequence[float], gain: Sequ
     else:
         Wt = np.linalg.solve(D, W)
         G = np.einsum("kia,kib->ab", Wt[late] / k1[None, :, None], Wt[late]) / max(int(late.sum()), 1)
-    g = np.sqrt(np.asarray(gain, dtype=float))
-    rate = float(np.linalg.eigvalsh((g[:, None] * G * g[None, :] + (g[:, None] * G * g[None, :]).T) / 2)[0])
+    K = np.asarray(gain, dtype=float)
+    L = np.linalg.cholesky(K if K.ndim == 2 else np.diag(K))  # K = L L': the rate is lambda_min(L' G L)
+    M = L.T @ G @ L
+    rate = float(np.linalg.eigvalsh((M + M.T) / 2)[0])
     return Excitation(time=t, alpha=alpha, window=window, rate=max(rate, 0.0), duration=float(t[-1] - t[0]))

@@ -31,11 +31,23 @@ def _draw_error(result: Any) -> Any:
     for j in range(n):
         tag(fig, "error", *plot_decimated(ax, t, e[:, j], color=JOINT_COLORS[j % len(JOINT_COLORS)],
                                           label=f"joint {j + 1}"))
+    check = next((c for c in result.checks if c.name == "tracking_convergence"), None)
+    window = None
+    if check is not None and "window_maxima_rad" in check.certificate:
+        c = check.certificate
+        window = float(c["window_s"])
+        ends = np.asarray(c["window_ends_s"], dtype=float)
+        starts = np.concatenate([[t[0]], ends[:-1]])
+        for j, row in enumerate(c["window_maxima_rad"]):
+            xs = np.column_stack([starts, ends]).ravel()
+            ys = np.repeat(np.asarray(row, dtype=float), 2)
+            tag(fig, "envelope", *ax.plot(xs, ys, color=JOINT_COLORS[j % len(JOINT_COLORS)], ls="--", lw=0.9,
+                                          label="largest |e| per window" if j == 0 else None))
     ax.set_xlabel("time (s)")
     ax.set_ylabel("e = qD − q (rad)")
     ax.set_xlim(t[0], t[-1])
-    ax.legend(loc="best", framealpha=0.9, fontsize=7, ncol=min(n, 3))
-    return fig, {"n": n, "last": float(np.max(np.abs(e[t >= t[-1] - 0.1 * (t[-1] - t[0])])))}
+    ax.legend(loc="best", framealpha=0.9, fontsize=7, ncol=min(n + 1, 3))
+    return fig, {"n": n, "last": float(np.max(np.abs(e[t >= t[-1] - 0.1 * (t[-1] - t[0])]))), "window": window}
 
 
 def error_figure(result: Any) -> Figure | None:
@@ -45,6 +57,9 @@ def error_figure(result: Any) -> Figure | None:
     svg, keys, info = render_tagged(_draw_error, result)
     caption = (f"Drawn: the tracking error qD − q of each of the {info['n']} joints against time (rad). Over the last "
                f"tenth of the run its largest magnitude is {info['last']:.3g} rad.")
+    if "envelope" in keys:
+        caption += (f" Dashed: the largest |e| of each joint over each window of {info['window']:.4g} s, the bound "
+                    "the tracking judgement asks to decrease.")
     return Figure("Tracking error", caption, svg, "fig-adaptive-ct-error.svg", ("tracking_convergence",))
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -79,7 +79,7 @@ class Adaptation:
     initial : tuple of float
         Their estimates at ``t = 0``.
     gain : tuple of float
-        ``K`` (diagonal), one per adapted parameter (unit of the parameter squared times s/rad^2).
+        The diagonal of ``K``, one per adapted parameter (unit of the parameter squared times s/rad^2).
     K1, K2, psi : tuple of float
         Error gains (1/s^2, 1/s) and the filter's ``psi`` (s), per joint.
     acceleration : str
@@ -93,6 +93,14 @@ class Adaptation:
     scheme : str
         ``"craig"`` (the notes' law) or ``"slotine_li"`` (:mod:`.slotine_li`; then ``K1, K2, psi`` are empty and
         ``Lambda`` (1/s) and ``KD`` (N*m*s/rad) per joint are its gains).
+    gain_matrix : tuple of tuple of float or None
+        The full symmetric positive-definite ``K`` (m x m) when it is not diagonal (``controller.gain_matrix``, or
+        ``T^-1 diag(gain on a) T^-T`` from ``controller.combination``); None: ``K = diag(gain)``.
+    combination : tuple of tuple of float or None
+        ``T`` (m x m, invertible) of ``controller.combination``: the combinations ``a = T p`` on which the spec's
+        gain is diagonal; None when not given.
+    combination_gain : tuple of float
+        The spec's diagonal gain on ``a`` (with ``combination`` only).
     """
 
     names: tuple[str, ...]
@@ -108,13 +116,28 @@ class Adaptation:
     scheme: str = "craig"
     Lambda: tuple[float, ...] = ()
     KD: tuple[float, ...] = ()
+    gain_matrix: tuple[tuple[float, ...], ...] | None = None
+    combination: tuple[tuple[float, ...], ...] | None = None
+    combination_gain: tuple[float, ...] = ()
+
+    def K(self) -> np.ndarray:
+        """The adaptation gain ``K`` (m x m, symmetric positive definite)."""
+        if self.gain_matrix is None:
+            return np.diag(np.asarray(self.gain, dtype=float))
+        return np.asarray(self.gain_matrix, dtype=float)
 
     def to_json(self) -> dict[str, Any]:
         """JSON-ready settings."""
-        return {"adapt": list(self.names), "initial": list(self.initial), "gain": list(self.gain),
-                "K1": list(self.K1), "K2": list(self.K2), "psi": list(self.psi), "acceleration": self.acceleration,
-                "bandwidth": self.bandwidth, "bounds": None if self.bounds is None else [list(b) for b in self.bounds],
-                "delta": self.delta, "scheme": self.scheme, "Lambda": list(self.Lambda), "KD": list(self.KD)}
+        out = {"adapt": list(self.names), "initial": list(self.initial), "gain": list(self.gain),
+               "K1": list(self.K1), "K2": list(self.K2), "psi": list(self.psi), "acceleration": self.acceleration,
+               "bandwidth": self.bandwidth, "bounds": None if self.bounds is None else [list(b) for b in self.bounds],
+               "delta": self.delta, "scheme": self.scheme, "Lambda": list(self.Lambda), "KD": list(self.KD)}
+        if self.gain_matrix is not None:
+            out["gain_matrix"] = [list(r) for r in self.gain_matrix]
+        if self.combination is not None:
+            out["combination"] = [list(r) for r in self.combination]
+            out["combination_gain"] = list(self.combination_gain)
+        return out
 
     @classmethod
     def from_json(cls, x: Any) -> Adaptation:
@@ -124,7 +147,10 @@ class Adaptation:
                    K2=tuple(x["K2"]), psi=tuple(x["psi"]), acceleration=x["acceleration"],
                    bandwidth=float(x["bandwidth"]), bounds=None if bounds is None else tuple(tuple(b) for b in bounds),
                    delta=float(x["delta"]), scheme=x.get("scheme", "craig"), Lambda=tuple(x.get("Lambda", ())),
-                   KD=tuple(x.get("KD", ())))
+                   KD=tuple(x.get("KD", ())),
+                   gain_matrix=None if x.get("gain_matrix") is None else tuple(tuple(r) for r in x["gain_matrix"]),
+                   combination=None if x.get("combination") is None else tuple(tuple(r) for r in x["combination"]),
+                   combination_gain=tuple(x.get("combination_gain", ())))
 
 
 def _indices(plant: Any, names: Sequence[str]) -> list[int]:
@@ -187,7 +213,7 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
     P_true = true_parameters(plant)
     tau_of = _torque_of_parameters(plant)
     K1, K2, psi = (ca.DM(list(x)) for x in (a.K1, a.K2, a.psi))
-    gain = np.asarray(a.gain, dtype=float)
+    gain = a.K()
     p = plant.model_parameters()
     fd = plant.robot.functions["forward_dynamics"]
     memo: dict[int, dict[str, ca.SX]] = {}
@@ -217,9 +243,9 @@ def adaptive_law(plant: Any, a: Adaptation) -> Law:
         e1 = e + psi * ed
         Pa = ca.SX.sym("Pa", len(idx))
         Wa = ca.jacobian(tau_of(q, qd, qdd, _estimate(P_true, idx, Pa)), Pa)  # affine in P: free of Pa
-        rate = ca.DM(gain) * (Wa.T @ ca.solve(D_hat, e1))
+        rate = ca.DM(gain) @ (Wa.T @ ca.solve(D_hat, e1))
         phi = ca.DM(P_true[idx]) - est
-        V = ca.sum1((K2 + psi * K1) * e**2 + 2 * e * ed + psi * ed**2) + ca.sum1(phi**2 / ca.DM(gain))
+        V = ca.sum1((K2 + psi * K1) * e**2 + 2 * e * ed + psi * ed**2) + ca.dot(phi, ca.DM(np.linalg.inv(gain)) @ phi)
         Vdot = -ca.sum1(2 * K1 * e**2 + 2 * (psi * K2 - 1) * ed**2)
         memo[key] = {"u": u, "rate": rate, "V": V, "Vdot": Vdot, "e1": e1, "qd": qd, "vf_dot": None}
         if a.acceleration == "filtered":
@@ -315,8 +341,33 @@ class AdaptiveData(FamilyData):
         The unit of each adapted parameter, in the order of ``adaptation.names``.
     true : tuple of float
         The arm's true value of each adapted parameter (its unit).
+    convergence : Convergence
+        How ``tracking_convergence`` judges the error (``controller.convergence``).
+    start_warnings : tuple of str
+        What is physically impossible about the starting estimates (:mod:`.physical`), one sentence each.
     """
 
     adaptation: Adaptation
     units: tuple[str, ...]
     true: tuple[float, ...]
+    convergence: Convergence = field(default_factory=lambda: Convergence())
+    start_warnings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Convergence:
+    """The tracking-convergence judgement's settings (``controller.convergence``).
+
+    Attributes
+    ----------
+    window : float or None
+        The trailing window (s); None: the reference's period for a sine, else a tenth of the run.
+    tolerance : float
+        Relative rise allowed from one window's maximum to the next (dimensionless).
+    floor : float
+        An error whose running maximum stays below it counts as converged (rad).
+    """
+
+    window: float | None = None
+    tolerance: float = 0.0
+    floor: float = 1e-6

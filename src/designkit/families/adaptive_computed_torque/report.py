@@ -16,7 +16,10 @@ from designkit.display.section import Question, ReportSection, Table
 from designkit.families.adaptive_computed_torque.laws import estimates
 from designkit.families.adaptive_computed_torque.words import describe, unit_text
 
-__all__ = ["json", "section"]
+__all__ = ["SHOWN", "json", "section"]
+
+SHOWN = 12
+"""Windows of the tracking judgement shown in the report's table (the first two and the last ones beyond)."""
 
 
 def _num(x: Any) -> float | None:
@@ -39,8 +42,8 @@ def _spr_rows(result: Any) -> list[dict[str, Any]]:
 
 
 def json(result: Any) -> dict[str, Any]:
-    """``{"adaptation": {parameters, units, initial, final, true, spr: {margin, psi_min}, excitation}}`` (SI units;
-    ``final`` and ``excitation`` null without a run)."""
+    """``{"adaptation": {parameters, units, initial, final, true, spr: {margin, psi_min}, excitation, start_warnings,
+    gain_matrix}}`` (SI units; ``final`` and ``excitation`` null without a run; ``gain_matrix`` the full ``K``)."""
     d, sim = result.design, result.simulation
     a = d.data.adaptation
     rows = [] if a.scheme == "slotine_li" else _spr_rows(result)
@@ -49,7 +52,8 @@ def json(result: Any) -> dict[str, Any]:
         "true": list(d.data.true), "acceleration": a.acceleration, "scheme": a.scheme,
         "spr": None if not rows else {"psi_K2_minus_1": [r["psi_K2_minus_1"] for r in rows],
                                       "psi_min_s": [r["psi_min_s"] for r in rows]},
-        "final": None, "excitation": None,
+        "final": None, "excitation": None, "start_warnings": list(d.data.start_warnings),
+        "gain_matrix": a.K().tolist(),
     }
     if sim is not None:
         out["final"] = [_num(v) for v in estimates(sim, a.names)[-1]]
@@ -95,13 +99,25 @@ def _tracking_question(result: Any) -> Question:
     if check is None:
         return Question("Does the tracking error go to zero?", ("The run was not judged.",))
     c = check.certificate
-    if "last_window_rad" not in c:  # a run that diverged: the check says when
+    if "window_maxima_rad" not in c:  # a run that diverged: the check says when
         return Question("Does the tracking error go to zero?", (f"No: {check.detail}.",))
-    words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last "
-                      f"{_f(c['tail_s'], 3)} s" for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"],
-                                                                                 strict=True)))
+    theorem = ("The Lyapunov argument promises e → 0 as t → ∞, not a size by a given time, so the error is judged by "
+               f"a bound that decreases: the running maximum of |e| over trailing windows of {_f(c['window_s'], 4)} s "
+               f"({c['window_from']}), from the window of the run's peak to the last, must decrease (each at most "
+               f"1 + {_f(c['tolerance'], 3)} times the one before, the last below the peak), or stay below "
+               f"{_f(c['floor_rad'], 3)} rad.")
+    ends = list(c["window_ends_s"])
+    shown = list(range(len(ends))) if len(ends) <= SHOWN else [*range(2), *range(len(ends) - (SHOWN - 2), len(ends))]
+    title = "The largest |e| over each window, oldest first (rad)" + (
+        "" if len(ends) <= SHOWN else f": the first 2 and the last {SHOWN - 2} of {len(ends)} windows")
+    table = Table(title, ("Joint", *(f"to {_f(ends[k], 4)} s" for k in shown), "judged"),
+                  tuple((str(j + 1), *(_f(row[k], 3) for k in shown), c["joints"][j]["why"])
+                        for j, row in enumerate(c["window_maxima_rad"])))
+    words = ", ".join(f"joint {k + 1}: {_f(b, 3)} rad at most over the run, {_f(a, 3)} rad over the last window"
+                      for k, (a, b) in enumerate(zip(c["last_window_rad"], c["peak_rad"], strict=True)))
     return Question("Does the tracking error go to zero?",
-                    (("Yes" if check.passed else "Not within the run") + f": {words}.",))
+                    (("Yes, it is decreasing" if check.passed else "Not shown within the run") + f": {words}.",
+                     theorem), (table,))
 
 
 def _estimates_question(result: Any) -> Question:

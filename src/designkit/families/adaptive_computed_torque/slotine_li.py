@@ -40,7 +40,8 @@ def christoffel_torque(tau_of: Any, n: int, size: int) -> ca.Function:
 
 def parts(s: Any, tau_of: Any, n: int, P_true: np.ndarray, idx: Sequence[int], est: ca.SX, Lambda: ca.DM,
           KD: ca.DM, gain: np.ndarray, estimate: Any) -> dict[str, ca.SX]:
-    """The Slotine--Li law's expressions at the symbols ``s`` (command, update rate, ``V`` and its derivative)."""
+    """The Slotine--Li law's expressions at the symbols ``s`` (command, update rate, ``V`` and its derivative);
+    ``gain`` is the adaptation gain ``K`` (m x m, symmetric positive definite)."""
     Y = christoffel_torque(tau_of, n, len(P_true))
     q, qd = s.q, s.qd
     e, ed = s.qD - q, s.qDd - qd
@@ -50,11 +51,11 @@ def parts(s: Any, tau_of: Any, n: int, P_true: np.ndarray, idx: Sequence[int], e
     u = Y(q, qd, qr_d, qr_dd, P_hat) + KD * sv
     Pa = ca.SX.sym("Pa", len(idx))
     Ya = ca.jacobian(Y(q, qd, qr_d, qr_dd, estimate(P_true, idx, Pa)), Pa)  # affine in P: free of Pa
-    rate = ca.DM(gain) * (Ya.T @ sv)
+    rate = ca.DM(gain) @ (Ya.T @ sv)
     acc = ca.SX.sym("acc", n)
     D_true = ca.jacobian(tau_of(q, ca.SX.zeros(n), acc, ca.DM(P_true)), acc)
     phi = ca.DM(P_true[list(idx)]) - est
-    V = 0.5 * ca.dot(sv, D_true @ sv) + 0.5 * ca.sum1(phi**2 / ca.DM(gain))
+    V = 0.5 * ca.dot(sv, D_true @ sv) + 0.5 * ca.dot(phi, ca.DM(np.linalg.inv(gain)) @ phi)
     return {"u": u, "rate": rate, "V": V, "Vdot": -ca.sum1(KD * sv**2), "e1": sv, "vf_dot": None}
 
 
