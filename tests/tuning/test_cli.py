@@ -44,6 +44,19 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, te
     assert not out.exists()
 
 
+@pytest.mark.parametrize(("args", "where"), [
+    (["--method", "gradient"], "method: the gradient search needs a smooth loop, and this one is not: the law is "
+     "discontinuous"),
+    (["--method", "newton"], "--method: invalid choice: 'newton'"),
+], ids=["gradient-on-switching", "unknown"])
+def test_a_method_the_loop_cannot_take_exits_2(tmp_path, capsys, args, where):
+    out = tmp_path / "out"
+    assert _code(["tune", str(SPECS / "tune-vsc-link.yaml"), "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("designkit: error: ") and where in err, err
+    assert not out.exists()
+
+
 @pytest.mark.slow  # about 10 s: a search of 8 s
 def test_infeasible_requirements_exit_1_naming_the_conflict_and_the_bound(tmp_path, capsys):
     code = main(["tune", str(SPECS / "infeasible-requirements.yaml"), "--out", str(tmp_path), "--budget", "8"])

@@ -246,7 +246,7 @@ def choose(problem: Any, space: Any, method: str = "auto", seed: int = 0, budget
         raise SpecError("method", f"must be one of {', '.join(METHODS)}, got {str(method)[:40]!r}")
     why_not = "" if method == "nelder-mead" else smooth_loop(problem, synthesize(problem.loaded.spec, problem.plant))
     if method == "gradient" and why_not:
-        raise SpecError("method", f"the gradient search needs a smooth loop, and this one is {why_not}")
+        raise SpecError("method", f"the gradient search needs a smooth loop, and this one is not: {why_not}")
 
     def run(x: np.ndarray, above: float) -> Any:
         return evaluate(problem, space, x, above=above)

@@ -11,8 +11,9 @@ whose constraints are smooth where each margin is.  SciPy's SLSQP (:func:`scipy.
 run as any candidate is (``evaluate``: the family's own run at every box point, then its certificates when it could
 be the best): the answer is the best of those candidates, never a value of the sensitivity runs.  From the best
 candidate the search starts again, and every other time from a seeded random point of the box, until a restart from
-the best point improves its score by less than :data:`~designkit.tuning.search.TOLERANCE`, or the budget is spent,
-or six restarts are done.
+the best point improves its score by less than :data:`~designkit.tuning.search.TOLERANCE`, or the budget is spent
+(the first gradient is always computed, and the point SLSQP steps to when the budget runs out is still run as a
+candidate), or six restarts are done.
 """
 
 from __future__ import annotations
@@ -74,15 +75,16 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
     tried: dict[bytes, Any] = {}
     grads: dict[bytes, Any] = {}
     sens = [0]
+    pending: list[np.ndarray] = []  # the point SLSQP stepped to when the budget ran out
     count = [0]
 
     def key(x: np.ndarray) -> bytes:
         return np.round(np.clip(np.asarray(x, dtype=float), lo, hi), 10).tobytes()
 
-    def candidate(x: np.ndarray) -> Any:
+    def candidate(x: np.ndarray, *, last: bool = False) -> Any:
         k = key(x)
         if k not in tried:
-            if done and time.perf_counter() - start > budget:
+            if done and not last and time.perf_counter() - start > budget:
                 raise _OutOfTimeError
             tried[k] = evaluate(np.clip(np.asarray(x, dtype=float), lo, hi), max((e.score for e in done),
                                                                                    default=-np.inf))
@@ -94,7 +96,8 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
         x = np.clip(v[:n], lo, hi)
         k = key(x)
         if k not in grads:
-            if time.perf_counter() - start > budget:
+            if grads and time.perf_counter() - start > budget:
+                pending[:] = [x]
                 raise _OutOfTimeError
             grads[k] = gradient(x)
             sens[0] += grads[k].runs
@@ -124,6 +127,8 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
             candidate(res.x[:n])  # the point it ends on, run as every candidate is
         except _OutOfTimeError:
             stopped = "budget spent"
+            if pending:  # the step SLSQP took last is run as a candidate, the budget spent or not
+                candidate(pending[0], last=True)
             break
         score = _best(done).score
         if restarts % 2 == 1 and score - previous < TOLERANCE:  # a restart from the best point found nothing better

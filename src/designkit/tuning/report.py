@@ -58,6 +58,17 @@ def convergence_svg(result: Any) -> str:
     return to_svg(fig)
 
 
+def _svg(draw: Any, *args: Any) -> str:
+    """``draw(*args)`` under the figures' style: DejaVu Sans, the text kept as SVG text (searchable in the HTML and
+    in the PDF, which embeds the font)."""
+    import matplotlib
+
+    from designkit.display.svg import RC_PARAMS
+
+    with matplotlib.rc_context(RC_PARAMS):
+        return draw(*args)
+
+
 def blocks(result: Any) -> list[tuple[Any, ...]]:
     """The report's content, in order, for both renderings: ``("p", text)``, ``("h", text)``, ``("table", header,
     rows, status column or None)``, ``("figure", file name, svg)``."""
@@ -100,7 +111,7 @@ def blocks(result: Any) -> list[tuple[Any, ...]]:
                      "family's own run with every check (its certificates)."))
     if result.choice:
         out.append(("p", f"Why this search: {result.choice}."))
-    out.append(("figure", "convergence.svg", convergence_svg(result)))
+    out.append(("figure", "convergence.svg", _svg(convergence_svg, result)))
     out += _sweep_part(result)
     out += _trade_part(result)
     if result.conflict is not None:
@@ -225,7 +236,7 @@ def _trade_part(result: Any) -> list[tuple[Any, ...]]:
     rows = [(f"{s:+.2f}" + (" (clipped)" if c else ""),
              *("" if not np.isfinite(t.margins[k][i]) else f"{t.margins[k][i]:.3g}" for k in names),
              t.failed[i]) for i, (s, c) in enumerate(zip(t.steps, t.clipped, strict=True))]
-    return [("h", "Trade-off along the final direction"), ("figure", "trade-off.svg", trade_svg(t)),
+    return [("h", "Trade-off along the final direction"), ("figure", "trade-off.svg", _svg(trade_svg, t)),
             ("p", "Each requirement's worst normalised margin over the box's points (the nominal plant and the "
                   f"{len(result.points)} points the search ran), measured by the family's own runs at "
                   f"{len(t.steps)} points on the straight line, in the tuner's log coordinates, from the spec's own "

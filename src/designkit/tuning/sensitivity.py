@@ -73,19 +73,19 @@ def smooth_loop(problem: Any, design: Any) -> str:
 
     spec = problem.loaded.spec
     if design.learning is not None:
-        return "a learning law (its requirements are read after trials of an update that is no smooth map)"
+        return "the law learns over trials (its requirements are read after an update between trials)"
     if getattr(spec, "implementation", None) is not None:
-        return "the controller as implemented (sampled, quantised, delayed)"
+        return "the spec's implementation section samples, quantises or delays the controller"
     if design.law is None:
         return "the design carries no law to simulate"
     sim = build(spec, design, plant=problem.plant)
     regime = sim.regime
     if regime is None or not regime.smooth:
-        return f"a loop that is not smooth ({regime.why if regime is not None and regime.why else 'held per step'})"
+        return regime.why if regime is not None and regime.why else "the loop is held per step"
     if regime.resets:
-        return "a law whose projection resets its states"
+        return "the law's projection resets its states"
     if not sim.step.is_a("SXFunction"):
-        return "a step CasADi does not expand into SX (a CVODES step or compiled C)"
+        return "CasADi does not expand the step into SX (a CVODES step or compiled C)"
     return ""
 
 
