@@ -69,6 +69,7 @@ class Gradient:
 def smooth_loop(problem: Any, design: Any) -> str:
     """Why the loop of ``design`` is not one the gradient path runs (``""`` when it is: smooth, see the module
     docstring); the loop is built on the nominal plant as the tuner runs it."""
+    from designkit.errors import DesignkitError
     from designkit.simulation.run import build
 
     spec = problem.loaded.spec
@@ -78,7 +79,10 @@ def smooth_loop(problem: Any, design: Any) -> str:
         return "the spec's implementation section samples, quantises or delays the controller"
     if design.law is None:
         return "the design carries no law to simulate"
-    sim = build(spec, design, plant=problem.plant)
+    try:
+        sim = build(spec, design, plant=problem.plant)
+    except DesignkitError as exc:
+        return f"its loop cannot be built ({exc})"
     regime = sim.regime
     if regime is None or not regime.smooth:
         return regime.why if regime is not None and regime.why else "the loop is held per step"
