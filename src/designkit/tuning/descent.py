@@ -102,8 +102,6 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
             grads[k] = gradient(x)
             sens[0] += grads[k].runs
         g = grads[k]
-        if g.failed or not g.margins:
-            return np.array([-1e3 - v[n]]), np.r_[np.zeros(n), -1.0][None, :]
         values = [m[r] for m in g.margins for r in m]
         rows = [np.r_[gr[r], -1.0] for gr in g.gradients for r in gr]
         return np.asarray(values) - v[n], np.asarray(rows)

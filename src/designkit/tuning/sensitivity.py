@@ -207,22 +207,31 @@ def _at_point(problem: Any, space: Any, x: np.ndarray, plant: Any, designs: list
 
 def gradients(problem: Any, space: Any, x: np.ndarray) -> Gradient:
     """The requirement margins at ``x`` and their gradients at every point of the box (module docstring); never
-    raises for values the family refuses or a run that cannot be made: ``failed`` says why."""
+    raises for values the family refuses or a run that cannot be made: ``failed`` says why, and the points not
+    reached have the evaluation's score for it (:data:`~designkit.tuning.evaluate.REFUSED`, ``NOT_RUN``) with a zero
+    gradient, so that every call gives as many margins."""
     from designkit.errors import DesignkitError
+    from designkit.tuning.evaluate import NOT_RUN, REFUSED
 
     x = np.clip(np.asarray(x, dtype=float), *space.bounds)
-    margins, grads, runs = [], [], 0
+    points = ({}, *problem.points)
+    margins: list[dict[str, float]] = []
+    grads: list[dict[str, np.ndarray]] = []
+    failed, low = "", 0.0
     try:
         nominal = _designs(problem, space, x, problem.plant)
-        for point in ({}, *problem.points):
+        for point in points:
             plant = problem.plant.with_params(**point) if point else problem.plant
             designs = _designs(problem, space, x, plant) if point and problem.each else nominal
             m, g = _at_point(problem, space, x, plant, designs)
-            runs += 1
             margins.append(m)
             grads.append(g)
     except DesignkitError as exc:
-        return Gradient(x, tuple(margins), tuple(grads), runs, f"refused: {exc}")
+        failed, low = f"refused: {exc}", REFUSED
     except Exception as exc:  # noqa: BLE001 -- a run that cannot be made is that point's outcome, with its reason
-        return Gradient(x, tuple(margins), tuple(grads), runs, f"not run: {type(exc).__name__}: {exc}")
-    return Gradient(x, tuple(margins), tuple(grads), runs)
+        failed, low = f"not run: {type(exc).__name__}: {exc}", NOT_RUN
+    runs = len(margins)
+    for _ in points[runs:]:
+        margins.append(dict.fromkeys(problem.requirements, low))
+        grads.append({r: np.zeros(x.size) for r in problem.requirements})
+    return Gradient(x, tuple(margins), tuple(grads), runs, failed)
