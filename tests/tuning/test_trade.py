@@ -93,6 +93,10 @@ def test_the_pdf_report_carries_the_same_content(tuned):
     t = tuned.trade
     for i, step in enumerate(t.steps):
         assert f"{step:+.2f} " + " ".join(f"{t.margins[k][i]:.3g}" for k in t.margins) in text, step
+    # no date in the PDF: the same result compiles to the same bytes
+    from designkit.tuning.report import pdf_bytes
+
+    assert pdf_bytes(tuned) == pdf.read_bytes() and b"CreationDate" not in pdf.read_bytes()
     # the figures' text is text in the PDF: the convergence figure's legend and the trade-off's axis
     for said in ("best so far", "every requirement met", "step along the line from the initial to the tuned values"):
         assert said in text, said

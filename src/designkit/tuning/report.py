@@ -156,9 +156,12 @@ def html_text(result: Any) -> str:
 def typst_source(result: Any) -> str:
     """The report as Typst markup, the same blocks as the HTML page (figures referenced by file name)."""
     from designkit.report.pdf import escape_typst as t
+    from designkit.report.pdf import typst_string
 
-    out = ['#set page(paper: "a4", margin: 2cm)', '#set text(font: "DejaVu Sans", size: 9pt)',
-           f"= {t(result.loaded.spec.name)}: tuning", ""]
+    title = f"{result.loaded.spec.name}: tuning"
+    out = [f'#set document(title: {typst_string(title)}, author: "designkit", date: none)',
+           '#set page(paper: "a4", margin: 2cm)', '#set text(font: "DejaVu Sans", size: 9pt)',
+           f"= {t(title)}", ""]
     for b in blocks(result):
         if b[0] == "p":
             out += [t(b[1]), ""]
@@ -174,12 +177,13 @@ def typst_source(result: Any) -> str:
 
 
 def pdf_bytes(result: Any) -> bytes:
-    """The report compiled to PDF by Typst (the figures' DejaVu Sans embedded, no system fonts)."""
+    """The report compiled to PDF by Typst (the figures' DejaVu Sans embedded, no system fonts, no date: the same
+    result gives the same bytes)."""
     import tempfile
 
     import typst
 
-    from designkit.report.pdf import figure_font_dir
+    from designkit.report.pdf import figure_font_dir, without_false_suspects
 
     with tempfile.TemporaryDirectory(prefix="designkit-tuning-") as tmp:
         root = Path(tmp)
@@ -192,7 +196,7 @@ def pdf_bytes(result: Any) -> bytes:
         pdf = typst.compile(str(main), root=str(root), font_paths=[str(fonts)], ignore_system_fonts=True)
     if not isinstance(pdf, bytes) or not pdf.startswith(b"%PDF"):
         raise RuntimeError("typst did not return a PDF document")
-    return pdf
+    return without_false_suspects(pdf)
 
 
 def summary_lines(result: Any) -> list[str]:
