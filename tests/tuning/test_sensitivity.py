@@ -85,3 +85,21 @@ def test_the_gradient_search_is_refused_on_a_switching_loop(tmp_path):
         dk.tune(SPECS / "tune-vsc-link.yaml", out=tmp_path, method="newton", write=False)
     assert err.value.path == "method"
     assert not any(tmp_path.iterdir())
+
+
+def test_values_the_family_refuses_give_every_point_a_refused_margin(tmp_path):
+    """A pole on the fixed zero (-3 1/s): the family refuses the design, the gradients say so and still give one
+    margin per requirement and point (the evaluation's refused score, a zero gradient), as the epigraph needs."""
+    from designkit.tuning.evaluate import REFUSED
+    from designkit.tuning.sensitivity import gradients
+    from tests.tuning.specs import LINK
+
+    problem, space = prepare(dk.parse_spec(LINK.replace("tau: 0.5}", "tau: 0.5, uncertainty: {Km: [1.6, 2.4]}}")))
+    x = space.x0.copy()
+    x[0] = np.log(3.0)
+    g = gradients(problem, space, x)
+    assert g.failed.startswith("refused") and g.runs == 0
+    assert len(g.margins) == len(g.gradients) == 1 + len(problem.points) == 3
+    for m, gr in zip(g.margins, g.gradients, strict=True):
+        assert set(m) == set(problem.requirements) and all(v == REFUSED for v in m.values())
+        assert all(np.array_equal(v, np.zeros(x.size)) for v in gr.values())
