@@ -309,14 +309,14 @@ def cmd_tune(args: argparse.Namespace) -> int:
     from designkit.tuning.report import summary_lines
 
     result = tune(load_spec(args.spec), out=Path(args.out), budget=args.budget, sweep_samples=args.sweep_samples,
-                  scheduler=args.scheduler)
+                  scheduler=args.scheduler, method=args.method)
     if args.json:
         print(json.dumps(result.to_json(), indent=2, default=str))
         return EXIT_OK if result.verified else EXIT_CHECK_FAILED
     s, best, initial = result.search, result.best, result.initial
     lines = [f"{result.loaded.spec.name}: {s.method}; {s.iterations} iterations, {len(s.evaluations)} candidates, "
              f"{s.simulations} simulations, {s.seconds:.1f} s ({s.stopped})",
-             f"plants: the nominal and {len(result.points)} points of the box"]
+             f"why this search: {result.choice}", f"plants: the nominal and {len(result.points)} points of the box"]
     for req in best.margins:
         mark = " (active)" if req == best.active else ""
         lines.append(f"  {req}: worst normalised margin {initial.margins[req]:.3g} -> {best.margins[req]:.3g}{mark}")
@@ -525,7 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "write the tuned spec and an HTML report")
     p.add_argument("spec", help="path of the YAML spec (with requirements; an optional tune: section)")
     p.add_argument("--out", default=".", help="output directory (default: the current folder): <name>-tuned.yaml "
-                   "and <name>-tuning.html")
+                   "<name>-tuning.html and .pdf")
     p.add_argument("--budget", type=_seconds, default=60.0, metavar="SECONDS",
                    help="wall time the search may take (default 60 s)")
     p.add_argument("--sweep-samples", type=_sweep_samples, default=64, metavar="N",
@@ -533,6 +533,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "none)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the confirming sweep on the Dask scheduler at this "
                    "address (tcp://host:8786, or tls:// with the Dask TLS configuration); default: in this process")
+    p.add_argument("--method", choices=("auto", "gradient", "nelder-mead"), default="auto", help="the search: "
+                   "gradient on a smooth loop, Nelder-Mead on any other (auto, default), or the one named")
     p.add_argument("--json", action="store_true", help="print one JSON object (method, margins before and after, "
                    "tuned values, checks, conflict, sweep, trade_off)")
     p.set_defaults(func=cmd_tune)

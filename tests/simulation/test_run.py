@@ -236,3 +236,27 @@ def test_result_is_complete_and_settings_are_json():
     assert settings["steps_per_sample"] * settings["dt"] == pytest.approx(0.002)
     assert settings["delay_steps"] * settings["dt"] == pytest.approx(0.004)
     assert settings["noise"]["seed"] == 2 and settings["reference"]["kind"] == "sine"
+
+
+def test_a_simulator_keeps_its_regime_and_reads_records_it_is_given():
+    """``Simulator.regime`` is the loop's (a PID smooth, a relay law held per step); ``Simulator.result`` splits
+    records laid out as the step writes them (x, xc, u_command, u_applied, y, d) into the result's signals."""
+    from pathlib import Path
+
+    import designkit as dk
+    from designkit.simulation.integrate import run_steps
+    from designkit.simulation.run import build
+
+    specs = Path(__file__).resolve().parents[2] / "specs"
+    pid = dk.load_spec(specs / "posspeed-link.yaml").spec
+    sim = build(pid, dk.synthesize(pid))
+    assert sim.regime.smooth and not sim.regime.held_law
+    relay = dk.load_spec(specs / "vsc-link.yaml").spec
+    assert not build(relay, dk.synthesize(relay)).regime.smooth
+    rec = run_steps(sim.step, sim.z0, sim.inputs)
+    res = sim.result(rec + 1.0)
+    nx, nc, nu = 2, sim.law.n_state, 1
+    assert np.array_equal(res.state, rec[:nx].T + 1.0)
+    assert np.array_equal(res.controller_state, rec[nx:nx + nc].T + 1.0)
+    assert np.array_equal(res.u_command, rec[nx + nc:nx + nc + nu].T + 1.0)
+    assert res.time is sim.time and res.settings == sim.settings

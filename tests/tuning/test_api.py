@@ -24,10 +24,17 @@ def test_a_short_tuning_writes_a_verified_spec_and_a_report(tmp_path):
     assert payload["verified"] is True and payload["tuned"]["active"] == result.best.active
     assert [c["label"] for c in payload["coordinates"]] == ["poles[0]", "poles[1]", "poles[2]"]
     assert all(c["low"] <= c["tuned"] <= c["high"] for c in payload["coordinates"])
+    # a smooth loop: the gradient search, its sensitivity runs counted among the simulations
+    assert payload["method"].startswith("gradient: SLSQP") and payload["method_choice"].startswith("gradient")
+    s = result.search
+    assert payload["sensitivity_runs"] == s.sensitivity_runs >= 1
+    assert payload["simulations"] == sum(e.runs for e in s.evaluations) + s.sensitivity_runs
+    assert set(result.files) == {"spec", "html", "pdf"} and result.files["pdf"].read_bytes().startswith(b"%PDF")
 
 
 @pytest.mark.parametrize(("kwargs", "where"), [({"budget": 0}, "budget"), ({"budget": float("nan")}, "budget"),
-                                               ({"budget": True}, "budget"), ({"seed": -1}, "seed")])
+                                               ({"budget": True}, "budget"), ({"seed": -1}, "seed"),
+                                               ({"method": "newton"}, "method")])
 def test_bad_arguments_name_the_argument(tmp_path, kwargs, where):
     with pytest.raises(dk.SpecError) as info:
         dk.tune(write(tmp_path, LINK), out=tmp_path / "out", **kwargs)

@@ -11,6 +11,7 @@ import pytest
 
 import designkit as dk
 from tests.marks import slow_cases
+from tests.report.pdf_text import pdf_text
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = sorted(p.stem for p in (ROOT / "specs").glob("tune-*.yaml"))
@@ -23,6 +24,7 @@ def test_every_example_has_its_tuning_report():
     for name in EXAMPLES:
         folder = ROOT / "reports" / name
         assert (folder / f"{name}-tuned.yaml").is_file() and (folder / f"{name}-tuning.html").is_file()
+        assert (folder / f"{name}-tuning.pdf").read_bytes().startswith(b"%PDF")
 
 
 @pytest.mark.parametrize("name", slow_cases(EXAMPLES, SLOW, str))
@@ -32,3 +34,4 @@ def test_the_committed_tuned_spec_verifies(name):
     assert run.verified, [c.name for c in run.failed]
     html = (folder / f"{name}-tuning.html").read_text(encoding="utf-8")
     assert re.search(r"TUNED AND VERIFIED|tuned and verified", html, re.IGNORECASE)
+    assert "TUNED AND VERIFIED" in pdf_text(folder / f"{name}-tuning.pdf")

@@ -81,5 +81,5 @@ def test_the_tuned_spec_is_rerun_by_synth(tuned, tmp_path, capsys):
     assert main(["synth", str(tuned.files["spec"]), "--out", str(tmp_path), "--no-studies", "--jobs", "1"]) == 0
     assert "VERIFIED" in capsys.readouterr().out
     html = tuned.files["html"].read_text(encoding="utf-8")
-    for said in ("initial", "tuned", "active", "Nelder–Mead", "<svg"):
+    for said in ("initial", "tuned", "active", "gradient: SLSQP", "Why this search: gradient: a smooth loop", "<svg"):
         assert said in html

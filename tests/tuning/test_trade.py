@@ -73,3 +73,30 @@ def test_no_direction_no_curve_and_a_refused_point_is_not_measured(tmp_path):
     t = trade_off(problem, space, space.x0, target, steps=(0.0, 1.0))
     assert not t.failed[0] and np.isfinite(t.scores[0])
     assert t.failed[1] and np.isnan(t.scores[1]) and all(np.isnan(m[1]) for m in t.margins.values())
+
+
+def test_the_pdf_report_carries_the_same_content(tuned):
+    """``<name>-tuning.pdf`` beside the HTML: its text (read back from the PDF) holds the verdict, every margin before
+    and after, the tuned coordinates, the search, each point of the trade-off table, and the figures' own text."""
+    from tests.report.pdf_text import pdf_text
+
+    pdf = tuned.files["pdf"]
+    assert pdf == tuned.files["html"].with_suffix(".pdf") and pdf.read_bytes().startswith(b"%PDF")
+    text = " ".join(pdf_text(pdf).split())
+    assert "link-tune: tuning" in text and "TUNED AND VERIFIED" in text
+    for k in tuned.best.margins:
+        assert f"{tuned.initial.margins[k]:.3g}" in text and f"{tuned.best.margins[k]:.3g}" in text, k
+    for c, x in zip(tuned.space.coordinates, tuned.best.x, strict=True):
+        assert f"{c.label} 1/s [{c.low:.4g}, {c.high:.4g}] {c.initial:.4g} {np.exp(x):.4g}" in text
+    s = tuned.search
+    assert f"{len(s.evaluations)} candidates, {s.simulations} simulations" in text and "Why this search" in text
+    t = tuned.trade
+    for i, step in enumerate(t.steps):
+        assert f"{step:+.2f} " + " ".join(f"{t.margins[k][i]:.3g}" for k in t.margins) in text, step
+    # no date in the PDF: the same result compiles to the same bytes
+    from designkit.tuning.report import pdf_bytes
+
+    assert pdf_bytes(tuned) == pdf.read_bytes() and b"CreationDate" not in pdf.read_bytes()
+    # the figures' text is text in the PDF: the convergence figure's legend and the trade-off's axis
+    for said in ("best so far", "every requirement met", "step along the line from the initial to the tuned values"):
+        assert said in text, said

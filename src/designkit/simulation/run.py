@@ -154,6 +154,8 @@ class Simulator:
     restep : callable or None
         ``Law -> sim_step``: the step of this loop (plant, element, timing) with another law of the same layout,
         e.g. one whose functions call compiled C (the ``generated_code`` check).
+    regime : Regime or None
+        How the loop is evaluated in time (:mod:`designkit.simulation.regime`): held per step, or smooth.
     """
 
     step: ca.Function
@@ -173,6 +175,7 @@ class Simulator:
     cvodes: Any = None
     implementation: Any = None
     restep: Any = field(default=None, repr=False)
+    regime: Any = None
     _flat: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -235,7 +238,14 @@ class Simulator:
             settings = freeze({**settings, "integrator_failure": (
                 f"the integrator stopped at t = {t_fail:.6g} s ({failure['error']}): the loop diverged or is too "
                 "stiff for the step; the records are NaN from there")})
-        p, law = plant, self.law
+        return self.result(rec, plant=plant, settings=settings)
+
+    def result(self, rec: np.ndarray, *, plant: Any = None, settings: Mapping[str, Any] | None = None
+               ) -> SimulationResult:
+        """The result of records ``rec`` (``(n_record, N)``, one column per step, as ``step`` writes them) of this
+        loop, e.g. records moved along a sensitivity; ``plant`` and ``settings`` default to the simulator's."""
+        p, law = (self.plant if plant is None else plant), self.law
+        settings = self.settings if settings is None else settings
         rec.setflags(write=False)  # the result keeps views of the records instead of copies
         impl = self.implementation
         extra = impl.n_lag if impl is not None else 0
@@ -444,7 +454,8 @@ def build(spec: Any, design: Design, *, plant: Any = None, law: Law | None = Non
     return Simulator(step=step, inputs=inputs, z0=z0, time=t, reference=reference, kind=kind,
                      plant=true_plant, law=law, settings=freeze(settings), accumulated=accumulated,
                      compiled=freeze(compile_info), motion=motion, change=change, dopri5=dopri5, cvodes=cvodes,
-                     implementation=impl if impl is not None and impl.changes_plant else None, restep=restep)
+                     implementation=impl if impl is not None and impl.changes_plant else None, restep=restep,
+                     regime=regime)
 
 
 def _lag_start(impl: Any, law: Law, x0: np.ndarray, rest: Any, before: np.ndarray, measure: Any) -> np.ndarray:

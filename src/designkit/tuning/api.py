@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["DEFAULT_BUDGET", "TuneResult", "prepare", "tune"]
+__all__ = ["DEFAULT_BUDGET", "METHODS", "TuneResult", "choose", "prepare", "tune"]
 
 DEFAULT_BUDGET = 60.0
 """Wall time the search may take by default (s)."""
@@ -46,6 +46,9 @@ class TuneResult:
         asked for).
     trade : Trade or None
         The requirements' margins along the final direction (None when the tuned point is the initial one).
+    choice : str
+        Why the search is the one it is: the loop smooth (the gradient search) or, with the reason, not (Nelder--Mead),
+        or the method asked for.
     """
 
     loaded: Any
@@ -60,6 +63,7 @@ class TuneResult:
     files: dict[str, Path] = field(default_factory=dict)
     confirmation: Any = None
     trade: Any = None
+    choice: str = ""
 
     @property
     def best(self) -> Any:
@@ -102,6 +106,8 @@ class TuneResult:
             "verified": self.verified,
             "met": self.met,
             "method": s.method,
+            "method_choice": self.choice,
+            "sensitivity_runs": s.sensitivity_runs,
             "iterations": s.iterations,
             "restarts": s.restarts,
             "candidates": len(s.evaluations),
@@ -216,8 +222,50 @@ def prepare(loaded: Any) -> tuple[Any, Any]:
     return problem, space
 
 
+METHODS = ("auto", "gradient", "nelder-mead")
+"""The searches :func:`tune` runs: ``auto`` the gradient search on a smooth loop, Nelder--Mead on any other."""
+
+
+def choose(problem: Any, space: Any, method: str = "auto", seed: int = 0, budget: float = DEFAULT_BUDGET
+           ) -> tuple[Any, str]:
+    """Run the search ``method`` asks for on the tuning problem: ``(Search, why this search)``.
+
+    Raises
+    ------
+    SpecError
+        ``method``: not one of :data:`METHODS`, or ``gradient`` on a loop that is not smooth (naming why).
+    """
+    from designkit.errors import SpecError
+    from designkit.families import synthesize
+    from designkit.tuning.descent import slsqp
+    from designkit.tuning.evaluate import evaluate
+    from designkit.tuning.search import nelder_mead
+    from designkit.tuning.sensitivity import gradients, smooth_loop
+
+    if method not in METHODS:
+        raise SpecError("method", f"must be one of {', '.join(METHODS)}, got {str(method)[:40]!r}")
+    why_not = "" if method == "nelder-mead" else smooth_loop(problem, synthesize(problem.loaded.spec, problem.plant))
+    if method == "gradient" and why_not:
+        raise SpecError("method", f"the gradient search needs a smooth loop, and this one is not: {why_not}")
+
+    def run(x: np.ndarray, above: float) -> Any:
+        return evaluate(problem, space, x, above=above)
+
+    if method == "nelder-mead":
+        choice = "Nelder-Mead, as asked"
+    elif why_not:
+        choice = f"Nelder-Mead (derivative-free): {why_not}"
+    else:
+        choice = ("gradient: a smooth loop (a continuous law, no switching, sampling, delay, quantisation or "
+                  "learning)" + (", as asked" if method == "gradient" else ""))
+        return slsqp(run, lambda x: gradients(problem, space, x), space.x0, space.bounds, budget=budget,
+                     seed=seed), choice
+    return nelder_mead(run, space.x0, space.bounds, budget=budget, seed=seed), choice
+
+
 def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BUDGET, seed: int = 0,
-         write: bool = True, sweep_samples: int = 64, scheduler: str | None = None) -> TuneResult:
+         write: bool = True, sweep_samples: int = 64, scheduler: str | None = None,
+         method: str = "auto") -> TuneResult:
     """Tune the knobs of a spec's controller for its requirements over its uncertainty box (docs/tuning.md).
 
     Parameters
@@ -237,6 +285,10 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     scheduler : str, optional
         Address of a Dask scheduler the confirming sweep runs on (``tcp://host:8786``), checked before the search
         as ``designkit sweep --scheduler`` checks it; without it the sweep runs in this process.
+    method : str
+        ``auto`` (default): the gradient search on a smooth loop, Nelder--Mead on a switching, sampled, learning or
+        otherwise non-smooth one; ``gradient`` or ``nelder-mead`` to force one (``gradient`` refused on a loop that
+        is not smooth).
 
     Returns
     -------
@@ -252,23 +304,23 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         ``out`` cannot be a folder (a file in the way, no permission); checked before anything runs.
     """
     from designkit import arguments
+    from designkit.errors import SpecError
     from designkit.runner.variants import changed_spec
     from designkit.tuning.confirm import check_scheduler, confirm
-    from designkit.tuning.evaluate import evaluate
     from designkit.tuning.infeasible import conflict, minimum_time
-    from designkit.tuning.search import nelder_mead
     from designkit.tuning.trade import trade_off
 
     budget = arguments.number(budget, "budget", positive=True)
     seed = arguments.integer(seed, "seed", low=0, high=2**32 - 1)
     write = arguments.flag(write, "write")
     sweep_samples = arguments.integer(sweep_samples, "sweep_samples", low=0, high=10_000)
+    if method not in METHODS:
+        raise SpecError("method", f"must be one of {', '.join(METHODS)}, got {str(method)[:40]!r}")
     folder = _destination(out)
     loaded = _loaded(spec)
     problem, space = prepare(loaded)
     check_scheduler(scheduler)
-    search = nelder_mead(lambda x, above: evaluate(problem, space, x, above=above), space.x0, space.bounds,
-                         budget=budget, seed=seed)
+    search, choice = choose(problem, space, method, seed, budget)
     initial = search.evaluations[0]
     best = search.best
     tuned = changed_spec(loaded, [("name", (loaded.spec.name + "-tuned")[:100]), *space.changes(best.x)])
@@ -284,7 +336,7 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
         confirmation = confirm(tuned, samples=sweep_samples, seed=seed, scheduler=scheduler)
     trade = trade_off(problem, space, space.x0, best.x)
     result = TuneResult(loaded, space, problem.points, search, initial, tuned, verify, found, bound,
-                        confirmation=confirmation, trade=trade)
+                        confirmation=confirmation, trade=trade, choice=choice)
     if write:
         from designkit.tuning.report import write_files
 

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CAP", "REQUIREMENTS", "Evaluation", "Problem", "evaluate", "requirement_names"]
+__all__ = ["CAP", "REQUIREMENTS", "Evaluation", "Problem", "evaluate", "margins_on", "requirement_names"]
 
 REQUIREMENTS = ("overshoot", "settling_time", "rise_time", "steady_state_error", "tracking_error", "max_control",
                 "gain_margin", "phase_margin", "modulus_margin", "max_reversal_rate", "max_command_variation")
@@ -182,13 +182,21 @@ def _requirements_at(problem: Problem, loaded: Any, design: Any, plant: Any) -> 
     trials (the requirements then read the last trial, as the family's own run does)."""
     from designkit.simulation.run import build
     from designkit.simulation.trials import run_trials
-    from designkit.verification.suite import Context
 
     spec = loaded.spec
     learning = design.learning
     simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
     trials = run_trials(simulator, learning.trials, learning.update) if learning is not None else None
     sim = trials.results[-1] if trials is not None else simulator.run()
+    return margins_on(problem, spec, design, plant, sim, trials)
+
+
+def margins_on(problem: Problem, spec: Any, design: Any, plant: Any, sim: Any, trials: Any = None
+               ) -> dict[str, float]:
+    """The requirement margins the family's checks give on the run ``sim`` of ``design``'s loop on ``plant``
+    (:data:`DIVERGED` for every requirement when the run diverged)."""
+    from designkit.verification.suite import Context
+
     if sim.diverged_at is not None:
         return dict.fromkeys(problem.requirements, DIVERGED)
     ctx = Context(spec, sim, spec.numerics.solver, plant, None, trials, None)

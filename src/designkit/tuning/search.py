@@ -50,6 +50,8 @@ class Search:
         Wall time (s).
     stopped : str
         Why it stopped (converged, budget spent).
+    sensitivity_runs : int
+        Runs of the loop with its forward sensitivities (the gradient search; counted among the simulations).
     """
 
     method: str
@@ -59,11 +61,12 @@ class Search:
     restarts: int
     seconds: float
     stopped: str
+    sensitivity_runs: int = 0
 
     @property
     def simulations(self) -> int:
-        """Simulations run (every candidate at every point of the box)."""
-        return sum(e.runs for e in self.evaluations)
+        """Simulations run (every candidate at every point of the box, and the sensitivity runs)."""
+        return sum(e.runs for e in self.evaluations) + self.sensitivity_runs
 
     @property
     def history(self) -> np.ndarray:
