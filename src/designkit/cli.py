@@ -527,7 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=".", help="output directory (default: the current folder): <name>-tuned.yaml "
                    "<name>-tuning.html and .pdf")
     p.add_argument("--budget", type=_seconds, default=60.0, metavar="SECONDS",
-                   help="wall time the search may take (default 60 s)")
+                   help="processor time the search may take (default 60 s)")
     p.add_argument("--sweep-samples", type=_sweep_samples, default=64, metavar="N",
                    help="samples of the confirming sweep of the tuned spec over plant.uncertainty (default 64; 0: "
                    "none)")

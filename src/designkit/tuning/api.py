@@ -12,7 +12,7 @@ import numpy as np
 __all__ = ["DEFAULT_BUDGET", "METHODS", "TuneResult", "choose", "prepare", "tune"]
 
 DEFAULT_BUDGET = 60.0
-"""Wall time the search may take by default (s)."""
+"""Processor time the search may take by default (s)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,7 +275,7 @@ def tune(spec: Any, *, out: str | Path | None = None, budget: float = DEFAULT_BU
     out : str or Path, optional
         Folder of ``<name>-tuned.yaml`` and ``<name>-tuning.html`` (default: the current folder; created if needed).
     budget : float
-        Wall time the search may take (s, > 0).
+        Processor time the search may take (s, > 0; this process and the compilers it waits for).
     seed : int
         Seed of the random restarts.
     write : bool

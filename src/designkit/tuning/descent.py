@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from designkit.studies.core.budget import cpu_seconds
 from designkit.tuning.search import TOLERANCE, Search, _best, _OutOfTimeError
 
 __all__ = ["METHOD", "slsqp"]
@@ -53,7 +54,7 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
     bounds : (ndarray, ndarray)
         Lower and upper bounds (log space).
     budget : float
-        Wall time the search may take (s); the run going on when it is spent is finished.
+        Processor time the search may take (s); the run going on when it is spent is finished.
     seed : int
         Seed of the random restarts.
     max_restarts : int
@@ -69,7 +70,7 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
 
     lo, hi = bounds
     n = lo.size
-    start = time.perf_counter()
+    start, clock = time.perf_counter(), cpu_seconds()
     rng = np.random.default_rng(seed)
     done: list[Any] = []
     tried: dict[bytes, Any] = {}
@@ -84,7 +85,7 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
     def candidate(x: np.ndarray, *, last: bool = False) -> Any:
         k = key(x)
         if k not in tried:
-            if done and not last and time.perf_counter() - start > budget:
+            if done and not last and cpu_seconds() - clock > budget:
                 raise _OutOfTimeError
             tried[k] = evaluate(np.clip(np.asarray(x, dtype=float), lo, hi), max((e.score for e in done),
                                                                                    default=-np.inf))
@@ -96,7 +97,7 @@ def slsqp(evaluate: Callable[[np.ndarray, float], Any], gradient: Callable[[np.n
         x = np.clip(v[:n], lo, hi)
         k = key(x)
         if k not in grads:
-            if grads and time.perf_counter() - start > budget:
+            if grads and cpu_seconds() - clock > budget:
                 pending[:] = [x]
                 raise _OutOfTimeError
             grads[k] = gradient(x)
