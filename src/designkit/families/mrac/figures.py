@@ -110,7 +110,7 @@ def _limits(signals: Sequence[np.ndarray], margin: float = 0.25) -> tuple[float,
 def outputs_figure(result: Any) -> Figure | None:
     """The link against the reference model's output, with adaptation and with the gains frozen at their initial
     values (top), and the two output errors (bottom)."""
-    if result.simulation is None or "ym" not in result.simulation.signals:
+    if result.simulation is None or "ym" not in result.simulation.signals or "a1" not in result.simulation.signals:
         return None
     svg, keys, info = render_tagged(_draw_outputs, result)
     parts = []
