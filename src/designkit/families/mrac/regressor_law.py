@@ -139,11 +139,16 @@ def regressor_law(plant: Any, s: Structure, rule: str, gamma: Sequence[float], i
 
     names = state_names(s, rule)
     n_fixed = len(names) - p
-    states = [State(name, (lambda k: lambda sym: parts(sym)["deriv"][k])(k)) for k, name in enumerate(names[:n_fixed])]
-    states += [State(name, (lambda k: lambda sym: parts(sym)["deriv"][k])(n_fixed + i), float(initial[i]))
-               for i, name in enumerate(s.names)]
+    def deriv(k: int):
+        return lambda sym: parts(sym)["deriv"][k]
+
+    def param(i: int):
+        return lambda sym: parts(sym)["theta"][i]
+
+    states = [State(name, deriv(k)) for k, name in enumerate(names[:n_fixed])]
+    states += [State(name, deriv(n_fixed + i), float(initial[i])) for i, name in enumerate(s.names)]
     signals = {"ym": lambda sym: parts(sym)["ym"], "e": lambda sym: -parts(sym)["e"]}
-    signals.update({name: (lambda i: lambda sym: parts(sym)["theta"][i])(i) for i, name in enumerate(s.names)})
+    signals.update({name: param(i) for i, name in enumerate(s.names)})
     fastest = max([abs(r) for r in np.roots(s.model_den)] + [abs(r) for r in np.roots(s.lam)] + [1e-9])
     return dynamic_law(
         KIND, plant, states=states, command=lambda sym: parts(sym)["u"],

@@ -14,10 +14,10 @@ with ``alpha(s) = (s^(n-2), ..., s, 1)`` and ``Lambda = Lambda0 Zm`` monic of de
 ``L = Lambda + theta_u' alpha`` and ``M = theta2 Lambda + theta_y' alpha`` the loop is
 ``y = theta1 kp Z Lambda / (L R + kp Z M) uc``.
 
-**Matching** (:func:`matching`): ``theta1 = km/kp``, ``L = Z Lbar`` and ``kp M`` the quotient and the remainder of
-``Lambda0 Rm`` divided by ``R`` (``Lbar R + kp M = Lambda0 Rm``), so that ``L R + kp Z M = Z Lambda0 Rm`` and the loop is
-``km Zm/Rm``: the plant's zeros ``Z`` are cancelled (they must be stable: a minimum-phase plant).  For ``n = 1``:
-``theta1 = bm/b``, ``theta2 = (am - a)/b`` (``G = b/(s + a)``, ``Gm = bm/(s + am)``).
+**Matching** (:func:`matching`): ``theta1 = km/kp``, ``L = Z Lbar`` and ``kp M`` the quotient and the remainder
+of ``Lambda0 Rm`` divided by ``R`` (``Lbar R + kp M = Lambda0 Rm``), so that ``L R + kp Z M = Z Lambda0 Rm`` and the
+loop is ``km Zm/Rm``: the plant's zeros ``Z`` are cancelled (they must be stable: a minimum-phase plant).
+For ``n = 1``: ``theta1 = bm/b``, ``theta2 = (am - a)/b`` (``G = b/(s + a)``, ``Gm = bm/(s + am)``).
 
 Coefficients are lists, highest power first (NumPy's ``polyval`` order).  Pure NumPy; no CasADi here.
 """
@@ -105,7 +105,7 @@ class Structure:
 
     @property
     def high_frequency_sign(self) -> float:
-        """``sign(kp/km)``: the sign the rules need (the sign of the plant's high-frequency gain against the model's)."""
+        """``sign(kp/km)``: the sign the rules need (the plant's high-frequency gain's against the model's)."""
         return float(np.sign(self.plant_num[0] * self.model_num[0]))
 
     @property
