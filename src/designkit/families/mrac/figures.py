@@ -25,6 +25,7 @@ from designkit.display.figure import (
 from designkit.display.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
 from designkit.families.mrac.boundary import GammaRun
 from designkit.families.mrac.model import PARAMETERS, UNITS
+from designkit.families.mrac.regressor_figures import regressor_figure
 from designkit.families.mrac.runs import adapted, assess, final_link, matching
 
 __all__ = ["FIGURES", "gamma_figure", "outputs_figure", "parameters_figure"]
@@ -289,5 +290,5 @@ def gamma_figure(result: Any) -> Figure | None:
                   _present(result, ("adaptive_stability",)))
 
 
-FIGURES = (outputs_figure, parameters_figure, gamma_figure)
+FIGURES = (outputs_figure, parameters_figure, gamma_figure, regressor_figure)
 """The family's figures, in report order."""
