@@ -1,4 +1,4 @@
-"""Benchmark: Astrom and Wittenmark's MIT-rule example (``specs/mrac-mit-first-order.yaml``), 100 s, against ``solve_ivp``.
+"""Benchmark: Astrom and Wittenmark's MIT-rule example (specs/mrac-mit-first-order.yaml), 100 s, against solve_ivp.
 
 Scenario (Adaptive Control, 2nd ed., Example 5.2): ``G = 0.5/(s + 1)``, ``Gm = 2/(s + 2)``, ``u = theta1 uc -
 theta2 y`` from zero, the MIT rule with the filters ``2/(p + 2)`` of ``uc`` and ``y``, ``gamma = 1``, a square wave of
