@@ -71,3 +71,17 @@ def test_the_ideal_parameters_and_what_the_run_reports(textbook):
     err = adaptation["error_rms"]
     assert err["adaptive"] < err["fixed"]
 
+
+
+def test_the_figure_draws_the_output_and_the_parameters(textbook):
+    from designkit.display.svg import svg_keys
+    from designkit.families.mrac.figures import outputs_figure, parameters_figure
+    from designkit.families.mrac.regressor_figures import regressor_figure
+
+    _, result = textbook
+    fig = regressor_figure(result)
+    assert fig.filename == "fig-mrac-regressor.svg"
+    assert {"command", "model", "output", "theta", "ideal"} <= set(svg_keys(fig.svg))
+    final = [float(result.simulation.signals[n][-1]) for n in ("theta1", "theta2")]
+    assert f"{final[0]:.4g}" in fig.caption and "4, 2" in fig.caption
+    assert outputs_figure(result) is None and parameters_figure(result) is None  # the coefficient form's
