@@ -183,6 +183,8 @@ BAD = {
     "non-minimum phase": ("plant: {kind: transfer_function, num: [-1, 2], den: [1, 3, 2]}\n"
                           f"controller: {{kind: mrac, {AW_MODEL}, gamma: 1}}\n" + SQUARE,
                           "plant: the plant has the zero"),
+    "two inputs": ("plant: {kind: state_space, A: [[0, 1], [-2, -3]], B: [[0, 1], [1, 0]], C: [[1, 0]]}\n"
+                   f"controller: {{kind: mrac, {AW_MODEL}, gamma: 1}}\n" + SQUARE, "plant.B: the plant has 2 inputs"),
     "improper model": (TF + "controller: {kind: mrac, reference_model: {num: [1, 2], den: [1, 2]}, gamma: 1}\n"
                        + SQUARE, "controller.reference_model"),
     "rule on the link": ("plant: {kind: link, Km: 2.0, tau: 0.5}\n"

@@ -49,6 +49,9 @@ def _fail(path: str, reason: str) -> SpecError:
 def synthesize(spec: Any, plant: Any) -> Design:
     """The feedforward/feedback MRAC a spec asks for, on the spec's plant at its nominal parameters."""
     c = spec.controller
+    if len(plant.inputs) != 1:
+        raise _fail("plant.B", f"the plant has {len(plant.inputs)} inputs: the feedforward/feedback structure "
+                               "commands one (u = θ'ω)")
     num, den = plant_transfer(plant)
     try:
         kp, Z = monic(num)
