@@ -41,6 +41,12 @@ the controller.
 
 **Modifications** (``controller.modification``, :mod:`designkit.families.mrac.modification`): the normalised
 rule, a dead zone on the error, or a projection of the parameters on a box replace the plain gradient rule.
+
+**The feedforward/feedback structure** (``structure: feedforward_feedback``, the default on a ``transfer_function``
+or ``state_space`` plant, offered on the link): ``u = theta' omega`` towards a reference model of any order with the
+plant's relative degree, adapted by the MIT, Lyapunov or normalized rule (Astrom and Wittenmark, *Adaptive Control*,
+ch. 5): :mod:`~designkit.families.mrac.structure`, :mod:`~designkit.families.mrac.regressor_design`,
+:mod:`~designkit.families.mrac.regressor_law`, :mod:`~designkit.families.mrac.regressor_checks`.
 """
 
 from __future__ import annotations
@@ -197,6 +203,10 @@ class MracSpec(Section):
     default the nominal design).  ``nominal``: the link the gains are realised on (default the spec's plant).
     ``modification``: an ad hoc modification of the gradient rule, ``{kind: normalized, rate}``, ``{kind:
     dead_zone, width}`` or ``{kind: projection, low, high}`` (:mod:`designkit.families.mrac.modification`).
+    ``structure``: ``coefficients`` (the above; the link's default) or ``feedforward_feedback`` (``u = theta'
+    omega``; the default on a linear plant), which reads ``reference_model`` (required), ``rule`` (``mit``,
+    ``lyapunov``, ``normalized``), ``gamma`` and ``initial`` (one per parameter), ``normalization`` (``alpha0`` of the
+    normalized rule) and ``filter_poles`` (the poles of ``Lambda0``, plant order 2 or more).
     """
 
     kind: Literal[KIND]
