@@ -42,6 +42,14 @@ CONFORMANCE = {
              "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
              "plant_change: {time: 8.0, values: {Km: 1.6}}}",
              "{max_control: 50}"),  # a square wave has no settling: the adaptive checks judge the error
+    # the link as a transfer function and as a state-space model measuring 2 x1: the feedforward/feedback structure
+    # (four parameters), from its ideal parameters, recovering the model after Km drops 20 %
+    "transfer_function": ("{kind: mrac, reference_model: {poles: [-4, -5]}, gamma: 1}",
+                          "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+                          "plant_change: {time: 8.0, values: {Km: 1.6}}}", "{max_control: 50}"),
+    "state_space": ("{kind: mrac, reference_model: {poles: [-4, -5]}, gamma: 1}",
+                    "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+                    "plant_change: {time: 8.0, values: {Km: 1.6}}}", "{max_control: 50}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 

@@ -465,8 +465,8 @@ def _family() -> Family:
         kind=KIND, spec=MracSpec, plants=("link", "transfer_function", "state_space"), reference="step",
         synthesize=synthesize, law=law,
         uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
-        checks=(checks.coefficient_form_only("pole_placement"), "lyapunov", "frozen_final", "robustness",
-                "loop_margins", "designed_loop", "time_domain", *checks.RULES),
+        checks=("pole_placement", "lyapunov", "frozen_final", "robustness", "loop_margins", "designed_loop",
+                "time_domain", *checks.RULES),
         display=Display(
             label="Model reference adaptive PD servo (MRAC)",
             law=("u = −K1(α) (x1 − xD) − K2(α) x2,  K1 = τn α1/Kmn,  K2 = (τn α2 − 1)/Kmn",

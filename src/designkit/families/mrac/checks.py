@@ -26,7 +26,6 @@ and the check is required; otherwise it is informational and says so.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Any
 
@@ -292,17 +291,6 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
         return (f"The adaptation ended on parameters {final} whose fixed-gain loop is unstable on the true link.",
                 "Lower γ so that the parameters converge instead of wandering (see the adaptive stability check).")
     return None
-
-
-def coefficient_form_only(name: str) -> CheckRule:
-    """The generic check ``name``, not run on the feedforward/feedback structure: ``pole_placement`` judges a servo
-    whose static gain is 1 by design, and the loop frozen at that structure's initial parameters (zero in Astrom and
-    Wittenmark's examples) is no designed servo; its stability is the ``lyapunov`` check's."""
-    from designkit.verification.suite import GENERIC
-
-    rule = GENERIC[name]
-    base = rule.applies
-    return dataclasses.replace(rule, applies=lambda d, c: base(d, c) and not _regressor(d))
 
 
 RULES = (

@@ -142,7 +142,7 @@ def last_event(spec: Any, duration: float) -> float:
 def swing(sim: Any) -> float:
     """Extent of the reference positions, the position before the motion included (rad)."""
     r = np.asarray(sim.reference, dtype=float)[:, 0, 0]
-    before = float(sim.settings["initial_state"]["x1"])
+    before = float(np.asarray(sim.state, dtype=float)[0, sim.positions[0]])  # where the run starts
     return float(max(r.max(), before) - min(r.min(), before))
 
 
