@@ -20,7 +20,9 @@ time-domain PASS on it says nothing about the design.  Two tests, both on the de
    rest point: the largest difference between
    the run's deviations divided by the scale and the linear response, over the positions and the plant
    inputs, relative to the linear response's extent (the largest over the positions, and over the inputs), at
-   most :data:`SMALL_SIGNAL_REL`.  The nonlinear
+   most :data:`SMALL_SIGNAL_REL`.  The positions' extent is at least the reference's own motion: a loop that
+   barely responds (an adaptive law frozen at zero gains) is judged against the size of the command, not against
+   its own vanishing response, whose ratio to any integration error says nothing.  The nonlinear
    terms of a smooth plant contribute in proportion to the scale (1e-4), the integrators about 1e-6.
    A plant with non-smooth terms at rest (Coulomb friction, :meth:`~designkit.models.plant.PlantBase.nonsmooth`)
    is not linear however small the signal, so part 3 is not run on it and the check says so.
@@ -183,6 +185,10 @@ def designed_loop_check(spec: Any, design: Any) -> Check:
     extent = np.empty((y_lin.shape[0], 1))  # one scale per kind of output: the positions together, the inputs together
     for rows in (slice(0, n_pos), slice(n_pos, None)):
         extent[rows] = float(np.max(np.abs(y_lin[rows]))) if y_lin[rows].size else 1.0
+    motion = float(np.max(np.abs(flat))) if flat.size else 0.0  # the reference's own motion, per unit of scale
+    weak = bool(extent[0, 0] < 0.5 * motion) if n_pos else False
+    if n_pos:
+        extent[:n_pos] = max(float(extent[0, 0]), motion)
     extent[extent == 0] = 1.0
     rel = np.abs(y_run - y_lin) / extent
     worst = float(np.max(rel)) if np.all(np.isfinite(rel)) else np.inf
@@ -191,7 +197,8 @@ def designed_loop_check(spec: Any, design: Any) -> Check:
     moved = "" if same else (" (the run does not start at the design's operating point: compared with the loop "
                              "linearized where it starts)")
     cert.update(small_signal_scale=SMALL_SIGNAL, largest_relative_difference=worst, tolerance=SMALL_SIGNAL_REL,
-                worst_output=outputs[row], worst_at_s=float(t[k]))
+                worst_output=outputs[row], worst_at_s=float(t[k]), position_scale=float(extent[0, 0]) if n_pos
+                else None, reference_motion=motion)
     ok = bool(worst <= SMALL_SIGNAL_REL)
     what = (f"starts at rest (max |dz/dt| = {residual:.2g}) and, with the motion scaled by {SMALL_SIGNAL:g}, "
             f"follows its linearization to {worst:.2g} of the response (largest on {outputs[row]} at "
@@ -200,6 +207,9 @@ def designed_loop_check(spec: Any, design: Any) -> Check:
         what = (f"the small-signal run leaves the linear closed loop by {worst:.3g} of the response on {outputs[row]} "
                 f"at t = {t[k]:.3g} s (tolerance {SMALL_SIGNAL_REL:g}){moved}: the simulated loop is not the "
                 "designed one -- a state, reference or feed-forward the design does not contain")
+    if weak:
+        what += (f"; the positions are judged against the reference's motion ({motion:.3g} per unit of scale), larger "
+                 "than the linear loop's response")
     if left_out:
         what += (f"; the small-signal run leaves out {left_out}, which the verified run contains and the linear "
                  "design does not model")

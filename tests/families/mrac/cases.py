@@ -15,7 +15,15 @@ simulation: {duration: 4.0, trajectory: {kind: square, amplitude: 0.5, period: 4
 NORMALIZED = BASE.replace("kind: mrac,", "kind: mrac, modification: {kind: normalized, rate: 4.5},", 1)
 DEAD_ZONE = BASE.replace("kind: mrac,", "kind: mrac, modification: {kind: dead_zone, width: 0.001},", 1)
 
+FIRST_ORDER = """\
+name: ranges-mrac-first-order
+plant: {kind: transfer_function, num: [0.5], den: [1, 1]}
+controller: {kind: mrac, reference_model: {num: [2], den: [1, 2]}, rule: normalized, normalization: 1.0, gamma: 1}
+simulation: {duration: 4.0, trajectory: {kind: square, amplitude: 1, period: 4}}
+"""
+
 RANGES = {
+    "controller.normalization": [(FIRST_ORDER, "controller.normalization", "controller.normalization")],
     "controller.reference_model.natural_frequency": [(BASE, "controller.reference_model.natural_frequency",
                                                       "controller.reference_model.natural_frequency")],
     "controller.reference_model.damping": [(BASE, "controller.reference_model.damping",
@@ -34,11 +42,22 @@ CONFORMANCE = {
              "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
              "plant_change: {time: 8.0, values: {Km: 1.6}}}",
              "{max_control: 50}"),  # a square wave has no settling: the adaptive checks judge the error
+    # the link as a transfer function and as a state-space model measuring 2 x1: the feedforward/feedback structure
+    # (four parameters), from its ideal parameters, recovering the model after Km drops 20 %
+    "transfer_function": ("{kind: mrac, reference_model: {poles: [-4, -5]}, gamma: 1}",
+                          "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+                          "plant_change: {time: 8.0, values: {Km: 1.6}}}", "{max_control: 50}"),
+    "state_space": ("{kind: mrac, reference_model: {poles: [-4, -5]}, gamma: 1}",
+                    "{duration: 40.0, trajectory: {kind: square, amplitude: 0.5, period: 4}, "
+                    "plant_change: {time: 8.0, values: {Km: 1.6}}}", "{max_control: 50}"),
 }
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
 EXAMPLES = {
     "mrac-link": 0,
     "mrac-gamma-unstable": 1,  # the gradient rule diverges for this adaptation gain: the report gives the bound
+    "mrac-mit-first-order": 0,  # Astrom and Wittenmark's Example 5.2, gamma = 1
+    "mrac-mit-first-order-slow": 0,  # gamma = 0.2
+    "mrac-mit-first-order-fast": 0,  # gamma = 5
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

@@ -71,3 +71,32 @@ def test_the_generic_designed_loop_check_holds_for_the_frozen_law_without_a_plan
 def test_designed_loop_is_judged_on_the_designed_plant_without_the_plant_change():
     spec = load_spec(SPECS / "mrac-link.yaml").spec
     assert designed_loop_check(spec, synthesize(spec)).passed is True
+
+
+ZERO_START = ("name: x\nplant: {kind: link, Km: 2.0, tau: 0.5}\n"
+              "controller: {kind: mrac, poles: [-4, -5], gamma: 10000, initial: [4.0e-12, 2.0]}\n"
+              "simulation: {duration: 30, trajectory: {kind: square, amplitude: 0.5, period: 4}}\n")
+
+
+def test_designed_loop_from_zero_gains_is_judged_against_the_reference():
+    """Started from a1 = 4e-12, a2 = 2 (K1 = 1e-12, K2 = 0) the frozen loop barely responds (its slow pole is at
+    about -2e-12 1/s) while the square wave moves 0.5 rad; relative to that vanishing response the small-signal
+    difference is hundreds of times the response; the check judges it against the reference's motion and passes."""
+    spec = parse_spec(ZERO_START).spec
+    design = synthesize(spec)
+    check = designed_loop_check(spec, design)
+    assert check.passed is True, check.detail
+    assert check.certificate["reference_motion"] == pytest.approx(0.5)
+    assert check.certificate["position_scale"] == pytest.approx(0.5)
+    assert "judged against the reference's motion" in check.detail
+    assert check.certificate["largest_relative_difference"] < 1e-6
+    assert np.min(np.abs(np.linalg.eigvals(design.closed_loop.A))) < 1e-10  # the loop frozen at zero gain: no response
+
+
+def test_designed_loop_from_the_nominal_gains_is_judged_against_its_own_response():
+    text = (SPECS / "mrac-link.yaml").read_text().replace("  plant_change: {time: 20, values: {Km: 1.0}}\n", "")
+    spec = parse_spec(text).spec
+    check = designed_loop_check(spec, synthesize(spec))
+    assert check.passed is True, check.detail
+    assert "judged against the reference's motion" not in check.detail
+    assert check.certificate["largest_relative_difference"] < 1e-3

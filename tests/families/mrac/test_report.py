@@ -9,15 +9,20 @@ from designkit.display.section import ReportSection
 from designkit.display.svg import svg_keys
 from designkit.families import family
 from designkit.families.mrac.figures import gamma_figure, outputs_figure, parameters_figure
+from designkit.families.mrac.regressor_figures import regressor_figure
 from designkit.families.mrac.report import section
 
 FAMILY = family("mrac")
 
 
 def test_the_family_declares_its_figures_section_and_json():
-    assert FAMILY.figures == (outputs_figure, parameters_figure, gamma_figure)
+    assert FAMILY.figures == (outputs_figure, parameters_figure, gamma_figure, regressor_figure)
     assert FAMILY.sections == (section,)
     assert FAMILY.references == ("step", "square", "prbs")
+
+
+def test_the_coefficient_forms_figures_leave_the_other_structure_alone(link_result):
+    assert regressor_figure(link_result) is None
 
 
 def test_outputs_figure(link_result):

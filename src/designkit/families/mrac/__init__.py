@@ -41,6 +41,12 @@ the controller.
 
 **Modifications** (``controller.modification``, :mod:`designkit.families.mrac.modification`): the normalised
 rule, a dead zone on the error, or a projection of the parameters on a box replace the plain gradient rule.
+
+**The feedforward/feedback structure** (``structure: feedforward_feedback``, the default on a ``transfer_function``
+or ``state_space`` plant, offered on the link): ``u = theta' omega`` towards a reference model of any order with the
+plant's relative degree, adapted by the MIT, Lyapunov or normalized rule (Astrom and Wittenmark, *Adaptive Control*,
+ch. 5): :mod:`~designkit.families.mrac.structure`, :mod:`~designkit.families.mrac.regressor_design`,
+:mod:`~designkit.families.mrac.regressor_law`, :mod:`~designkit.families.mrac.regressor_checks`.
 """
 
 from __future__ import annotations
@@ -48,11 +54,12 @@ from __future__ import annotations
 import math
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from designkit.errors import SpecError
 from designkit.families.mrac import laws as mrac_law
-from designkit.families.mrac.data import MracData
+from designkit.families.mrac.data import MracData, RegressorData
 from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, gains_of
 from designkit.families.mrac.modification import Modification, describe, resolved
@@ -68,13 +75,17 @@ Q_RANGE = 1e12
 
 
 class ReferenceModelSpec(Section):
-    """The reference model ``ym'' + a2 ym' + a1 ym = a1 xD``: ``natural_frequency`` (rad/s, 1e-6 to 1e6) with
-    ``damping`` (dimensionless, positive: a non-positive damping is an unstable model), or ``poles`` (exactly
-    two, 1/s: the model is second order like the PD loop on the link)."""
+    """The reference model: ``natural_frequency`` (rad/s, 1e-6 to 1e6) with ``damping`` (dimensionless, positive: a
+    non-positive damping is an unstable model), or ``poles`` (1/s; unit static gain), or a transfer function ``{num,
+    den}`` (highest power first, strictly proper, stable).  The coefficient form on the link is second order
+    (``ym'' + a2 ym' + a1 ym = a1 xD``: two poles, or the frequency and damping); the feedforward/feedback structure
+    takes any order whose relative degree is the plant's."""
 
     natural_frequency: Ranged(1e-6, 1e6, "rad/s", base=PositiveFinite) | None = None
     damping: Ranged(1e-6, 1e3, "", base=Finite) | None = None
     poles: list[Pole] | None = None
+    num: list[Finite] | None = None
+    den: list[Finite] | None = None
 
     @field_validator("damping")
     @classmethod
@@ -86,12 +97,11 @@ class ReferenceModelSpec(Section):
 
     @field_validator("poles")
     @classmethod
-    def _two_poles(cls, v: list[complex] | None) -> list[complex] | None:
+    def _poles(cls, v: list[complex] | None) -> list[complex] | None:
         if v is None:
             return v
-        if len(v) != 2:
-            raise ValueError(f"must list exactly 2 poles, got {len(v)}: the reference model must be second order, "
-                             "like the PD loop on the link whose coefficients are adapted")
+        if not 1 <= len(v) <= 20:
+            raise ValueError(f"must list 1 to 20 poles, got {len(v)}")
         check_poles(v)
         check_conjugates(v)
         return v
@@ -99,23 +109,65 @@ class ReferenceModelSpec(Section):
     @model_validator(mode="after")
     def _one_form(self) -> ReferenceModelSpec:
         freq = self.natural_frequency is not None or self.damping is not None
-        if freq and self.poles is not None:
-            raise ValueError("give natural_frequency and damping, or poles, not both")
+        tf = self.num is not None or self.den is not None
+        if sum((freq, self.poles is not None, tf)) > 1:
+            raise ValueError("give natural_frequency and damping, or poles, or num and den: one form")
         if freq and (self.natural_frequency is None or self.damping is None):
             missing = "damping" if self.damping is None else "natural_frequency"
             raise ValueError(f"{missing}: required with {'natural_frequency' if missing == 'damping' else 'damping'}")
-        if not freq and self.poles is None:
-            raise ValueError("give natural_frequency and damping, or poles")
+        if tf:
+            check_model_transfer(self.num, self.den)
+        if not (freq or tf) and self.poles is None:
+            raise ValueError("give natural_frequency and damping, or poles, or num and den")
         if freq:
             check_poles(ReferenceModel.from_frequency(self.natural_frequency, self.damping).poles)
         return self
 
     def model(self) -> ReferenceModel:
-        """The :class:`~designkit.families.mrac.model.ReferenceModel` it describes."""
+        """The second-order :class:`~designkit.families.mrac.model.ReferenceModel` it describes (coefficient form)."""
         if self.poles is not None:
             return ReferenceModel.from_poles(self.poles, "the spec's poles")
         return ReferenceModel.from_frequency(self.natural_frequency, self.damping,
                                              "the spec's natural frequency and damping")
+
+    def transfer(self) -> tuple[list[float], list[float]]:
+        """``(num, den)`` of the model, highest power first (poles and frequency forms: unit static gain)."""
+        if self.num is not None:
+            return [float(v) for v in self.num], [float(v) for v in self.den]
+        if self.poles is not None:
+            den = [float(v) for v in np.real(np.poly(np.asarray(self.poles, dtype=complex)))]
+            return [den[-1]], den
+        wn, z = float(self.natural_frequency), float(self.damping)
+        return [wn * wn], [1.0, 2 * z * wn, wn * wn]
+
+
+def check_model_transfer(num: list[float] | None, den: list[float] | None) -> None:
+    """A model ``num/den`` must be given whole, strictly proper, stable, with a static gain (``ValueError`` naming the
+    key)."""
+    from designkit.families.mrac.structure import monic
+
+    if num is None or den is None:
+        raise ValueError(f"{'den' if den is None else 'num'}: required with {'num' if den is None else 'den'}")
+    try:
+        _, d = monic(den)
+    except ValueError:
+        raise ValueError("den: must not be zero") from None
+    try:
+        _, nn = monic(num)
+    except ValueError:
+        raise ValueError("num: must not be zero") from None
+    if len(d) < 2 or len(d) > 21:
+        raise ValueError(f"den: must have degree 1 to 20, got {len(d) - 1}")
+    if len(nn) >= len(d):
+        raise ValueError(f"num: the model must be strictly proper (numerator degree {len(nn) - 1} < denominator "
+                         f"degree {len(d) - 1})")
+    roots = np.roots(d)
+    if np.any(roots.real >= 0):
+        worst = roots[int(np.argmax(roots.real))]
+        raise ValueError(f"den: the model must be stable, it has the pole {worst:.4g}")
+    if abs(nn[-1]) <= 1e-12 * float(np.max(np.abs(nn))):
+        raise ValueError("num: the model must have a nonzero static gain (num(0) != 0), or it does not follow a "
+                         "constant command")
 
 
 class NominalLink(Section):
@@ -126,10 +178,11 @@ class NominalLink(Section):
     tau: Ranged(1e-6, 1e6, "s", base=PositiveFinite) | None = None
 
 
-def _positive_list(v: Any, size: int, what: str) -> list[float]:
+def _positive_list(v: Any, size: int, what: str, path: str = "") -> list[float]:
     values = list(v) if isinstance(v, list | tuple) else [v]
     if len(values) not in (1, size):
-        raise ValueError(f"must be one number or {size} (one per adapted parameter a1, a2), got {len(values)}")
+        raise ValueError(f"{path + ': ' if path else ''}must be one number or {size} (one per adapted parameter "
+                         f"a1, a2), got {len(values)}")
     for k, x in enumerate(values):
         if not GAMMA_RANGE[0] <= x <= GAMMA_RANGE[1]:
             where = f"[{k}]: " if len(values) > 1 else ""
@@ -150,6 +203,10 @@ class MracSpec(Section):
     default the nominal design).  ``nominal``: the link the gains are realised on (default the spec's plant).
     ``modification``: an ad hoc modification of the gradient rule, ``{kind: normalized, rate}``, ``{kind:
     dead_zone, width}`` or ``{kind: projection, low, high}`` (:mod:`designkit.families.mrac.modification`).
+    ``structure``: ``coefficients`` (the above; the link's default) or ``feedforward_feedback`` (``u = theta'
+    omega``; the default on a linear plant), which reads ``reference_model`` (required), ``rule`` (``mit``,
+    ``lyapunov``, ``normalized``), ``gamma`` and ``initial`` (one per parameter), ``normalization`` (``alpha0`` of the
+    normalized rule) and ``filter_poles`` (the poles of ``Lambda0``, plant order 2 or more).
     """
 
     kind: Literal[KIND]
@@ -161,6 +218,12 @@ class MracSpec(Section):
     initial: list[Finite] | None = None
     nominal: NominalLink | None = None
     modification: Modification | None = None
+    structure: Literal["coefficients", "feedforward_feedback"] | None = Field(
+        default=None, description="coefficients (the PD loop's, the link's default) or feedforward_feedback "
+                                  "(u = theta' omega, the default on a transfer_function or state_space plant).")
+    rule: Literal["mit", "lyapunov", "normalized"] = "mit"
+    normalization: Ranged(1e-12, 1e12, "", base=PositiveFinite) = 1.0
+    filter_poles: list[Pole] | None = None
 
     @field_validator("poles")
     @classmethod
@@ -181,7 +244,9 @@ class MracSpec(Section):
             if x <= 0:
                 where = f"[{k}]: " if len(values) > 1 else ""
                 raise ValueError(f"{where}must be positive (an adaptation gain), got {x:g}")
-        _positive_list(v, 2, "an adaptation gain")
+            if not GAMMA_RANGE[0] <= x <= GAMMA_RANGE[1]:
+                where = f"[{k}]: " if len(values) > 1 else ""
+                raise ValueError(f"{where}an adaptation gain must be between 1e-12 and 1e12, got {x:g}")
         return v
 
     @field_validator("Q")
@@ -199,17 +264,12 @@ class MracSpec(Section):
                              "with a zero or negative eigenvalue leaves part of the error unweighted or rewards it")
         return v
 
-    @field_validator("initial")
+    @field_validator("filter_poles")
     @classmethod
-    def _initial(cls, v: list[float] | None) -> list[float] | None:
-        if v is None:
-            return v
-        if len(v) != 2:
-            raise ValueError(f"must list the 2 adapted parameters [a1, a2], got {len(v)}")
-        for k, x in enumerate(v):
-            if not 1e-12 <= x <= 1e12:
-                raise ValueError(f"[{k}]: must be between 1e-12 and 1e12 ({UNITS[k]}): positive coefficients are "
-                                 f"a stable starting loop, got {x:g}")
+    def _filter_poles(cls, v: list[complex] | None) -> list[complex] | None:
+        if v is not None:
+            check_poles(v)
+            check_conjugates(v)
         return v
 
     @model_validator(mode="after")
@@ -237,10 +297,53 @@ def _eig2(m: list[list[float]]) -> tuple[float, float]:
     return tr / 2 - disc, tr / 2 + disc
 
 
+def structure_of(spec: Any) -> str:
+    """The structure a spec asks for: ``controller.structure``, else the plant's default (``coefficients`` on the
+    link, ``feedforward_feedback`` on a linear plant)."""
+    given = spec.controller.structure
+    return given if given is not None else ("coefficients" if spec.plant.kind == "link" else "feedforward_feedback")
+
+
 def validate(spec: Any) -> None:
-    """Cross-section rules: no anti-windup (the PD servo has no integral)."""
+    """Cross-section rules: no anti-windup (no integral); each structure's own settings only
+    (:func:`_validate_coefficients`, :func:`designkit.families.mrac.regressor_design.validate`)."""
     if spec.simulation.anti_windup is not None:
-        raise ValueError("simulation.anti_windup: the adaptive PD servo has no integral to limit")
+        raise ValueError("simulation.anti_windup: the adaptive servo has no integral to limit")
+    if structure_of(spec) == "coefficients":
+        _validate_coefficients(spec)
+    else:
+        from designkit.families.mrac.regressor_design import validate as validate_regressor
+
+        validate_regressor(spec)
+
+
+def _validate_coefficients(spec: Any) -> None:
+    c = spec.controller
+    if spec.plant.kind != "link":
+        raise ValueError(f"controller.structure: the coefficient form adapts the closed-loop coefficients of the PD "
+                         f"servo of the link; on a {spec.plant.kind} plant use feedforward_feedback")
+    for name, why in (("rule", "the coefficient form's rule is the gradient (MIT) rule of notes section 4.2; its "
+                               "normalised variant is controller.modification: {kind: normalized}"),
+                      ("normalization", "read by the feedforward_feedback structure's normalized rule only"),
+                      ("filter_poles", "read by the feedforward_feedback structure only")):
+        if name in c.model_fields_set and getattr(c, name) != type(c).model_fields[name].default:
+            raise ValueError(f"controller.{name}: {why}")
+    m = c.reference_model
+    if m is not None and (m.num is not None or m.den is not None):
+        raise ValueError("controller.reference_model.num: the coefficient form's model is second order "
+                         "ym'' + a2 ym' + a1 ym = a1 xD: give its poles or natural_frequency and damping")
+    if m is not None and m.poles is not None and len(m.poles) != 2:
+        raise ValueError(f"controller.reference_model.poles: must list exactly 2 poles, got {len(m.poles)}: the "
+                         "reference model must be second order, like the PD loop on the link whose coefficients are "
+                         "adapted")
+    _positive_list(c.gamma, 2, "an adaptation gain", "controller.gamma")
+    if c.initial is not None:
+        if len(c.initial) != 2:
+            raise ValueError(f"controller.initial: must list the 2 adapted parameters [a1, a2], got {len(c.initial)}")
+        for k, x in enumerate(c.initial):
+            if not 1e-12 <= x <= 1e12:
+                raise ValueError(f"controller.initial[{k}]: must be between 1e-12 and 1e12 ({UNITS[k]}): positive "
+                                 f"coefficients are a stable starting loop, got {x:g}")
 
 
 def _nominal(spec: Any, plant: Any) -> Any:
@@ -252,7 +355,12 @@ def _nominal(spec: Any, plant: Any) -> Any:
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
-    """The MRAC a spec asks for (module docstring), on the nominal link."""
+    """The MRAC a spec asks for (module docstring), on the nominal link; the feedforward/feedback structure by
+    :func:`designkit.families.mrac.regressor_design.synthesize`."""
+    if structure_of(spec) == "feedforward_feedback":
+        from designkit.families.mrac.regressor_design import synthesize as synthesize_regressor
+
+        return synthesize_regressor(spec, plant)
     c = spec.controller
     nominal = _nominal(spec, plant)
     notes = []
@@ -331,16 +439,31 @@ def design(nominal: Any, model: ReferenceModel, gamma: tuple[float, float], Q: l
 
 def law(design: Design, anti_windup: Any = None) -> Any:
     """The adaptive law of ``design`` (its reference model, gains and initial parameters from ``design.data``)."""
-    x: MracData = design.data
+    x = design.data
+    if isinstance(x, RegressorData):
+        from designkit.families.mrac.regressor_law import regressor_law
+
+        return regressor_law(design.plant, x.structure, x.rule, x.gamma, x.initial, x.normalization)
     return mrac_law.adaptive_law(design.plant, ReferenceModel(x.reference_model.a), x.gamma,
                                  [list(r) for r in x.Q], x.initial, x.modification)
+
+
+def _law_of(design: Any) -> tuple[str, ...]:
+    from designkit.families.mrac.regressor_design import law_lines
+
+    return law_lines(design.data) if isinstance(getattr(design, "data", None), RegressorData) else ()
+
+
+def _loop_of(design: Any) -> str | None:
+    return "" if isinstance(getattr(design, "data", None), RegressorData) else None
 
 
 def _family() -> Family:
     from designkit.families.mrac import answers, checks, figures, knobs, report
 
     return Family(
-        kind=KIND, spec=MracSpec, plants=("link",), reference="step", synthesize=synthesize, law=law,
+        kind=KIND, spec=MracSpec, plants=("link", "transfer_function", "state_space"), reference="step",
+        synthesize=synthesize, law=law,
         uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
         checks=("pole_placement", "lyapunov", "frozen_final", "robustness", "loop_margins", "designed_loop",
                 "time_domain", *checks.RULES),
@@ -351,6 +474,7 @@ def _family() -> Family:
                  "S' = (∂f_m/∂y) S + ∂f_m/∂a,  S = ∂ym/∂a  (sensitivity model, CasADi Jacobians)",
                  "α' = Γ Sᵀ Q e,  e = ym − x  (gradient rule, ∂e/∂α ≈ −∂ym/∂a)"),
             loop_transfer="L(s) = Km (K2 s + K1) / (s (τ s + 1))  (adaptation frozen)",
+            law_of=_law_of, loop_transfer_of=_loop_of,
             summary="Notes §4.2 and the MRAC simulator: a PD position servo whose closed-loop coefficients are "
                     "adjusted by the gradient rule so that the link follows a reference model."),
         validate=validate, references=("step", "square", "prbs"),

@@ -7,6 +7,7 @@ from typing import Any
 
 from designkit.display.numbers import fmt_number, fmt_poles
 from designkit.families.mrac.checks import mismatch_reasons
+from designkit.families.mrac.data import RegressorData
 from designkit.families.mrac.model import ReferenceModel
 from designkit.families.mrac.modification import describe
 
@@ -35,6 +36,12 @@ def how(result: Any) -> tuple[str, ...]:
     if result.simulation is None:
         return ()
     d = result.design
+    if isinstance(d.data, RegressorData):
+        a = json(result)["adaptation"]
+        return (f"The {a['rule']} rule moves θ = ({', '.join(a['parameters'])}) from {_vector(a['initial'])} to "
+                f"{_vector(a['final'])}, against {_vector(a['matching'])} that make the nominal loop the reference "
+                f"model; its output error is {fmt_number(a['error_rms']['adaptive'], 3)} RMS, against "
+                f"{fmt_number(a['error_rms']['fixed'], 3)} with the parameters frozen at their initial values.",)
     plant = result.plant if result.plant is not None else d.plant
     reasons = mismatch_reasons(d, result.loaded.spec, plant)
     a = json(result)["adaptation"]
@@ -52,6 +59,11 @@ def strategy(result: Any) -> tuple[str, ...]:
     """The law, the adaptation and its gains, in continuous time; the reference model's poles (1/s)."""
     d = result.design
     x = d.data
+    if isinstance(x, RegressorData):
+        return (f"A model-reference controller u = θᵀω (feedforward of the command, feedback of the output) whose "
+                f"{len(x.gamma)} parameters follow the {x.rule} rule in continuous time: a direct scheme, which "
+                "adjusts the controller from the output error against a reference model without estimating the "
+                "plant.",)
     gamma = x.gamma
     gammas = _gain(gamma[0]) if gamma[0] == gamma[1] else f"({_gain(gamma[0])}, {_gain(gamma[1])})"
     poles = fmt_poles(ReferenceModel(x.reference_model.a).poles)

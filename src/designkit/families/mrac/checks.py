@@ -31,7 +31,9 @@ from typing import Any
 
 import numpy as np
 
+from designkit.families.mrac import regressor_checks
 from designkit.families.mrac.boundary import GammaRun, floquet_boundary, frozen_signal_bound, gamma_boundary
+from designkit.families.mrac.data import RegressorData
 from designkit.families.mrac.laws import KIND
 from designkit.families.mrac.runs import (
     adapted,
@@ -110,7 +112,13 @@ def fixed_comparison(design: Any, ctx: Context) -> dict[str, Any]:
             "e_fixed": ym_f - np.asarray(fixed.state, dtype=float)[:, pos], "time_fixed": tf}
 
 
+def _regressor(design: Any) -> bool:
+    return isinstance(design.data, RegressorData)
+
+
 def _adaptation_error(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if _regressor(design):
+        return regressor_checks.adaptation_error(design, ctx)
     sim = ctx.simulation
     cmp = fixed_comparison(design, ctx)
     ea, ef = cmp["e_adaptive"], cmp["e_fixed"]
@@ -156,6 +164,8 @@ def _json(x: float) -> float | None:
 
 
 def _convergence(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if _regressor(design):
+        return regressor_checks.convergence(design, ctx, CONVERGED_REL, EFOLDS)
     sim, spec = ctx.simulation, ctx.spec
     plant = ctx.true_plant(design)
     link = final_link(spec, plant)
@@ -208,6 +218,8 @@ def _list(v: np.ndarray) -> list[float | None]:
 
 
 def _stability(design: Any, ctx: Context) -> tuple[Check, ...]:
+    if _regressor(design):
+        return regressor_checks.stability(design, ctx)
     sim, spec = ctx.simulation, ctx.spec
     a = assess(sim, spec)
     cert: dict[str, Any] = {"finite": a.finite, "peak_error": _json(a.peak), "bound": a.bound, "growth": a.growth,

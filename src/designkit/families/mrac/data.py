@@ -7,9 +7,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from designkit.families.mrac.model import ReferenceModel
+from designkit.families.mrac.structure import Structure
 from designkit.synthesis.design import FamilyData
 
-__all__ = ["MracData"]
+__all__ = ["MracData", "RegressorData"]
 
 
 @dataclass(frozen=True)
@@ -47,3 +48,33 @@ class MracData(FamilyData):
     def nominal(self) -> tuple[float, float]:
         """``(Km, tau)`` of the nominal link ((rad/s)/(N*m), s)."""
         return self.nominal_Km, self.nominal_tau
+
+
+@dataclass(frozen=True)
+class RegressorData(FamilyData):
+    """The feedforward/feedback MRAC's design data (:mod:`designkit.families.mrac.structure`).
+
+    Attributes
+    ----------
+    structure : Structure
+        The nominal plant, the reference model, the filter ``Lambda`` and the ideal parameters.
+    rule : str
+        ``"mit"``, ``"lyapunov"`` or ``"normalized"``.
+    gamma : tuple of float
+        One adaptation gain per parameter (1/(s * unit(e) * unit(phi_i))).
+    initial : tuple of float
+        The parameters at ``t = 0`` (the unit of ``u`` per the unit of their regressor entry).
+    normalization : float
+        ``alpha0`` of the normalized rule (the unit of ``phi' phi``).
+    """
+
+    structure: Structure
+    rule: str
+    gamma: tuple[float, ...]
+    initial: tuple[float, ...]
+    normalization: float = 1.0
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The adapted parameters' names."""
+        return self.structure.names

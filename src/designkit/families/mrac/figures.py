@@ -25,6 +25,7 @@ from designkit.display.figure import (
 from designkit.display.svg import BLUE, GREEN, GREY, ORANGE, PURPLE, RED, new_figure, plot_decimated, render_tagged, tag
 from designkit.families.mrac.boundary import GammaRun
 from designkit.families.mrac.model import PARAMETERS, UNITS
+from designkit.families.mrac.regressor_figures import regressor_figure
 from designkit.families.mrac.runs import adapted, assess, final_link, matching
 
 __all__ = ["FIGURES", "gamma_figure", "outputs_figure", "parameters_figure"]
@@ -110,7 +111,7 @@ def _limits(signals: Sequence[np.ndarray], margin: float = 0.25) -> tuple[float,
 def outputs_figure(result: Any) -> Figure | None:
     """The link against the reference model's output, with adaptation and with the gains frozen at their initial
     values (top), and the two output errors (bottom)."""
-    if result.simulation is None or "ym" not in result.simulation.signals:
+    if result.simulation is None or "ym" not in result.simulation.signals or "a1" not in result.simulation.signals:
         return None
     svg, keys, info = render_tagged(_draw_outputs, result)
     parts = []
@@ -289,5 +290,5 @@ def gamma_figure(result: Any) -> Figure | None:
                   _present(result, ("adaptive_stability",)))
 
 
-FIGURES = (outputs_figure, parameters_figure, gamma_figure)
+FIGURES = (outputs_figure, parameters_figure, gamma_figure, regressor_figure)
 """The family's figures, in report order."""

@@ -16,6 +16,7 @@ import numpy as np
 from designkit.display.numbers import fmt_number, fmt_poles
 from designkit.display.section import Question, ReportSection, Table
 from designkit.families.mrac.checks import fixed_comparison
+from designkit.families.mrac.data import RegressorData
 from designkit.families.mrac.model import PARAMETERS, UNITS, ReferenceModel, coefficients_of, gains_of
 from designkit.families.mrac.modification import describe
 from designkit.families.mrac.runs import adapted, final_link, matching, rms
@@ -33,6 +34,8 @@ def json(result: Any) -> dict[str, Any]:
     output error ``ym - x1`` (rad) over the run with adaptation and with the gains frozen at their initial values
     (same scenario); non-finite values are ``null``."""
     d, sim = result.design, result.simulation
+    if isinstance(d.data, RegressorData):
+        return {"adaptation": regressor_json(result)}
     out: dict[str, Any] = {"parameters": list(PARAMETERS), "units": list(UNITS),
                            "initial": [float(v) for v in d.linearization.initial]}
     if sim is None:
@@ -48,6 +51,30 @@ def json(result: Any) -> dict[str, Any]:
     out.update(final=[_num(v) for v in final], matching=list(matching(d, final_link(result.loaded.spec, plant))),
                error_rms={"adaptive": _num(err["adaptive"]), "fixed": _num(err["fixed"])})
     return {"adaptation": out}
+
+
+def regressor_json(result: Any) -> dict[str, Any]:
+    """The feedforward/feedback structure's ``adaptation``: ``{structure, rule, parameters, initial, final,
+    matching, error_rms}``; ``matching`` the ideal parameters of the nominal plant, ``matching_final`` those of the
+    plant the run ends with (after a ``plant_change``)."""
+    from designkit.families.mrac.regressor_checks import adaptation_error, final_ideal
+
+    d, sim = result.design, result.simulation
+    x = d.data
+    out: dict[str, Any] = {"structure": "feedforward_feedback", "rule": x.rule, "parameters": list(x.parameters),
+                           "initial": list(x.initial), "matching": list(x.structure.ideal)}
+    if sim is None:
+        return {**out, "final": None, "matching_final": None, "error_rms": None}
+    plant = result.plant if result.plant is not None else d.plant
+    check = next((c for c in result.checks if c.name == "adaptation_error"), None)
+    if check is None:
+        check = adaptation_error(d, context(result))[0]
+    err = check.certificate["error_rms"]
+    final_want = final_ideal(d, result.loaded.spec, plant)
+    out.update(final=[_num(float(np.asarray(sim.signals[n])[-1])) for n in x.parameters],
+               matching_final=list(final_want) if final_want is not None else None,
+               error_rms={"adaptive": _num(err["adaptive"]), "fixed": _num(err["fixed"])})
+    return out
 
 
 def _f(x: float | None, digits: int = 3) -> str:

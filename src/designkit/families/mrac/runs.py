@@ -142,7 +142,7 @@ def last_event(spec: Any, duration: float) -> float:
 def swing(sim: Any) -> float:
     """Extent of the reference positions, the position before the motion included (rad)."""
     r = np.asarray(sim.reference, dtype=float)[:, 0, 0]
-    before = float(sim.settings["initial_state"]["x1"])
+    before = float(np.asarray(sim.state, dtype=float)[0, sim.positions[0]])  # where the run starts
     return float(max(r.max(), before) - min(r.min(), before))
 
 
@@ -207,16 +207,19 @@ class Assessment:
     reason: str
 
 
-def assess(sim: Any, spec: Any) -> Assessment:
-    """Is the adaptive run ``sim`` (in the scenario of ``spec``) bounded?  See the module docstring."""
+def assess(sim: Any, spec: Any, parameters: np.ndarray | None = None, size: float = 0.0) -> Assessment:
+    """Is the adaptive run ``sim`` (in the scenario of ``spec``) bounded?  See the module docstring.
+
+    ``parameters`` (N x p) are the adapted parameters along the run (default the coefficient form's ``a1, a2``);
+    they have drifted beyond :data:`PARAMETER_FACTOR` times the larger of their initial size and ``size``."""
     t = np.asarray(sim.time, dtype=float)
     e = np.asarray(sim.signals["e"], dtype=float)
     states = np.hstack([np.asarray(sim.state, dtype=float), np.asarray(sim.controller_state, dtype=float)])
     bound = BOUND_FACTOR * max(swing(sim), 1e-12)
     not_finite = ~np.all(np.isfinite(states), axis=1) | ~np.isfinite(e)
     beyond = np.abs(np.where(np.isfinite(e), e, 0.0)) > bound
-    alpha = adapted(sim)
-    limit = PARAMETER_FACTOR * max(float(np.max(np.abs(alpha[0]))), 1e-12)
+    alpha = adapted(sim) if parameters is None else np.asarray(parameters, dtype=float)
+    limit = PARAMETER_FACTOR * max(float(np.max(np.abs(alpha[0]))), float(size), 1e-12)
     drifted = np.max(np.abs(np.where(np.isfinite(alpha), alpha, 0.0)), axis=1) > limit
     finite = bool(not not_finite.any() and "integrator_failure" not in sim.settings)
     first = np.flatnonzero(not_finite | beyond | drifted)

@@ -28,6 +28,7 @@ from designkit.families.mrac.boundary import (
     gamma_boundary,
 )
 from designkit.families.mrac.checks import fixed_comparison
+from designkit.families.mrac.data import RegressorData
 from designkit.families.mrac.laws import fixed_law
 from designkit.families.mrac.model import ReferenceModel, matching_parameters
 from designkit.families.mrac.runs import (
@@ -264,6 +265,8 @@ def _main_fixed(result: Any, r: _Runner) -> dict[str, np.ndarray]:
 def study(result: Any) -> Study | None:
     """The re-simulated experiment of ``result`` (module docstring), cached; None without a simulation."""
     if result.simulation is None or result.design.linearization.kind != "frozen":
+        return None
+    if isinstance(result.design.data, RegressorData):  # the study varies the coefficient form's settings
         return None
     if result in _CACHE:
         return _CACHE[result]

@@ -25,7 +25,9 @@ def _draw_bode(data: Any) -> Any:
         color = JOINT_COLORS[k % len(JOINT_COLORS)]
         phase = np.degrees(np.unwrap(np.angle(resp)))
         phase -= 360.0 * math.ceil(phase[0] / 360.0)
-        tag(fig, "loop-gain", *ax_m.semilogx(w, 20.0 * np.log10(np.abs(resp)), color=color,
+        mag = np.abs(resp)
+        db = 20.0 * np.log10(np.where(mag > 0, mag, np.nan))  # a zero loop gain (a loop frozen at zero) is not drawn
+        tag(fig, "loop-gain", *ax_m.semilogx(w, db, color=color,
                                              label=f"L at {ch['input']}"))
         tag(fig, "loop-phase", *ax_p.semilogx(w, phase, color=color))
         if math.isfinite(m.w_gain_crossover):
