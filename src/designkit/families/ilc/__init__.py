@@ -31,7 +31,7 @@ from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
-from pydantic import Field, ValidationInfo, field_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
@@ -39,6 +39,7 @@ from designkit.families.ilc.figures import error_norm_figure, learned_figure, tr
 from designkit.families.ilc.knobs import KNOBS, METRICS
 from designkit.families.ilc.learning import IlcData, check_size, lifted_of, operator_of, trial_grid, update_rule
 from designkit.families.ilc.lifted import lifted_model
+from designkit.families.ilc.linear import LINEAR_PLANTS, synthesize_linear, validate_linear
 from designkit.families.ilc.operators import contraction, learning_operator
 from designkit.simulation.trials import MAX_TRIALS, Learning
 from designkit.spec.computed_torque import PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
@@ -57,28 +58,48 @@ KIND = "ilc"
 class LearningSpec(Section):
     """The learning operator ``Q`` of ``d_{k+1} = d_k + Q e_k``.
 
-    ``kind: adjoint`` (default): ``Q = alpha H^T``, ``alpha`` (1/s^4, 1e-12 to 1e30; left out: ``1 /
-    sigma_max(H)^2``).  ``kind: p_type``: ``d_{k+1}(t_i) = d_k(t_i) + gain e_k(t_{i+1})``, ``gain`` (1/s^2,
-    1e-12 to 1e30) required.
+    ``kind: adjoint`` (default): ``Q = alpha H^T``, ``alpha`` (1/s^4 on a robot, ``(input/output)^2`` on a linear
+    plant; 1e-12 to 1e30; left out: ``1 / sigma_max(H)^2``).  ``kind: p_type``: ``d_{k+1}(t_i) = d_k(t_i) + gain
+    e_k(t_{i+r})`` (``r`` the relative degree in samples), ``gain`` (1/s^2 on a robot, input per output unit on a
+    linear plant; 1e-12 to 1e30) required.  ``kind: filter``: ``d_{k+1} = d_k + F(z) e_k(. + r)``, ``F`` a causal
+    filter ``num``/``den`` (coefficients of ``z^0, z^-1, ...``, each within 1e12, at most 20 of each; ``num[0]``
+    and ``den[0]`` nonzero), required.
     """
 
-    kind: Literal["adjoint", "p_type"] = "adjoint"
+    kind: Literal["adjoint", "p_type", "filter"] = "adjoint"
     alpha: Ranged(1e-12, 1e30, "1/s^4", base=Finite) | None = None
     gain: Ranged(1e-12, 1e30, "1/s^2", base=Finite) | None = Field(default=None, validate_default=True)
+    num: list[Ranged(-1e12, 1e12, "", base=Finite)] | None = Field(default=None, min_length=1, max_length=20)
+    den: list[Ranged(-1e12, 1e12, "", base=Finite)] = Field(default_factory=lambda: [1.0], min_length=1,
+                                                           max_length=20)
+
+    @model_validator(mode="after")
+    def _filter(self) -> LearningSpec:
+        if self.kind == "filter":
+            if self.num is None:
+                raise ValueError("num: the filter update needs the filter's numerator (coefficients of z^0, z^-1, ...)")
+            if self.num[0] == 0:
+                raise ValueError("num: num[0] must be nonzero (F's first coefficient sets the spectral radius "
+                                 "|1 - F_0 h_0|; with 0 the learning never converges)")
+            if self.den[0] == 0:
+                raise ValueError("den: den[0] must be nonzero (a causal filter)")
+        elif self.num is not None or self.den != [1.0]:
+            raise ValueError("num: num and den belong to the filter update (kind: filter)")
+        return self
 
     @field_validator("alpha")
     @classmethod
     def _alpha_is_adjoint(cls, v: float | None, info: ValidationInfo) -> float | None:
-        if v is not None and info.data.get("kind") == "p_type":
-            raise ValueError("belongs to the adjoint update (kind: adjoint); the p_type update takes gain")
+        if v is not None and info.data.get("kind") in ("p_type", "filter"):
+            raise ValueError("belongs to the adjoint update (kind: adjoint)")
         return v
 
     @field_validator("gain")
     @classmethod
     def _gain_is_p_type(cls, v: float | None, info: ValidationInfo) -> float | None:
         kind = info.data.get("kind")
-        if v is not None and kind == "adjoint":
-            raise ValueError("belongs to the p_type update (kind: p_type); the adjoint update takes alpha")
+        if v is not None and kind in ("adjoint", "filter"):
+            raise ValueError(f"belongs to the p_type update (kind: p_type); the {kind} update does not take it")
         if v is None and kind == "p_type":
             raise ValueError("the p_type update needs a gain (1/s^2)")
         return v
@@ -94,6 +115,13 @@ class ILCSpec(ComputedTorqueSpec):
     kind: Literal[KIND]
     trials: RangedInt(1, MAX_TRIALS) = 10
     learning: LearningSpec = Field(default_factory=LearningSpec)
+
+    @model_validator(mode="after")
+    def _one_way(self) -> ILCSpec:
+        # on a linear plant there is no feedback: no poles at all is allowed here, and a robot refuses it later
+        if self.poles is None and self.damping is None and self.natural_frequency is None:
+            return self
+        return self.check_one_way()
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -115,6 +143,16 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 
 def validate(spec: Any) -> None:
     """The lifted model is the smooth, continuous, undelayed loop's: refuse what changes its structure."""
+    if spec.plant.kind in LINEAR_PLANTS:
+        validate_linear(spec)
+        return
+    ctrl = spec.controller
+    if ctrl.poles is None and ctrl.damping is None and ctrl.natural_frequency is None:
+        raise ValueError("controller.poles: computed torque on a robot needs its error poles: give either poles, or "
+                         "damping and natural_frequency")
+    if ctrl.learning.kind == "filter":
+        raise ValueError("controller.learning.kind: the filter update runs on a transfer_function or state_space "
+                         "plant; on a robot use adjoint or p_type")
     sim = spec.simulation
     if sim.delay > 0:
         raise ValueError("simulation.delay: the learning's lifted model has no delay (a delay of m steps makes the "
@@ -132,9 +170,12 @@ def validate(spec: Any) -> None:
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
-    """The computed-torque gains, the trial's grid and lifted model, and the learning operator and rule."""
+    """The computed-torque gains, the trial's grid and lifted model, and the learning operator and rule (on a linear
+    plant: its sampled model, :func:`~designkit.families.ilc.linear.synthesize_linear`)."""
     ctrl = spec.controller
     model = controller_model(plant, ctrl.model)
+    if plant.kind in LINEAR_PLANTS:
+        return synthesize_linear(spec, plant, model, KIND)
     n = model.n_joints
     pairs = error_poles(spec, n)
     K1, K2 = error_gains(pairs)
@@ -204,8 +245,8 @@ def _json(result: Any) -> dict[str, Any]:
 FAMILY = Family(
     kind=KIND,
     spec=ILCSpec,
-    plants=("robot",),
-    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
+    plants=("robot", *LINEAR_PLANTS),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples", "plant.dt"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,
@@ -219,7 +260,7 @@ FAMILY = Family(
                 "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1.",
     ),
     validate=validate,
-    references=TRAJECTORY_REFERENCES,
+    references=(*TRAJECTORY_REFERENCES, "multisine"),
     figures=(error_norm_figure, tracking_error_figure, learned_figure),
     diagnoses=(diagnose,),
     json=_json,

@@ -29,6 +29,10 @@ def _converging(c: Any, lifted: Any) -> str:
                 f"{r['alpha_max_proved']:.4g}), e.g. {r['alpha_one_trial']:.4g} = 1/σ_max(H)², or leave it out "
                 "to get that value")
     alpha = 1.0 / max(s.estimate for s in lifted.sigma_max) ** 2
+    if lifted.integrator in ("zoh", "discrete"):
+        return (f"switch to controller.learning: {{kind: adjoint}} (α = 1/σ_max(H)² = {alpha:.4g} is computed), the "
+                "update with a monotone certificate for every plant, or lower the gain until ρ < 1 (this plant's "
+                "symbol decides whether any P-type gain has one)")
     return (f"switch to controller.learning: {{kind: adjoint}} (α = 1/σ_max(H)² = {alpha:.4g} 1/s⁴ is computed), "
             "the update with a monotone certificate; no P-type gain has one")
 

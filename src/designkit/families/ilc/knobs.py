@@ -60,7 +60,8 @@ KNOBS = (
     Knob("gain", "1/s^2", "learning gain of the P-type update", 1e-12, 1e30,
          path="controller.learning.gain", role="learning", boundary=True,
          search=lambda d: _window(_p_scale(d)), when=lambda d: _learning(d) == "p_type"),
-    Knob("poles", "1/s", "error poles of the computed-torque feedback", 1e-3, 1e5, path="controller.poles"),
+    Knob("poles", "1/s", "error poles of the computed-torque feedback", 1e-3, 1e5, path="controller.poles",
+         when=lambda d: d.data.sampled is None),
 )
 """The learning design's knobs (its learning gain, with the boundary, and the feedback's speed)."""
 

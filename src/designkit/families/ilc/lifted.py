@@ -35,11 +35,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
+from typing import Any
 
 import numpy as np
 
 __all__ = ["MAX_LIFTED", "MAX_TRIAL_SAMPLES", "LiftedModel", "Norm", "discretization", "lifted_model",
-           "markov_parameters", "symbol_bound", "top_singular"]
+           "markov_parameters", "sampled_lifted", "symbol_bound", "top_singular"]
 
 MAX_LIFTED = 50_000
 """Most lifted unknowns ``N n`` (samples per trial times joints) a design may ask for: 25 s at 1 kHz on a
@@ -166,54 +167,86 @@ def top_singular(matvec, rmatvec, L: int, upper: float, slack: float = 0.0) -> N
     return Norm(float(s[0]), value, lower, max(upper, lower), slack)
 
 
+def _transfer_of(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...],
+                                                                           int]:
+    """``(b, a, s)`` of a sampled single-input single-output system ``x_(i+1) = Phi x_i + Gamma u_i``, ``y_i = C x_i``:
+    ``s`` leading Markov parameters ``C Phi^m Gamma`` vanish (relative degree ``s + 1`` in steps), and ``sum_m C
+    Phi^(m+s) Gamma z^-m = b(z^-1) / a(z^-1)`` with ``a`` the characteristic polynomial of ``Phi``."""
+    n = Phi.shape[0]
+    a = np.real(np.poly(Phi)) if n else np.array([1.0])
+    h, x = np.empty(n + 1), np.asarray(Gamma, dtype=float).reshape(-1)
+    for m in range(n + 1):
+        h[m] = float(C @ x)
+        x = Phi @ x
+    scale = float(np.max(np.abs(h))) if np.any(h != 0) else 0.0
+    if scale == 0.0:
+        raise ValueError("the input does not reach the output (every Markov parameter C Phi^m Gamma is zero)")
+    s = int(np.flatnonzero(np.abs(h) > RELATIVE_DEGREE_TOL * scale)[0])
+    b = np.convolve(a, h)[:n]  # C (zI - Phi)^-1 Gamma = z^-1 b(z^-1) / a(z^-1): b_k = sum_j a_j h_(k-j), k < n
+    b = b[s:]
+    b = b[:max(1, len(b) - int(np.argmax(np.abs(b[::-1]) > 0)))] if np.any(b != 0) else b[:1]
+    return tuple(float(v) for v in b), tuple(float(v) for v in a), s
+
+
+RELATIVE_DEGREE_TOL = 1e-12
+"""A Markov parameter below this fraction of the largest of the first ``n + 1`` counts as zero when the relative
+degree of a sampled linear plant is read from them (a state-space model whose ``C B`` vanishes structurally)."""
+
+
 @dataclass(frozen=True)
 class LiftedModel:
-    """The lifted error system of every joint over one trial (module docstring).
+    """The lifted error system of every channel (joint) over one trial (module docstring).
 
     Parameters
     ----------
-    K1, K2 : tuple of float
-        Error gains per joint (1/s^2, 1/s).
+    systems : tuple of (b, a)
+        Per channel, the shifted sampled transfer function ``sum_m h_m z^-m = b(z^-1)/a(z^-1)`` (``b[0] = h_0 !=
+        0``), coefficients in powers of ``z^-1``.
     dt : float
-        Integration step (s).
+        The trial's sample period (s).
     samples : int
-        Recorded instants ``N`` of a trial; the lifted size per joint is ``L = N - 1``.
+        Recorded instants ``N`` of a trial; the lifted size per channel is ``L = N - shift``.
     integrator : str
-        ``"rk4"`` or ``"cvodes"`` (:func:`discretization`).
+        How the sampled system was obtained: ``"rk4"`` or ``"cvodes"`` (:func:`discretization`), ``"zoh"`` (a
+        continuous linear plant under a zero-order hold), ``"discrete"`` (a discrete-time plant as given).
+    shift : int
+        The relative degree in samples: the input at ``t_i`` first moves the output at ``t_(i+shift)``.
     """
 
-    K1: tuple[float, ...]
-    K2: tuple[float, ...]
+    systems: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...]
     dt: float
     samples: int
     integrator: str = "rk4"
+    shift: int = 1
 
     @property
     def n(self) -> int:
-        """Number of joints."""
-        return len(self.K1)
+        """Number of channels (joints)."""
+        return len(self.systems)
 
     @property
     def L(self) -> int:
-        """Lifted samples per joint, ``N - 1``."""
-        return self.samples - 1
+        """Lifted samples per channel, ``N - shift``."""
+        return self.samples - self.shift
 
-    @cached_property
-    def steps(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        """``(Phi, Gamma)`` of every joint."""
-        return tuple(discretization(k1, k2, self.dt, self.integrator) for k1, k2 in zip(self.K1, self.K2,
-                                                                                         strict=True))
+    def _series(self, j: int, inverse: bool) -> np.ndarray:
+        from scipy.signal import lfilter
+
+        b, a = (np.asarray(c, dtype=float) for c in self.systems[j])
+        impulse = np.zeros(self.L)
+        impulse[0] = 1.0
+        return lfilter(a, b, impulse) if inverse else lfilter(b, a, impulse)
 
     @cached_property
     def markov(self) -> np.ndarray:
-        """Shifted Markov parameters ``(n, L)``: ``markov[j, m] = d e_{i+m+1} / d v_i`` of joint ``j`` (s^2)."""
-        return np.array([markov_parameters(P, G, self.L) for P, G in self.steps])
+        """Shifted Markov parameters ``(n, L)``: ``markov[j, m] = d y_(i+m+shift) / d u_i`` of channel ``j``."""
+        return np.array([self._series(j, False) for j in range(self.n)])
 
     @cached_property
     def inverse_markov(self) -> np.ndarray:
-        """Coefficients ``(n, L)`` of ``H^-1`` per joint (1/s^2)."""
+        """Coefficients ``(n, L)`` of ``H^-1`` per channel (the power series of ``a/b``)."""
         with np.errstate(over="ignore", invalid="ignore"):
-            return np.array([markov_parameters(P, G, self.L, inverse=True) for P, G in self.steps])
+            return np.array([self._series(j, True) for j in range(self.n)])
 
     @cached_property
     def _spectra(self) -> tuple[int, np.ndarray, np.ndarray]:
@@ -247,10 +280,10 @@ class LiftedModel:
 
         return mv, (lambda x: mv(x[::-1])[::-1])
 
-    def _unique(self) -> dict[tuple[float, float], int]:
-        """One joint index per distinct pair of gains (identical joints share their norms)."""
-        out: dict[tuple[float, float], int] = {}
-        for j, key in enumerate(zip(self.K1, self.K2, strict=True)):
+    def _unique(self) -> dict[Any, int]:
+        """One channel index per distinct system (identical joints share their norms)."""
+        out: dict[Any, int] = {}
+        for j, key in enumerate(self.systems):
             out.setdefault(key, j)
         return out
 
@@ -263,7 +296,7 @@ class LiftedModel:
             sym, slack = symbol_bound(h)
             l1 = float(np.sum(np.abs(h)))
             found[key] = top_singular(*self._joint(j, "H"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
-        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+        return tuple(found[key] for key in self.systems)
 
     @cached_property
     def sigma_min(self) -> tuple[Norm, ...]:
@@ -280,17 +313,39 @@ class LiftedModel:
             inv = top_singular(*self._joint(j, "inverse"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
             found[key] = Norm(1.0 / inv.estimate, 1.0 / inv.power, 1.0 / inv.upper, 1.0 / inv.lower,
                               inv.slack)
-        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+        return tuple(found[key] for key in self.systems)
 
     def zeros(self, j: int = 0) -> np.ndarray:
-        """Zeros of joint ``j``'s shifted transfer function ``z H(z)`` (0 and the sampling zero near -1)."""
-        b, _ = _transfer(*self.steps[j])
-        return np.array([0.0, -b[1] / b[0]])
+        """Finite nonzero zeros of channel ``j``'s shifted transfer function ``b(z^-1)/a(z^-1)`` (on the robot: the
+        sampling zero near -1)."""
+        b = np.asarray(self.systems[j][0], dtype=float)
+        return np.roots(b) if b.size > 1 else np.zeros(0)
 
 
 @lru_cache(maxsize=32)
 def lifted_model(K1: tuple[float, ...], K2: tuple[float, ...], dt: float, samples: int,
                  integrator: str = "rk4") -> LiftedModel:
     """The :class:`LiftedModel` of these gains and grid, shared by the update, the checks and the figures."""
-    return LiftedModel(tuple(float(k) for k in K1), tuple(float(k) for k in K2), float(dt), int(samples),
-                       integrator)
+    systems = []
+    for k1, k2 in zip(K1, K2, strict=True):
+        b, a = _transfer(*discretization(float(k1), float(k2), float(dt), integrator))
+        systems.append((tuple(float(v) for v in b), tuple(float(v) for v in a)))
+    return LiftedModel(tuple(systems), float(dt), int(samples), integrator)
+
+
+@lru_cache(maxsize=32)
+def sampled_lifted(Phi: tuple[tuple[float, ...], ...], Gamma: tuple[float, ...], C: tuple[float, ...], dt: float,
+                   samples: int, integrator: str) -> LiftedModel:
+    """The :class:`LiftedModel` of a sampled single-input single-output plant ``x_(i+1) = Phi x_i + Gamma u_i``,
+    ``y_i = C x_i`` over ``samples`` instants (its shift the relative degree read from the Markov parameters).
+
+    Raises
+    ------
+    ValueError
+        When the input reaches no output sample within the trial.
+    """
+    b, a, s = _transfer_of(np.array(Phi, dtype=float), np.array(Gamma, dtype=float), np.array(C, dtype=float))
+    if samples - 1 - s < 1:
+        raise ValueError(f"the input first moves the output {s + 1} samples later; a trial of {samples} samples "
+                         "leaves nothing to learn")
+    return LiftedModel(((b, a),), float(dt), int(samples), integrator, shift=s + 1)
