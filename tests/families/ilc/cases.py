@@ -33,7 +33,9 @@ CONFORMANCE = {
 """Canonical plant -> (controller, simulation, requirements) of the conformance suite (tests/problems.py)."""
 
 EXAMPLES = {
-    "ilc-simnog": 0,
+    "ilc-simnog": 1,  # rho = 1 - 4.5e-13 < 1, within 1e-9 of the boundary: ilc_convergence UNDECIDED
+    "ilc-moore-monotone": 0,
+    "ilc-moore-asymptotic": 1,  # spectral radius 0.5 but ||I - 1.5 H||_2 = 1.149 > 1: the error norm grows for trials
     "ilc-simnog-diverging": 1,  # rho = ||I - QH|| = 1.47 > 1: the error norm grows trial after trial
 }
 """Example spec -> the exit code of ``designkit synth`` (tests/test_cli.py)."""

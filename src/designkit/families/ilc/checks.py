@@ -103,7 +103,8 @@ def _certificate_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         detail = (f"the two routes to the norms disagree by {diff:.2g} (relative, more than {RECHECK_REL:g}): ρ is "
                   f"not decided ({words['rho']})")
     else:
-        detail = (f"ρ lies between {c.lower:.10g} and {c.upper:.10g}: {verdict.explanation}, not decided; "
+        detail = (f"ρ lies between {near_one(c.lower, -c.excess)} and {near_one(c.upper, c.margin)}: "
+                  f"{verdict.explanation}, not decided; "
                   + words["range"])
     cert["verdict_reason"] = verdict.reason
     cert["boundary_tolerance"] = verdict.tolerance
