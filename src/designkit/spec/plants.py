@@ -302,7 +302,8 @@ class TransferFunctionPlantSpec(_LinearPlantSpec):
     ``parameters`` (``"Km"``, ``"2*a"``, ``"-(a + 1)/tau"``); no leading zero; ``len(num) < len(den)``, the
     denominator of degree 1 to 20.  ``input``, ``output`` name the signals (default ``u``, ``y``); ``units`` gives
     units by name (the output ``rad``, the input and parameters ``1`` by default).  ``dt`` (s, 1e-9 to 1e6) makes it
-    discrete-time: ``num(z)/den(z)``, highest power of ``z`` first, ``dt`` the sample period.  Realised in observability canonical form, ``y = x1``
+    discrete-time: ``num(z)/den(z)``, highest power of ``z`` first, ``dt`` the sample period.  Realised in
+    observability canonical form, ``y = x1``
     (:mod:`designkit.models.linear_plant`).
     """
 

@@ -160,7 +160,7 @@ def test_a_norm_proved_above_one_fails_whatever_the_power_iteration_says():
     assert cert["recheck_relative_difference"] > RECHECK_REL  # the secondary route disagrees
     assert rho.passed is False and rho.status == "FAIL" and cert["verdict_reason"] == "proved_false"
     assert "does not weigh against the proved bound" in rho.detail
-    # the lower bound is below the true norm, computed densely
-    lifted = lifted_of(design)
-    H = sl.toeplitz(lifted.markov[0], np.zeros(lifted.L))
-    assert np.linalg.norm(np.eye(lifted.L) - 100.0 * H, 2) >= cert["rho_lower_bound"] * (1 - 1e-9)
+    # the lower bound is ||(I - gamma H) x|| of a unit vector: it is below the norm that a dense SVD of a shorter
+    # section of the same Toeplitz matrix already exceeds 1 by (its leading 400 x 400 block is a compression)
+    h = lifted_of(design).markov[0][:400]
+    assert np.linalg.norm(np.eye(400) - 100.0 * sl.toeplitz(h, np.zeros(400)), 2) > 1.0

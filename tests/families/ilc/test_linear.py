@@ -134,7 +134,8 @@ def test_the_filter_update_against_numpy():
      "simulation: {duration: 5, dt: 0.5}\n", "simulation.dt: 0.5 s differs from the discrete-time plant's"),
     ("plant: {kind: state_space, dt: 1.0, A: [[0.5]], B: [[1]], C: [[1]]}\ncontroller: {kind: ilc}\n"
      "simulation: {duration: 5, delay: 0.1}\n", "simulation.delay: the learning trials on a state_space plant"),
-    ("plant: {kind: robot, robot: planar2r}\ncontroller: {kind: ilc}\n", "controller.poles: computed torque on a robot"),
+    ("plant: {kind: robot, robot: planar2r}\ncontroller: {kind: ilc}\n",
+     "controller.poles: computed torque on a robot"),
     ("plant: {kind: state_space, dt: 1.0, A: [[0.5]], B: [[1]], C: [[1]]}\n"
      "controller: {kind: ilc, learning: {kind: filter, num: [0, 1]}}\nsimulation: {duration: 5}\n",
      "controller.learning.num: num[0] must be nonzero"),

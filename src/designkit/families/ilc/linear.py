@@ -53,8 +53,8 @@ def validate_linear(spec: Any) -> None:
                              "sampled difference equation from rest, input held over each sample; they do not run it")
     for name in ("poles", "damping", "natural_frequency"):
         if getattr(spec.controller, name) is not None:
-            raise ValueError(f"controller.{name}: on a {spec.plant.kind} plant the learned signal is the plant's input, "
-                             "played open loop; there is no computed-torque feedback whose error poles to give")
+            raise ValueError(f"controller.{name}: on a {spec.plant.kind} plant the learned signal is the plant's "
+                             "input, played open loop; there is no computed-torque feedback whose error poles to give")
     if spec.plant.uncertainty is not None:
         raise ValueError(f"plant.uncertainty: the learning on a {spec.plant.kind} plant is not judged over a "
                          "parameter box (its certificate is the controller's model's); leave it out")
@@ -86,8 +86,8 @@ def linear_grid(spec: Any, plant: Any) -> tuple[float, int, str]:
     if plant.dt is not None:
         dt = float(plant.dt)
         if sim.dt is not None and abs(float(sim.dt) - dt) > 1e-12 * dt:
-            raise SpecError("simulation.dt", f"{float(sim.dt):g} s differs from the discrete-time plant's sample period "
-                            f"plant.dt = {dt:g} s; leave it out")
+            raise SpecError("simulation.dt", f"{float(sim.dt):g} s differs from the discrete-time plant's sample "
+                            f"period plant.dt = {dt:g} s; leave it out")
         duration = float(sim.duration) if sim.duration is not None else float(ref.horizon)
         if not duration > 0:
             raise SpecError("simulation.duration", "a learning trial needs a duration (the reference has none)")
@@ -127,7 +127,8 @@ def synthesize_linear(spec: Any, plant: Any, model: Any, kind: str) -> Design:
     h_unit = ratio(y_unit, u_unit)
     filt = None
     if learning.kind == "adjoint":
-        name, unit, meaning = "alpha", (f"({ratio(u_unit, y_unit)})^2" if ratio(u_unit, y_unit) else ""), "learning gain of Q = alpha H^T"
+        per = ratio(u_unit, y_unit)
+        name, unit, meaning = "alpha", f"({per})^2" if per else "", "learning gain of Q = alpha H^T"
         if learning.alpha is not None:
             value, source = float(learning.alpha), "controller.learning.alpha"
         else:

@@ -72,7 +72,8 @@ class PType:
         return self.gain * np.asarray(E, dtype=float)
 
     def describe(self) -> str:
-        return f"d_(k+1)(t_i) = d_k(t_i) + γ e_k(t_(i+r)) with γ = {self.gain:.6g} (P-type, advance r = relative degree)"
+        return (f"d_(k+1)(t_i) = d_k(t_i) + γ e_k(t_(i+r)) with γ = {self.gain:.6g} (P-type, advance r = relative "
+                "degree)")
 
 
 @dataclass(frozen=True)
