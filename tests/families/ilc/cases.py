@@ -11,11 +11,20 @@ controller: {kind: ilc, poles: [-20, -20], trials: 3, learning: {kind: adjoint, 
 simulation: {duration: 1.0, trajectory: {kind: quintic, amplitude: [0.2, -0.1], duration: 0.8}}
 """
 P_TYPE = BASE.replace("{kind: adjoint, alpha: 1000.0}", "{kind: p_type, gain: 100.0}")
+LINEAR = """\
+name: ranges-ilc-linear
+plant: {kind: state_space, dt: 1.0, A: [[-0.8, -0.22], [1, 0]], B: [[0.5], [1]], C: [[1, 0.5]]}
+controller: {kind: ilc, trials: 3, learning: {kind: filter, num: [0.5, 0.1], den: [1.0, 0.2]}}
+simulation: {duration: 50, trajectory: {kind: sine, amplitude: 1.0, frequency: 0.02}}
+"""
 
 RANGES = {
     "controller.trials": [(BASE, "controller.trials", "controller.trials")],
     "controller.learning.alpha": [(BASE, "controller.learning.alpha", "controller.learning.alpha")],
     "controller.learning.gain": [(P_TYPE, "controller.learning.gain", "controller.learning.gain")],
+    "plant.dt": [(LINEAR, "plant.dt", "plant.dt")],  # only the learning family runs a discrete-time plant
+    "controller.learning.num[]": [(LINEAR, "controller.learning.num.1", "controller.learning.num[1]")],
+    "controller.learning.den[]": [(LINEAR, "controller.learning.den.1", "controller.learning.den[1]")],
 }
 """Declared key path -> [(base spec, concrete path to set, the key path the loader names)]."""
 

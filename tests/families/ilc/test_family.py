@@ -161,7 +161,8 @@ def test_diagnoses(example, diverging):
     cause, fix = diagnose(diverging, _check(diverging, "ilc_convergence"))
     alpha_max = diverging.to_json()["learning"]["range"]["alpha_max"]
     assert "exceeds 1 by" in cause and f"(0, {alpha_max:.4g})" in fix
-    assert diagnose(example, _check(example, "ilc_convergence")) is None
+    cause, fix = diagnose(example, _check(example, "ilc_convergence"))  # undecided at its boundary
+    assert "within 1e-09 of 1" in cause and "1 − 4.5e-13" in cause and "cannot be decided" in fix
     slow = Check(name="tracking_error", passed=False, target="<= 0.002 rad", achieved=0.00325, unit="rad")
     cause, fix = diagnose(example, slow)
     peaks = example.trials.max_tracking_errors

@@ -223,6 +223,10 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return dataclasses.replace(design, law=law(design))
 
 
+_LEARNING_GAIN = {"adjoint": "alpha", "p_type": "gamma", "filter": "q0"}
+"""The design gain that holds each update's learning gain."""
+
+
 def _json(result: Any) -> dict[str, Any]:
     """``rho`` (``||I - Q H||_2``, Lanczos estimate; its proved bracket and the spectral radius beside it) and
     ``trials.error_norm``: per trial, the Euclidean norm of the sampled tracking error over every joint and
@@ -235,7 +239,7 @@ def _json(result: Any) -> dict[str, Any]:
         "rho": c.rho,
         "rho_bounds": [c.lower, c.upper],
         "spectral_radius": c.spectral_radius,
-        "learning": {"kind": c.kind, "value": c.value, "unit": c.alpha_range.get("unit", ""),
+        "learning": {"kind": c.kind, "value": c.value, "unit": design.gains.unit(_LEARNING_GAIN[c.kind]),
                      "range": dict(c.alpha_range)},
         "trials": {"error_norm": [] if trials is None else [float(v) for v in trials.error_norms],
                    "max_tracking_error": [] if trials is None else [float(v) for v in trials.max_tracking_errors]},
@@ -253,11 +257,14 @@ FAMILY = Family(
     checks=("pole_placement", "lyapunov", CERTIFICATE_RULE, "error_poles", "robustness", "designed_loop",
             TRIALS_RULE, "time_domain", "torque_limits"),
     display=Display(
-        label="Computed torque with iterative learning",
+        label="Iterative learning control",
         law=("u = M̂(q) (q̈D + K1 (qD − q) + K2 (q̇D − q̇) + d_k) + ĥ(q, q̇)",
              "d_(k+1) = d_k + Q e_k between trials"),
+        law_of=lambda d: (("u(t_i) = u_k(t_i): the learned input, played to the plant and held over each sample",
+                           "u_(k+1) = u_k + Q e_k between trials") if d.data.sampled is not None else ()),
         summary="Notes §6.2: computed torque repeats a trajectory; between trials a learned acceleration d_k is "
-                "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1.",
+                "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1; on a "
+                "linear plant (continuous or discrete-time) the learned signal is the plant's input itself.",
     ),
     validate=validate,
     references=(*TRAJECTORY_REFERENCES, "multisine"),

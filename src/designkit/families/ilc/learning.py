@@ -70,11 +70,6 @@ class IlcData(FamilyData):
     units: tuple[str, str] = ("rad/s^2", "rad")
     filter: tuple[Any, ...] | None = None
 
-    @property
-    def h_unit(self) -> str:
-        """The unit of ``H`` (output per learned signal)."""
-        return "s^2" if self.sampled is None else f"{self.units[1]}/{self.units[0]}"
-
 
 def trial_grid(spec: Any, design: Any, plant: Any) -> Any:
     """The time grid the simulator will use for ``design`` on the true ``plant`` (a

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.ilc.lifted import LiftedModel, Norm, _nfft, symbol_bound, top_singular
+from designkit.families.ilc.lifted import LiftedModel, Norm, symbol_bound, toeplitz_norm
 from designkit.verification.bracket import bracket_verdict
 
 __all__ = ["Adjoint", "Contraction", "Filter", "PType", "contraction", "learning_operator"]
@@ -225,14 +225,9 @@ def _causal(lifted: LiftedModel, operator: PType | Filter) -> Contraction:
         h = lifted.markov[j]
         t = -fftconvolve(q, h)[:L] if q.size > 1 else -q[0] * h
         t[0] += 1.0
-        spectrum = np.fft.rfft(t, _nfft(L))
-
-        def mv(x: np.ndarray, sp: np.ndarray = spectrum) -> np.ndarray:
-            return lifted._convolve(sp, x)
-
         sym, slack = symbol_bound(t)
         l1 = float(np.sum(np.abs(t)))
-        norm: Norm = top_singular(mv, lambda x, f=mv: f(x[::-1])[::-1], L, min(l1, sym), slack if sym < l1 else 0.0)
+        norm: Norm = toeplitz_norm(t, min(l1, sym), slack if sym < l1 else 0.0)
         sr = abs(t[0])
         joints.append({"norm": norm.to_dict(), "spectral_radius": sr, "h0": float(h[0])})
         rho, rho_p = max(rho, norm.estimate), max(rho_p, norm.power)
