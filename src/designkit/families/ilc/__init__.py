@@ -22,6 +22,10 @@ the change of the error the lifted model does not explain.
 The feedback part is computed torque (exact linearization: the generic ``pole_placement``, ``lyapunov``,
 ``error_poles`` and ``designed_loop`` checks judge it with ``d = 0``); the iteration is the learning part,
 certified by ``rho`` (``ilc_convergence``) and measured over the trials (``ilc_error_decrease``).
+
+On a ``transfer_function`` or ``state_space`` plant, continuous or discrete-time (``plant.dt``), there is no
+feedback: the learned signal is the plant's input, the lifted map comes from the plant's own Markov parameters, and
+the family runs its own trials on the sampled plant (:mod:`~designkit.families.ilc.linear`).
 """
 
 from __future__ import annotations

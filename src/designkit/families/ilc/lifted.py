@@ -28,7 +28,14 @@ power iteration on ``H^T H``, and bracketed rigorously: below by ``||H u||`` for
 above by ``min(sum |h_m|, sup |a|)`` where ``a(w) = sum h_m e^{-imw}`` is the symbol (a finite Toeplitz matrix
 is a compression of the Laurent operator of its symbol), the supremum taken on an FFT grid of ``G`` points plus
 ``(pi / G) sum m |h_m|`` (the largest change of ``a`` between grid points).  ``sigma_min(H) = 1 / ||H^-1||``
-the same way on ``H^-1`` (also lower triangular Toeplitz).
+the same way on ``H^-1`` (also lower triangular Toeplitz).  Up to :data:`DENSE_MAX` samples the norms come from the
+dense matrix instead (:func:`toeplitz_norm`).
+
+**Any sampled linear plant** (:func:`sampled_lifted`): a single-input single-output ``x_(i+1) = Phi x_i + Gamma u_i``,
+``y_i = C x_i`` -- a discrete-time plant as given, a continuous one under a zero-order hold -- has the Markov
+parameters ``C Phi^m Gamma``; the ``s`` leading ones that vanish set the shift ``r = s + 1`` (the relative degree in
+samples), and the shifted ones the same structure, through the transfer function ``b(z^-1)/a(z^-1)`` with ``a`` the
+characteristic polynomial of ``Phi`` and ``b = (a * h)`` truncated.
 """
 
 from __future__ import annotations
