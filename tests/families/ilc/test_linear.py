@@ -144,3 +144,18 @@ def test_the_filter_update_against_numpy():
 ])
 def test_refusals_exit_2_naming_the_key(body, message, tmp_path, capsys):
     assert_bad_input(tmp_path, capsys, "name: bad\n" + body, message)
+
+
+def test_an_unstable_filter_is_undecided_not_a_crash():
+    """``F(z) = 0.5/(1 - 3 z^-1)``: its coefficients 0.5 * 3^m overflow within 700 samples. The norm is not computed
+    (UNDECIDED, said so), the trials diverge (FAIL), and the JSON stays strict."""
+    import json
+
+    text = ("name: unstable-filter\nplant: {kind: state_space, dt: 1.0, A: [[-0.8, -0.22], [1, 0]], B: [[0.5], [1]], "
+            "C: [[1, 0.5]]}\ncontroller: {kind: ilc, trials: 3, learning: {kind: filter, num: [0.5], den: [1, -3]}}\n"
+            "simulation: {duration: 700, trajectory: {kind: sine, amplitude: 1.0, frequency: 0.002}}\n")
+    result = run(parse_spec(text))
+    rho = next(c for c in result.checks if c.name == "ilc_convergence")
+    assert rho.passed is None and "not finite" in rho.detail
+    assert not result.verified
+    json.dumps(result.to_json(), allow_nan=False)  # no NaN nor Infinity anywhere

@@ -234,20 +234,24 @@ _LEARNING_GAIN = {"adjoint": "alpha", "p_type": "gamma", "filter": "q0"}
 def _json(result: Any) -> dict[str, Any]:
     """``rho`` (``||I - Q H||_2``, Lanczos estimate; its proved bracket and the spectral radius beside it) and
     ``trials.error_norm``: per trial, the Euclidean norm of the sampled tracking error over every joint and
-    instant (rad)."""
+    instant (rad); a number that is not finite is written ``null`` (strict JSON)."""
     design = result.design
     sim = result.simulation
     c = contraction(lifted_of(design, None if sim is None else sim.time), operator_of(design))
     trials = result.trials
-    return {
+    from designkit.verification.certificate import to_json
+
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged trial's norm is written null
+        norms = [] if trials is None else [float(v) for v in trials.error_norms]
+    return to_json({
         "rho": c.rho,
         "rho_bounds": [c.lower, c.upper],
         "spectral_radius": c.spectral_radius,
         "learning": {"kind": c.kind, "value": c.value, "unit": design.gains.unit(_LEARNING_GAIN[c.kind]),
                      "range": dict(c.alpha_range)},
-        "trials": {"error_norm": [] if trials is None else [float(v) for v in trials.error_norms],
+        "trials": {"error_norm": norms,
                    "max_tracking_error": [] if trials is None else [float(v) for v in trials.max_tracking_errors]},
-    }
+    })
 
 
 FAMILY = Family(

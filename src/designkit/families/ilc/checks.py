@@ -33,6 +33,7 @@ from designkit.families.ilc.learning import IlcData, lifted_errors, lifted_of, o
 from designkit.families.ilc.lifted import LiftedModel
 from designkit.families.ilc.operators import Contraction, contraction
 from designkit.verification.bracket import bracket_verdict
+from designkit.verification.certificate import to_json
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
@@ -92,10 +93,15 @@ def _certificate_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
                       "proved bracket: Rayleigh quotients below, min(l1, symbol sup on an FFT grid + slack) above"}
     words = _words(c, _units(design))
     verdict = bracket_verdict(c.margin, c.excess, routes_agree=ok)
-    passed = verdict.passed
+    passed, verdict_reason = verdict.passed, verdict.reason
     routes = (f"; the two routes to the norms disagree by {diff:.2g} (relative, more than {RECHECK_REL:g}), which "
               "does not weigh against the proved bound" if not ok else "")
-    if verdict.reason == "proved":
+    if not np.isfinite(c.rho):
+        passed, verdict_reason = None, "not_computed"
+    if verdict_reason == "not_computed":
+        detail = ("the learning operator's coefficients are not finite over the trial (an unstable filter): ρ is not "
+                  "computed, not decided; " + words["range"])
+    elif verdict.reason == "proved":
         detail = words["pass"]
     elif verdict.reason == "proved_false":
         detail = words["fail"] + routes
@@ -106,11 +112,12 @@ def _certificate_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         detail = (f"ρ lies between {near_one(c.lower, -c.excess)} and {near_one(c.upper, c.margin)}: "
                   f"{verdict.explanation}, not decided; "
                   + words["range"])
-    cert["verdict_reason"] = verdict.reason
+    cert["verdict_reason"] = verdict_reason
     cert["boundary_tolerance"] = verdict.tolerance
-    rho = Check(name="ilc_convergence", passed=passed, target="ρ = ‖I − Q H‖₂ < 1", achieved=c.rho,
+    rho = Check(name="ilc_convergence", passed=passed, target="ρ = ‖I − Q H‖₂ < 1",
+                achieved=c.rho if np.isfinite(c.rho) else None,
                 margin=c.margin if c.margin > 0 else -c.excess if c.excess > 0 else 0.0, unit="",
-                detail=detail, certificate=cert)
+                detail=detail, certificate=to_json(cert))
     spectral = Check(name="ilc_spectral_radius", passed=c.asymptotic, target="spectral radius of I − Q H < 1",
                      achieved=c.spectral_radius, margin=c.spectral_margin, unit="", required=False,
                      detail=words["spectral"], certificate={"spectral_radius": c.spectral_radius,
@@ -232,6 +239,11 @@ class TrialAnalysis:
 @lru_cache(maxsize=2)
 def analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     """The :class:`TrialAnalysis` of ``trials`` (cached: the check, the figures and the diagnoses share it)."""
+    with np.errstate(all="ignore"):  # a diverged run: its non-finite numbers are what the checks report
+        return _analyse(lifted, operator, trials)
+
+
+def _analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     c = contraction(lifted, operator)
     E = [lifted_errors(r, lifted.shift) for r in trials.results]
     D = [np.asarray(f, dtype=float).T[:, :lifted.L] for f in trials.feedforward]
@@ -244,7 +256,8 @@ def analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     for k in range(len(E) - 1):
         change = lifted.apply(D[k + 1] - D[k])
         size = float(np.linalg.norm(change))
-        mu.append(float(np.linalg.norm(E[k + 1] - E[k] + change)) / size if size > 0 else 0.0)
+        mu.append(float(np.linalg.norm(E[k + 1] - E[k] + change)) / size if size > 0 else
+                  0.0 if size == 0 else float("nan"))  # a diverged trial explains nothing
     predicted, e = [norms[0]], E[0]
     for _ in range(len(E) - 1):
         e = e - lifted.apply(operator.apply(lifted, e))
@@ -294,20 +307,21 @@ def _trial_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
             "lifted_model_prediction": a.predicted.tolist(), "errors": "measured qD − q at samples 1 .. N−1"}
     decrease = Check(name="ilc_error_decrease", passed=ok if finite else False, target="‖e_(k+1)‖ ≤ ρ ‖e_k‖",
                      achieved=float(np.max(a.ratios)) if finite else None, margin=margin if finite else None,
-                     unit="", detail=detail, certificate=cert,
+                     unit="", detail=detail, certificate=to_json(cert),
                      data={"norms": a.norms, "allowed": a.allowed, "predicted": a.predicted})
     mu = a.unexplained
     j = int(np.nanargmax(mu)) if mu.size and np.any(np.isfinite(mu)) else 0
     gap = abs(a.predicted[-1] - a.norms[-1]) / a.norms[-1] if a.norms[-1] > 0 else 0.0
     explained = bool(np.all(np.isfinite(mu)) and np.max(mu) < 1.0)
-    model = Check(name="ilc_lifted_model", passed=explained, target="μ_k < 1", achieved=float(np.max(mu)),
-                  margin=float(1.0 - np.max(mu)), unit="", required=False,
+    model = Check(name="ilc_lifted_model", passed=explained, target="μ_k < 1",
+                  achieved=float(np.max(mu)) if explained or np.all(np.isfinite(mu)) else None,
+                  margin=float(1.0 - np.max(mu)) if np.all(np.isfinite(mu)) else None, unit="", required=False,
                   detail=(f"the lifted model leaves {100 * np.max(mu):.3g} % of a trial-to-trial change of the error "
                           f"unexplained (largest from trial {j} to {j + 1}; median {100 * np.median(mu):.3g} %): "
                           f"{_source(design)}; iterated from trial 0 it predicts the last trial's error norm "
                           f"{a.predicted[-1]:.4g} {ue} against {a.norms[-1]:.4g} measured ({100 * gap:.3g} %)"),
-                  certificate={"unexplained": mu.tolist(), "predicted_last": float(a.predicted[-1]),
-                               "measured_last": float(a.norms[-1])})
+                  certificate=to_json({"unexplained": mu.tolist(), "predicted_last": float(a.predicted[-1]),
+                                       "measured_last": float(a.norms[-1])}))
     return decrease, model
 
 

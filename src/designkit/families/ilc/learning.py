@@ -154,7 +154,8 @@ def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData) -> 
         lifted = _lifted(K1, K2, info, result.time)
         check_size(lifted.samples, lifted.dt, lifted.n, int(info.trials))
         d = np.asarray(feedforward, dtype=float).T  # (n, N)
-        nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result, lifted.shift))
+        with np.errstate(all="ignore"):  # a diverged trial gives a non-finite update, judged by the checks
+            nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result, lifted.shift))
         out = np.empty_like(d)
         out[:, :lifted.L] = nxt
         out[:, lifted.L:] = nxt[:, -1:]

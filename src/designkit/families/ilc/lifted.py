@@ -187,6 +187,9 @@ def toeplitz_norm(t: np.ndarray, upper: float, slack: float = 0.0, transpose: bo
     proved bound of it, ``slack`` the grid's share): dense up to :data:`DENSE_MAX`, else by FFT products."""
     t = np.asarray(t, dtype=float)
     L = t.size
+    if not np.all(np.isfinite(t)):  # coefficients beyond the floats (an unstable filter): not computed
+        nan = float("nan")
+        return Norm(nan, nan, nan, float("inf"), 0.0, "coefficients not finite: not computed")
     if L <= DENSE_MAX:
         from scipy.linalg import eigh, toeplitz
 

@@ -228,12 +228,15 @@ def _causal(lifted: LiftedModel, operator: PType | Filter) -> Contraction:
         sym, slack = symbol_bound(t)
         l1 = float(np.sum(np.abs(t)))
         norm: Norm = toeplitz_norm(t, min(l1, sym), slack if sym < l1 else 0.0)
-        sr = abs(t[0])
+        sr = abs(1.0 - float(q[0] * h[0]))  # the diagonal, whatever the later coefficients
         joints.append({"norm": norm.to_dict(), "spectral_radius": sr, "h0": float(h[0])})
         rho, rho_p = max(rho, norm.estimate), max(rho_p, norm.power)
         lower, upper = max(lower, norm.lower), max(upper, norm.upper)
         spectral = max(spectral, sr)
         spectral_margin = min(spectral_margin, _margin(float(q[0] * h[0])))
+    if not all(np.isfinite(j["norm"]["lanczos"]) for j in joints):  # an operator whose norm was not computed
+        rho = rho_p = lower = float("nan")
+        upper = float("inf")
     h0 = min(float(lifted.markov[j, 0]) for j in range(lifted.n))
     if isinstance(operator, PType):
         rng = {"gamma_asymptotic_max": 2.0 / h0, "h0": h0, "unit": ""}
@@ -250,4 +253,5 @@ def contraction(lifted: LiftedModel, operator: Adjoint | PType | Filter) -> Cont
     """The :class:`Contraction` of ``operator`` on ``lifted`` (cached: the checks, figures and JSON share it)."""
     if isinstance(operator, Adjoint):
         return _adjoint(lifted, operator.alpha)
-    return _causal(lifted, operator)
+    with np.errstate(all="ignore"):  # an unstable filter's coefficients overflow: its norm is then not computed
+        return _causal(lifted, operator)
