@@ -159,3 +159,12 @@ def test_an_unstable_filter_is_undecided_not_a_crash():
     assert rho.passed is None and "not finite" in rho.detail
     assert not result.verified
     json.dumps(result.to_json(), allow_nan=False)  # no NaN nor Infinity anywhere
+
+
+def test_designkit_simulate_runs_the_trials_and_prints_the_last(capsys):
+    from designkit.cli import main
+
+    assert main(["simulate", str(SPECS / "ilc-moore-monotone.yaml")]) == 0
+    out = capsys.readouterr().out
+    assert "simulated 50 s in 50 steps" in out
+    assert "max |y - xD| = 0.0002463" in out  # the 20th trial's largest error (the spec's tracking_error)
