@@ -114,7 +114,8 @@ def measure() -> dict[str, Any]:
     for _ in range(REPEAT):
         _clear()
         t0 = time.perf_counter()
-        lm = lifted_model(lifted.K1, lifted.K2, lifted.dt, lifted.samples, lifted.integrator)
+        gains = [tuple(np.atleast_1d(np.asarray(design.gains[k], dtype=float)).tolist()) for k in ("K1", "K2")]
+        lm = lifted_model(*gains, lifted.dt, lifted.samples, lifted.integrator)
         _ = lm.markov, lm.inverse_markov
         t1 = time.perf_counter()
         _ = lm.sigma_max

@@ -501,6 +501,9 @@ def codegen(loaded: LoadedSpec | str | Path, out_dir: str | Path, *, name: str |
     _check_per_input(spec, true_plant)
     dsn = design(loaded, true_plant)
     learning = dsn.learning
+    if learning is not None and learning.run is not None:
+        raise SpecError("plant.kind", f"the {dsn.kind} design on a {true_plant.kind} plant has no control law to "
+                        "generate: its learned input is a sequence played to the plant, trial by trial")
     build(spec, dsn, plant=true_plant, expected_runs=learning.trials if learning else 1)
     return generate_law_code(dsn, dsn.law, out_dir, name=name, spec_name=spec.name, spec_sha256=loaded.sha256,
                              law_lines=family(dsn.kind).display.law)

@@ -158,3 +158,33 @@ def test_a_parameter_value_that_drops_the_order_is_refused_naming_the_parameter(
     with pytest.raises(ModelError) as info:
         plant.with_params(c=1.0)
     assert info.value.field == "c"
+
+
+def test_a_discrete_transfer_function_responds_as_python_controls():
+    """``num(z)/den(z)`` with ``dt``: the realisation's difference equation from rest against ``control.tf(num,
+    den, dt)``'s forced response to the same input sequence."""
+    plant = transfer_function_plant(["k", 0.3], [1, -1.2, 0.5], {"k": 2.0}, dt=0.1)
+    assert plant.dt == 0.1 and plant.velocities == () and "discrete-time" in plant.describe()
+    A, B, C, _ = plant.matrices()
+    u = np.sin(0.7 * np.arange(60)) + 0.2
+    x, y = np.zeros(A.shape[0]), []
+    for uk in u:
+        y.append(float(C[0] @ x))
+        x = A @ x + B[:, 0] * uk
+    ref = control.forced_response(control.tf([2.0, 0.3], [1, -1.2, 0.5], 0.1), T=0.1 * np.arange(60), U=u).outputs
+    np.testing.assert_allclose(y, np.ravel(ref), rtol=1e-12, atol=1e-12)
+    with pytest.raises(ModelError) as info:  # a difference equation has no ODE to integrate
+        plant.ode()
+    assert info.value.field == "dt"
+    assert plant.with_params(k=3.0).dt == 0.1  # a parameter change keeps it discrete
+
+
+def test_a_discrete_state_space_keeps_its_matrices():
+    A = [[-0.8, -0.22], [1, 0]]
+    plant = state_space_plant(A, [[0.5], [1]], [[1, 0.5]], dt=1.0)
+    Az, Bz, Cz, _ = plant.matrices()
+    # realised with y = x1 + 0.5 x2 as a state: the same Markov parameters C A^m B
+    for m in range(6):
+        direct = np.array([1, 0.5]) @ np.linalg.matrix_power(np.array(A), m) @ np.array([0.5, 1.0])
+        assert float(Cz[0] @ np.linalg.matrix_power(Az, m) @ Bz[:, 0]) == pytest.approx(direct, abs=1e-14)
+    assert any("[k+1]" in line for line in plant.equations())

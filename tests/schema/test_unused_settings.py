@@ -24,8 +24,32 @@ ADD = {
 }
 
 
+LINEAR = ("transfer_function", "state_space")
+DISCRETE_ILC = """\
+name: discrete-ilc
+plant: {kind: state_space, dt: 1.0, A: [[-0.8, -0.22], [1, 0]], B: [[0.5], [1]], C: [[1, 0.5]]}
+controller: {kind: ilc, trials: 3, learning: {kind: p_type, gain: 0.5}}
+simulation: {duration: 50, trajectory: {kind: sine, amplitude: 1.0, frequency: 0.02}}
+"""
+
+
+def _with_dt(kind: str) -> str:
+    """A spec of the family on a discrete-time linear plant: its linear conformance case with ``dt`` (skipped for a
+    family with none, whose plant kinds refuse a linear plant before its settings are read)."""
+    if kind == "ilc":
+        return DISCRETE_ILC
+    linear = [p for p in CASES[kind] if p in LINEAR]
+    if not linear:
+        pytest.skip(f"the {kind} family takes no linear plant")
+    text = case_yaml(kind, linear[0])
+    plant_line = next(line for line in text.splitlines() if line.startswith("plant: "))
+    return text.replace(plant_line, plant_line[:-1] + ", dt: 0.01}")
+
+
 def _with(kind: str, key: str) -> str:
     """The family's conformance spec with the setting ``key`` given (a parameter box added when it has none)."""
+    if key == "plant.dt":
+        return _with_dt(kind)
     text = case_yaml(kind, FIRST[kind])
     plant_line = next(line for line in text.splitlines() if line.startswith("plant: "))
     if key == "simulation.anti_windup":

@@ -47,7 +47,9 @@ def test_an_uncertainty_box_over_entry_parameters_moves_the_plant_to_each_corner
     ("{kind: transfer_function, num: ['2**a'], den: [1, 1, 0], parameters: {a: 1}}", "plant.num[0]: cannot read"),
     ("{kind: transfer_function, num: [1], den: [1, 1, 0], dt: 0}", "plant.dt: must be positive"),
     ("{kind: transfer_function, num: [1], den: [1, 1, 0], dt: -0.01}", "plant.dt: must be positive"),
-    ("{kind: transfer_function, num: [1], den: [1, 1, 0], dt: 0.01}", "plant.dt: discrete-time plants are not"),
+    ("{kind: transfer_function, num: [1], den: [1, 1, 0], dt: 0.01}",
+     "plant.dt: the state_regulator controller does not use it: it designs and simulates a continuous-time loop"),
+    ("{kind: transfer_function, num: [1], den: [1, 1, 0], dt: .inf}", "plant.dt: Input should be a finite number"),
     ("{kind: transfer_function, num: [1], den: [1, 1, 0], parameters: {a: 1}, uncertainty: {b: [1, 2]}}",
      "plant.uncertainty.b: unknown parameter"),
     ("{kind: transfer_function, num: [1], den: [tau, 1, 0], parameters: {tau: 1}, uncertainty: {tau: [0, 2]}}",
@@ -59,7 +61,8 @@ def test_an_uncertainty_box_over_entry_parameters_moves_the_plant_to_each_corner
     ("{kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0]], D: [[1]]}", "plant.D[0][0]"),
     ("{kind: state_space, A: [[0, .nan], [0, 0]], B: [[0], [1]], C: [[1, 0]]}", "plant.A[0][1]"),
     ("{kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0]], states: [p]}", "plant.states: needs 2"),
-    ("{kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0]], dt: 0.001}", "plant.dt: discrete"),
+    ("{kind: state_space, A: [[0, 1], [0, 0]], B: [[0], [1]], C: [[1, 0]], dt: 0.001}",
+     "plant.dt: the state_regulator controller does not use it"),
 ])
 def test_bad_linear_plants_exit_2_naming_the_key(plant, message, tmp_path, capsys):
     assert_bad_input(tmp_path, capsys, _spec(plant), message)

@@ -1,4 +1,4 @@
-"""Any continuous-time linear plant: a transfer function or a state-space model, as a :class:`Plant`.
+"""Any linear plant: a transfer function or a state-space model, continuous- or discrete-time, as a :class:`Plant`.
 
 **The model.**  ``x' = A(p) x + B(p) (u + xi)``, ``y = C(p) x + D(p) u``: each entry a number or an expression over
 named parameters ``p`` (:mod:`designkit.models.expression`), so a robustness box or a plant change moves the entries
@@ -26,6 +26,11 @@ realisation makes ``y1`` a state.
   feedthrough (``D1 = 0``).
 
 Elsewhere no state is the position's rate (``velocities = ()``): a family reads the output's rate as ``C1 A x``.
+
+**Discrete-time** (``dt``, the sample period in s): the same realisations with the shift in place of the
+derivative, ``x[k+1] = A x[k] + B (u[k] + xi[k])``, ``y[k] = C x[k]`` (a transfer function in ``z``, highest power
+first).  Such a plant has no ODE (:meth:`LinearPlant.ode` refuses, naming ``dt``) and no state is a rate; only a
+family that runs sampled plants uses it.
 """
 
 from __future__ import annotations
@@ -82,6 +87,9 @@ class LinearRealisation:
         The realisation in words.
     equations : tuple of str
         The model as written, then the realisation, in plain text.
+    dt : float or None
+        The sample period (s) of a discrete-time model (``A``, ``B`` then map ``x[k]``, ``u[k]`` to ``x[k+1]``);
+        None: continuous-time.
     """
 
     kind: str
@@ -101,6 +109,7 @@ class LinearRealisation:
     velocity: int | None
     form: str
     equations: tuple[str, ...]
+    dt: float | None = None
 
     def __post_init__(self) -> None:
         n, m = self.A.size1(), self.B.size2()
@@ -206,8 +215,17 @@ class LinearPlant(PlantBase):
         else none (the rate is ``C1 A x + C1 B u``)."""
         return () if self.realisation.velocity is None else (self.realisation.velocity,)
 
+    @property
+    def dt(self) -> float | None:
+        """The sample period (s) of a discrete-time plant, None for a continuous-time one."""
+        return self.realisation.dt
+
     def ode(self) -> ca.Function:
-        """``(x, u, d = xi, p) -> A(p) x + B(p) (u + xi)``."""
+        """``(x, u, d = xi, p) -> A(p) x + B(p) (u + xi)`` (:class:`ModelError` at ``dt`` for a discrete-time plant,
+        which is a difference equation and has no ODE)."""
+        if self.realisation.dt is not None:
+            raise ModelError("dt", "a discrete-time plant is a difference equation x[k+1] = A x[k] + B u[k]; it has no "
+                                   "ODE to integrate")
         return self.realisation.ode()
 
     def equations(self) -> tuple[str, ...]:
@@ -227,6 +245,8 @@ class LinearPlant(PlantBase):
         """The plant in one sentence."""
         r = self.realisation
         what = "transfer function" if r.kind == "transfer_function" else "state-space model"
+        if r.dt is not None:
+            what = f"discrete-time {what} (sample period {r.dt:g} s)"
         return (f"a linear {what} of order {len(r.states)} with {len(r.inputs)} input(s), realised in {r.form}; "
                 f"the tracked position is its first output {r.outputs[0].name} = state {r.states[r.position].name}")
 
@@ -353,7 +373,7 @@ def _combination(row: Sequence[Entry], names: Sequence[str]) -> str:
 
 def transfer_function_plant(num: Sequence[Entry], den: Sequence[Entry], parameters: Mapping[str, float] | None = None,
                             *, units: Mapping[str, str] | None = None, input: str = "u",
-                            output: str = "y") -> LinearPlant:
+                            output: str = "y", dt: float | None = None) -> LinearPlant:
     """The SISO plant ``y(s)/u(s) = num(s)/den(s)`` in observability canonical form (module docstring).
 
     Parameters
@@ -368,6 +388,9 @@ def transfer_function_plant(num: Sequence[Entry], den: Sequence[Entry], paramete
         ``"rad"``, parameters ``"1"``).
     input, output : str
         The signals' names.
+    dt : float, optional
+        The sample period (s) of a discrete-time plant: ``num(z)/den(z)``, realised in the same canonical form
+        with the shift in place of the derivative (``x1[k] = y[k]``).
 
     Raises
     ------
@@ -439,19 +462,27 @@ def transfer_function_plant(num: Sequence[Entry], den: Sequence[Entry], paramete
     lines = [f"{y}(s)/{u}(s) = {wrap(_polynomial(num))} / {wrap(_polynomial(den))}",
              f"observability canonical form: {exact}; x_k' = x_(k+1) + β_k ({u} + ξ), "
              f"x_n' = −Σ (a_j/a_0) x_(n+1−j) + β_n ({u} + ξ), β the Markov parameters"]
+    if dt is not None:
+        lines = [lines[0].replace("(s)", "(z)").replace("s^", "z^").replace(" s ", " z ").replace(" s)", " z)")
+                 + f", sample period {dt:g} s",
+                 f"observability canonical form: x1[k] = {y}[k]; x_k[k+1] = x_(k+1)[k] + β_k {u}[k], "
+                 f"x_n[k+1] = −Σ (a_j/a_0) x_(n+1−j)[k] + β_n {u}[k], β the Markov parameters"]
     realisation = LinearRealisation(
         kind="transfer_function", names=tuple(q.name for q in params), p=p, A=A, B=B, C=C, D=ca.SX.zeros(1, 1),
         entries=ca.vertcat(*a, *b), paths=tuple([f"den[{k}]" for k in range(len(den))]
                                                 + [f"num[{k}]" for k in range(len(num))]),
-        leading=0, states=states, inputs=ins, outputs=outs, position=0, velocity=1 if relative >= 2 else None,
-        form=f"observability canonical form ({exact})", equations=tuple(lines))
+        leading=0, states=states, inputs=ins, outputs=outs, position=0,
+        velocity=1 if relative >= 2 and dt is None else None,
+        form=f"observability canonical form ({exact})" if dt is None else "observability canonical form (x1 = y)",
+        equations=tuple(lines), dt=None if dt is None else float(dt))
     realisation.check(nominal)
     return LinearPlant(realisation, params)
 
 
 def state_space_plant(A: Any, B: Any, C: Any, D: Any = None, parameters: Mapping[str, float] | None = None, *,
                       states: Sequence[str] | None = None, inputs: Sequence[str] | None = None,
-                      outputs: Sequence[str] | None = None, units: Mapping[str, str] | None = None) -> LinearPlant:
+                      outputs: Sequence[str] | None = None, units: Mapping[str, str] | None = None,
+                      dt: float | None = None) -> LinearPlant:
     """The plant ``x' = A x + B (u + xi)``, ``y = C x + D u`` (module docstring for the realisation).
 
     Parameters
@@ -466,6 +497,8 @@ def state_space_plant(A: Any, B: Any, C: Any, D: Any = None, parameters: Mapping
     units : Mapping[str, str], optional
         Units by signal or parameter name (defaults: states and inputs ``"1"``, the first output ``"rad"``, others
         ``"1"``; parameters ``"1"``).
+    dt : float, optional
+        The sample period (s) of a discrete-time plant ``x[k+1] = A x[k] + B u[k]``.
 
     Raises
     ------
@@ -515,7 +548,8 @@ def state_space_plant(A: Any, B: Any, C: Any, D: Any = None, parameters: Mapping
     lines = []
     for i in range(n):
         parts = [t for t in (_combination(A[i], names), _combination(B[i], drive)) if t != "0"]
-        lines.append(f"{names[i]}' = " + (" + ".join(parts).replace("+ -", "- ") if parts else "0"))
+        lhs = f"{names[i]}[k+1]" if dt is not None else f"{names[i]}'"
+        lines.append(f"{lhs} = " + (" + ".join(parts).replace("+ -", "- ") if parts else "0"))
     lines += [f"{outs[i].name} = {_combination(C[i], names)}" for i in range(q)]
     if len(unit_row) >= 1 and others_zero:
         k = unit_row[0]
@@ -540,6 +574,6 @@ def state_space_plant(A: Any, B: Any, C: Any, D: Any = None, parameters: Mapping
     realisation = LinearRealisation(
         kind="state_space", names=tuple(par.name for par in params), p=p, A=A_z, B=B_z, C=C_z, D=Dm,
         entries=entries, paths=paths, leading=None, states=states_out, inputs=ins, outputs=outs, position=k,
-        velocity=None, form=form, equations=tuple(lines))
+        velocity=None, form=form, equations=tuple(lines), dt=None if dt is None else float(dt))
     realisation.check(nominal)
     return LinearPlant(realisation, params)

@@ -110,12 +110,16 @@ def run_spec(loaded: Any, *, plant: Any = None, adjust: Callable[[Any], Any] | N
     sim = trials = simulator = None
     if simulate:
         learning = design.learning
-        simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
-        if learning is not None:
-            trials = run_trials(simulator, learning.trials, learning.update)
+        if learning is not None and learning.run is not None:  # the design runs its own trials
+            trials = learning.run(spec, plant)
             sim = trials.results[-1]
         else:
-            sim = simulator.run()
+            simulator = build(spec, design, plant=plant, expected_runs=learning.trials if learning else 1)
+            if learning is not None:
+                trials = run_trials(simulator, learning.trials, learning.update)
+                sim = trials.results[-1]
+            else:
+                sim = simulator.run()
     rerun = None
     if simulate and box and getattr(spec.plant, "uncertainty", None) is not None:
         true_plant, base, each = plant, design, family(design.kind).box_design == "each"

@@ -116,6 +116,8 @@ def given_settings(spec: Spec) -> tuple[str, ...]:
     """The optional settings of :data:`designkit.synthesis.family.SETTINGS` that ``spec`` gives (a sub-key of
     ``plant.uncertainty`` counts when it differs from its default)."""
     keys = []
+    if getattr(spec.plant, "dt", None) is not None:
+        keys.append("plant.dt")
     if spec.simulation.anti_windup is not None:
         keys.append("simulation.anti_windup")
     unc = getattr(spec.plant, "uncertainty", None)

@@ -576,6 +576,16 @@ def simulate(spec: Any, design: Design, *, plant: Any = None) -> SimulationResul
     (0.001, 3001, 1.0)
     >>> float(abs(res.u_applied).max())
     20.0
+
+    A design that runs its own trials (``design.learning.run``: a sampled plant the simulator does not integrate)
+    runs them, on ``plant`` or the spec's plant, and its last trial is returned.
     """
+    learning = getattr(design, "learning", None)
+    if learning is not None and learning.run is not None:
+        if plant is None:
+            from designkit.spec.plant_builder import plant_from_spec
+
+            plant = plant_from_spec(spec.plant)
+        return learning.run(spec, plant).results[-1]
     return build(spec, design, plant=plant).run()
 

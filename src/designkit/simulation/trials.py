@@ -40,11 +40,16 @@ class Learning:
         The learning update between trials.
     description : str
         The update in words, for the report.
+    run : callable, optional
+        ``(spec, plant) -> TrialsResult``: the design runs its trials itself, on the true ``plant`` (a sampled
+        plant the simulator does not integrate, such as a discrete-time one), with ``update`` between them; None:
+        the pipeline builds the simulator and runs :func:`run_trials`.
     """
 
     trials: int
     update: LearningRule
     description: str = ""
+    run: Callable[[object, object], TrialsResult] | None = None
 
     def __post_init__(self) -> None:
         if not 1 <= int(self.trials) <= MAX_TRIALS:

@@ -84,6 +84,10 @@ class ComputedTorqueSpec(Section):
 
     @model_validator(mode="after")
     def _one_way(self) -> ComputedTorqueSpec:
+        return self.check_one_way()
+
+    def check_one_way(self) -> ComputedTorqueSpec:
+        """Poles, or damping and natural frequency (ValueError otherwise)."""
         by_poles = self.poles is not None
         by_zeta = self.damping is not None or self.natural_frequency is not None
         if by_poles == by_zeta:

@@ -90,14 +90,14 @@ def _transfer_function(section: TransferFunctionPlantSpec, base_dir: Path | None
     from designkit.models.linear_plant import transfer_function_plant
 
     return transfer_function_plant(section.num, section.den, section.parameters, units=section.units,
-                                   input=section.input, output=section.output)
+                                   input=section.input, output=section.output, dt=section.dt)
 
 
 def _state_space(section: StateSpacePlantSpec, base_dir: Path | None) -> PlantBase:
     from designkit.models.linear_plant import state_space_plant
 
     return state_space_plant(section.A, section.B, section.C, section.D, section.parameters, states=section.states,
-                             inputs=section.inputs, outputs=section.outputs, units=section.units)
+                             inputs=section.inputs, outputs=section.outputs, units=section.units, dt=section.dt)
 
 
 BUILDERS: dict[str, Callable[[Any, Path | None], PlantBase]] = {

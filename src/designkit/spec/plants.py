@@ -8,6 +8,11 @@
 * ``transfer_function``: a SISO ``num(s)/den(s)`` (coefficients highest power first);
 * ``state_space``: ``x' = A x + B u``, ``y = C x + D u`` with named states, inputs and outputs.
 
+Either linear kind with ``dt`` (the sample period, s) is **discrete-time**: ``num(z)/den(z)``, or the difference
+equation ``x[k+1] = A x[k] + B u[k]``.  Only a family that says it runs sampled plants (``plant.dt`` in
+:attr:`~designkit.synthesis.family.Family.uses`: the learning family) accepts one; any other refuses ``plant.dt``
+when the spec is read.
+
 The two linear kinds take ``parameters`` (name -> value) that their entries may name (``"b"``, ``"-a"``,
 ``"2*a"``: :mod:`designkit.models.expression`); :mod:`designkit.models.linear_plant` says how they are realised.
 
@@ -267,40 +272,38 @@ Entry = Ranged(COEFFICIENT.low, COEFFICIENT.high, COEFFICIENT.unit, base=Finite)
 SignalName = Annotated[str, Field(max_length=100)]
 
 
-def _continuous(dt: float | None) -> None:
-    if dt is None:
-        return
-    if dt <= 0:
-        raise ValueError(f"dt: must be positive (a sampling period in s), got {dt:g}")
-    raise ValueError("dt: discrete-time plants are not accepted: the simulation integrates continuous-time models; "
-                     "give the continuous-time model and omit dt")
-
-
 class _LinearPlantSpec(Section):
     """What the two linear plant kinds share: ``parameters`` their entries name, ``units``, ``dt``, ``uncertainty``."""
 
     parameters: dict[str, Ranged(PARAMETER.low, PARAMETER.high, PARAMETER.unit, base=Finite)] = Field(
         default_factory=dict, max_length=100)
     units: dict[str, Annotated[str, Field(max_length=40)]] = Field(default_factory=dict, max_length=200)
-    dt: Finite | None = None
+    dt: Ranged(1e-9, 1e6, "s", base=Finite) | None = None
     uncertainty: Uncertainty | None = None
+
+    @field_validator("dt")
+    @classmethod
+    def _sample_period(cls, v: float | None) -> float | None:
+        if v is not None and v <= 0:
+            raise ValueError(f"must be positive (the sample period of a discrete-time plant, s), got {v:g}")
+        return v
 
     @model_validator(mode="after")
     def _linear(self) -> _LinearPlantSpec:
-        _continuous(self.dt)
         if self.uncertainty is not None:
             self.uncertainty.check_ranges(type(self))
         return self
 
 
 class TransferFunctionPlantSpec(_LinearPlantSpec):
-    """A SISO plant ``output(s)/input(s) = num(s)/den(s)``, continuous-time, strictly proper.
+    """A SISO plant ``output(s)/input(s) = num(s)/den(s)`` (or in ``z`` with ``dt``), strictly proper.
 
     ``num``, ``den``: coefficients, highest power of ``s`` first, each a number (within 1e12) or a text over
     ``parameters`` (``"Km"``, ``"2*a"``, ``"-(a + 1)/tau"``); no leading zero; ``len(num) < len(den)``, the
     denominator of degree 1 to 20.  ``input``, ``output`` name the signals (default ``u``, ``y``); ``units`` gives
-    units by name (the output ``rad``, the input and parameters ``1`` by default).  ``dt`` (a sampling period) is
-    refused: the plant is continuous-time.  Realised in observability canonical form, ``y = x1``
+    units by name (the output ``rad``, the input and parameters ``1`` by default).  ``dt`` (s, 1e-9 to 1e6) makes it
+    discrete-time: ``num(z)/den(z)``, highest power of ``z`` first, ``dt`` the sample period.  Realised in
+    observability canonical form, ``y = x1``
     (:mod:`designkit.models.linear_plant`).
     """
 
@@ -312,13 +315,14 @@ class TransferFunctionPlantSpec(_LinearPlantSpec):
 
 
 class StateSpacePlantSpec(_LinearPlantSpec):
-    """A plant ``x' = A x + B u``, ``y = C x + D u``, continuous-time.
+    """A plant ``x' = A x + B u``, ``y = C x + D u`` (or ``x[k+1] = A x[k] + B u[k]`` with ``dt``).
 
     ``A`` (n x n, n at most 20), ``B`` (n x m), ``C`` (q x n), ``D`` (q x m, default zero): lists of rows whose
     entries are numbers (within 1e12) or texts over ``parameters``.  ``states``, ``inputs``, ``outputs`` name the
     signals (defaults ``x1..``, ``u``/``u1..``, ``y``/``y1..``); ``units`` gives units by name.  The first output is
-    the tracked position: it must measure something and have no direct feedthrough (``D[0] = 0``).  ``dt`` is
-    refused: the plant is continuous-time.
+    the tracked position: it must measure something and have no direct feedthrough (``D[0] = 0``).  ``dt`` (s, 1e-9
+    to 1e6) makes it discrete-time: ``x[k+1] = A x[k] + B u[k]``, ``y[k] = C x[k] + D u[k]``, ``dt`` the sample
+    period.
     """
 
     kind: Literal["state_space"]

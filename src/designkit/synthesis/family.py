@@ -43,6 +43,8 @@ SETTINGS = {
     "plant.uncertainty": "none of its checks judges the design over a box of plant parameters",
     "plant.uncertainty.grid": "the lattice of the box is read by the lattice check (robust_grid), which it does "
                               "not offer",
+    "plant.dt": "it designs and simulates a continuous-time loop, and a discrete-time plant is a difference equation "
+                "the simulator does not integrate; give the continuous-time model (no dt)",
     "plant.uncertainty.samples": "the box's random samples are read by the robust_grid, tracking_bounds and box_runs "
                                  "checks, none of which it offers",
 }

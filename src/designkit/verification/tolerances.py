@@ -68,6 +68,13 @@ LMI_SOLVER_OK = ("optimal",)
 """cvxpy statuses whose solution is re-checked; any other status (``optimal_inaccurate``,
 ``infeasible``, ``solver_error``...) leaves the check undecided."""
 
+# ----------------------------------------------------------------------------- proved brackets
+
+BOUNDARY_REL = 1e-9
+"""A statement ``value < bound`` judged on a proved bracket (:mod:`designkit.verification.bracket`) is undecided when
+the bracket's end lies within this fraction of ``|bound|`` of the bound: a certificate that holds by less than the
+precision its bounds are computed to is not a proof either way (a contraction at ``rho = 1 - 4.5e-13``)."""
+
 # ----------------------------------------------------------------------------- time domain
 
 STEADY_STATE_WINDOW = 0.05

@@ -22,6 +22,10 @@ the change of the error the lifted model does not explain.
 The feedback part is computed torque (exact linearization: the generic ``pole_placement``, ``lyapunov``,
 ``error_poles`` and ``designed_loop`` checks judge it with ``d = 0``); the iteration is the learning part,
 certified by ``rho`` (``ilc_convergence``) and measured over the trials (``ilc_error_decrease``).
+
+On a ``transfer_function`` or ``state_space`` plant, continuous or discrete-time (``plant.dt``), there is no
+feedback: the learned signal is the plant's input, the lifted map comes from the plant's own Markov parameters, and
+the family runs its own trials on the sampled plant (:mod:`~designkit.families.ilc.linear`).
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
-from pydantic import Field, ValidationInfo, field_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from designkit.families.ilc.checks import CERTIFICATE_RULE, TRIALS_RULE
 from designkit.families.ilc.diagnoses import diagnose
@@ -39,6 +43,7 @@ from designkit.families.ilc.figures import error_norm_figure, learned_figure, tr
 from designkit.families.ilc.knobs import KNOBS, METRICS
 from designkit.families.ilc.learning import IlcData, check_size, lifted_of, operator_of, trial_grid, update_rule
 from designkit.families.ilc.lifted import lifted_model
+from designkit.families.ilc.linear import LINEAR_PLANTS, synthesize_linear, validate_linear
 from designkit.families.ilc.operators import contraction, learning_operator
 from designkit.simulation.trials import MAX_TRIALS, Learning
 from designkit.spec.computed_torque import PER_JOINT_FIELDS, ComputedTorqueSpec, error_poles
@@ -57,28 +62,48 @@ KIND = "ilc"
 class LearningSpec(Section):
     """The learning operator ``Q`` of ``d_{k+1} = d_k + Q e_k``.
 
-    ``kind: adjoint`` (default): ``Q = alpha H^T``, ``alpha`` (1/s^4, 1e-12 to 1e30; left out: ``1 /
-    sigma_max(H)^2``).  ``kind: p_type``: ``d_{k+1}(t_i) = d_k(t_i) + gain e_k(t_{i+1})``, ``gain`` (1/s^2,
-    1e-12 to 1e30) required.
+    ``kind: adjoint`` (default): ``Q = alpha H^T``, ``alpha`` (1/s^4 on a robot, ``(input/output)^2`` on a linear
+    plant; 1e-12 to 1e30; left out: ``1 / sigma_max(H)^2``).  ``kind: p_type``: ``d_{k+1}(t_i) = d_k(t_i) + gain
+    e_k(t_{i+r})`` (``r`` the relative degree in samples), ``gain`` (1/s^2 on a robot, input per output unit on a
+    linear plant; 1e-12 to 1e30) required.  ``kind: filter``: ``d_{k+1} = d_k + F(z) e_k(. + r)``, ``F`` a causal
+    filter ``num``/``den`` (coefficients of ``z^0, z^-1, ...``, each within 1e12, at most 20 of each; ``num[0]``
+    and ``den[0]`` nonzero), required.
     """
 
-    kind: Literal["adjoint", "p_type"] = "adjoint"
+    kind: Literal["adjoint", "p_type", "filter"] = "adjoint"
     alpha: Ranged(1e-12, 1e30, "1/s^4", base=Finite) | None = None
     gain: Ranged(1e-12, 1e30, "1/s^2", base=Finite) | None = Field(default=None, validate_default=True)
+    num: list[Ranged(-1e12, 1e12, "", base=Finite)] | None = Field(default=None, min_length=1, max_length=20)
+    den: list[Ranged(-1e12, 1e12, "", base=Finite)] = Field(default_factory=lambda: [1.0], min_length=1,
+                                                           max_length=20)
+
+    @model_validator(mode="after")
+    def _filter(self) -> LearningSpec:
+        if self.kind == "filter":
+            if self.num is None:
+                raise ValueError("num: the filter update needs the filter's numerator (coefficients of z^0, z^-1, ...)")
+            if self.num[0] == 0:
+                raise ValueError("num: num[0] must be nonzero (F's first coefficient sets the spectral radius "
+                                 "|1 - F_0 h_0|; with 0 the learning never converges)")
+            if self.den[0] == 0:
+                raise ValueError("den: den[0] must be nonzero (a causal filter)")
+        elif self.num is not None or self.den != [1.0]:
+            raise ValueError("num: num and den belong to the filter update (kind: filter)")
+        return self
 
     @field_validator("alpha")
     @classmethod
     def _alpha_is_adjoint(cls, v: float | None, info: ValidationInfo) -> float | None:
-        if v is not None and info.data.get("kind") == "p_type":
-            raise ValueError("belongs to the adjoint update (kind: adjoint); the p_type update takes gain")
+        if v is not None and info.data.get("kind") in ("p_type", "filter"):
+            raise ValueError("belongs to the adjoint update (kind: adjoint)")
         return v
 
     @field_validator("gain")
     @classmethod
     def _gain_is_p_type(cls, v: float | None, info: ValidationInfo) -> float | None:
         kind = info.data.get("kind")
-        if v is not None and kind == "adjoint":
-            raise ValueError("belongs to the p_type update (kind: p_type); the adjoint update takes alpha")
+        if v is not None and kind in ("adjoint", "filter"):
+            raise ValueError(f"belongs to the p_type update (kind: p_type); the {kind} update does not take it")
         if v is None and kind == "p_type":
             raise ValueError("the p_type update needs a gain (1/s^2)")
         return v
@@ -94,6 +119,13 @@ class ILCSpec(ComputedTorqueSpec):
     kind: Literal[KIND]
     trials: RangedInt(1, MAX_TRIALS) = 10
     learning: LearningSpec = Field(default_factory=LearningSpec)
+
+    @model_validator(mode="after")
+    def _one_way(self) -> ILCSpec:
+        # on a linear plant there is no feedback: no poles at all is allowed here, and a robot refuses it later
+        if self.poles is None and self.damping is None and self.natural_frequency is None:
+            return self
+        return self.check_one_way()
 
 
 def law(design: Design, anti_windup: Any = None) -> Law:
@@ -115,6 +147,16 @@ def law(design: Design, anti_windup: Any = None) -> Law:
 
 def validate(spec: Any) -> None:
     """The lifted model is the smooth, continuous, undelayed loop's: refuse what changes its structure."""
+    if spec.plant.kind in LINEAR_PLANTS:
+        validate_linear(spec)
+        return
+    ctrl = spec.controller
+    if ctrl.poles is None and ctrl.damping is None and ctrl.natural_frequency is None:
+        raise ValueError("controller.poles: computed torque on a robot needs its error poles: give either poles, or "
+                         "damping and natural_frequency")
+    if ctrl.learning.kind == "filter":
+        raise ValueError("controller.learning.kind: the filter update runs on a transfer_function or state_space "
+                         "plant; on a robot use adjoint or p_type")
     sim = spec.simulation
     if sim.delay > 0:
         raise ValueError("simulation.delay: the learning's lifted model has no delay (a delay of m steps makes the "
@@ -132,9 +174,12 @@ def validate(spec: Any) -> None:
 
 
 def synthesize(spec: Any, plant: Any) -> Design:
-    """The computed-torque gains, the trial's grid and lifted model, and the learning operator and rule."""
+    """The computed-torque gains, the trial's grid and lifted model, and the learning operator and rule (on a linear
+    plant: its sampled model, :func:`~designkit.families.ilc.linear.synthesize_linear`)."""
     ctrl = spec.controller
     model = controller_model(plant, ctrl.model)
+    if plant.kind in LINEAR_PLANTS:
+        return synthesize_linear(spec, plant, model, KIND)
     n = model.n_joints
     pairs = error_poles(spec, n)
     K1, K2 = error_gains(pairs)
@@ -182,44 +227,55 @@ def synthesize(spec: Any, plant: Any) -> Design:
     return dataclasses.replace(design, law=law(design))
 
 
+_LEARNING_GAIN = {"adjoint": "alpha", "p_type": "gamma", "filter": "q0"}
+"""The design gain that holds each update's learning gain."""
+
+
 def _json(result: Any) -> dict[str, Any]:
     """``rho`` (``||I - Q H||_2``, Lanczos estimate; its proved bracket and the spectral radius beside it) and
     ``trials.error_norm``: per trial, the Euclidean norm of the sampled tracking error over every joint and
-    instant (rad)."""
+    instant (rad); a number that is not finite is written ``null`` (strict JSON)."""
     design = result.design
     sim = result.simulation
     c = contraction(lifted_of(design, None if sim is None else sim.time), operator_of(design))
     trials = result.trials
-    return {
+    from designkit.verification.certificate import to_json
+
+    with np.errstate(over="ignore", invalid="ignore"):  # a diverged trial's norm is written null
+        norms = [] if trials is None else [float(v) for v in trials.error_norms]
+    return to_json({
         "rho": c.rho,
         "rho_bounds": [c.lower, c.upper],
         "spectral_radius": c.spectral_radius,
-        "learning": {"kind": c.kind, "value": c.value, "unit": c.alpha_range.get("unit", ""),
+        "learning": {"kind": c.kind, "value": c.value, "unit": design.gains.unit(_LEARNING_GAIN[c.kind]),
                      "range": dict(c.alpha_range)},
-        "trials": {"error_norm": [] if trials is None else [float(v) for v in trials.error_norms],
+        "trials": {"error_norm": norms,
                    "max_tracking_error": [] if trials is None else [float(v) for v in trials.max_tracking_errors]},
-    }
+    })
 
 
 FAMILY = Family(
     kind=KIND,
     spec=ILCSpec,
-    plants=("robot",),
-    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples"),
+    plants=("robot", *LINEAR_PLANTS),
+    uses=("plant.uncertainty", "plant.uncertainty.grid", "plant.uncertainty.samples", "plant.dt"),
     reference="trajectory",
     synthesize=synthesize,
     law=law,
     checks=("pole_placement", "lyapunov", CERTIFICATE_RULE, "error_poles", "robustness", "designed_loop",
             TRIALS_RULE, "time_domain", "torque_limits"),
     display=Display(
-        label="Computed torque with iterative learning",
+        label="Iterative learning control",
         law=("u = M̂(q) (q̈D + K1 (qD − q) + K2 (q̇D − q̇) + d_k) + ĥ(q, q̇)",
              "d_(k+1) = d_k + Q e_k between trials"),
+        law_of=lambda d: (("u(t_i) = u_k(t_i): the learned input, played to the plant and held over each sample",
+                           "u_(k+1) = u_k + Q e_k between trials") if d.data.sampled is not None else ()),
         summary="Notes §6.2: computed torque repeats a trajectory; between trials a learned acceleration d_k is "
-                "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1.",
+                "corrected by the last trial's error through Q, converging monotonically when ‖I − Q H‖₂ < 1; on a "
+                "linear plant (continuous or discrete-time) the learned signal is the plant's input itself.",
     ),
     validate=validate,
-    references=TRAJECTORY_REFERENCES,
+    references=(*TRAJECTORY_REFERENCES, "multisine"),
     figures=(error_norm_figure, tracking_error_figure, learned_figure),
     diagnoses=(diagnose,),
     json=_json,

@@ -32,6 +32,8 @@ import numpy as np
 from designkit.families.ilc.learning import IlcData, lifted_errors, lifted_of, operator_of
 from designkit.families.ilc.lifted import LiftedModel
 from designkit.families.ilc.operators import Contraction, contraction
+from designkit.verification.bracket import bracket_verdict
+from designkit.verification.certificate import to_json
 from designkit.verification.check import Check
 from designkit.verification.suite import CheckRule, Context
 
@@ -84,24 +86,38 @@ def _certificate_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     ok, diff = _recheck(c)
     cert = {**c.to_dict(), "samples": lifted.samples, "lifted_size_per_joint": lifted.L, "dt": lifted.dt,
             "integrator": lifted.integrator, "h0": [float(h) for h in lifted.markov[:, 0]],
-            "sampling_zeros": [float(lifted.zeros(j)[1]) for j in range(lifted.n)],
+            "zeros": [[complex(z).real if abs(complex(z).imag) == 0 else [complex(z).real, complex(z).imag]
+                       for z in lifted.zeros(j)] for j in range(lifted.n)], "shift": lifted.shift,
             "recheck_relative_difference": diff,
             "method": "sigma by ARPACK Lanczos (svds) on FFT Toeplitz products, re-checked by power iteration; "
                       "proved bracket: Rayleigh quotients below, min(l1, symbol sup on an FFT grid + slack) above"}
-    words = _words(c)
-    if not ok:
-        passed, detail = None, (f"the two routes to the norms disagree by {diff:.2g} (relative, more than "
-                                f"{RECHECK_REL:g}): ρ is not decided ({words['rho']})")
-    elif c.monotone:
-        passed, detail = True, words["pass"]
-    elif c.monotone is False:
-        passed, detail = False, words["fail"]
+    words = _words(c, _units(design))
+    verdict = bracket_verdict(c.margin, c.excess, routes_agree=ok)
+    passed, verdict_reason = verdict.passed, verdict.reason
+    routes = (f"; the two routes to the norms disagree by {diff:.2g} (relative, more than {RECHECK_REL:g}), which "
+              "does not weigh against the proved bound" if not ok else "")
+    if not np.isfinite(c.rho):
+        passed, verdict_reason = None, "not_computed"
+    if verdict_reason == "not_computed":
+        detail = ("the learning operator's coefficients are not finite over the trial (an unstable filter): ρ is not "
+                  "computed, not decided; " + words["range"])
+    elif verdict.reason == "proved":
+        detail = words["pass"]
+    elif verdict.reason == "proved_false":
+        detail = words["fail"] + routes
+    elif verdict.reason == "routes":
+        detail = (f"the two routes to the norms disagree by {diff:.2g} (relative, more than {RECHECK_REL:g}): ρ is "
+                  f"not decided ({words['rho']})")
     else:
-        passed, detail = None, (f"ρ lies between {c.lower:.6g} and {c.upper:.6g}: the proved bracket contains 1, "
-                                "not decided; " + words["range"])
-    rho = Check(name="ilc_convergence", passed=passed, target="ρ = ‖I − Q H‖₂ < 1", achieved=c.rho,
+        detail = (f"ρ lies between {near_one(c.lower, -c.excess)} and {near_one(c.upper, c.margin)}: "
+                  f"{verdict.explanation}, not decided; "
+                  + words["range"])
+    cert["verdict_reason"] = verdict_reason
+    cert["boundary_tolerance"] = verdict.tolerance
+    rho = Check(name="ilc_convergence", passed=passed, target="ρ = ‖I − Q H‖₂ < 1",
+                achieved=c.rho if np.isfinite(c.rho) else None,
                 margin=c.margin if c.margin > 0 else -c.excess if c.excess > 0 else 0.0, unit="",
-                detail=detail, certificate=cert)
+                detail=detail, certificate=to_json(cert))
     spectral = Check(name="ilc_spectral_radius", passed=c.asymptotic, target="spectral radius of I − Q H < 1",
                      achieved=c.spectral_radius, margin=c.spectral_margin, unit="", required=False,
                      detail=words["spectral"], certificate={"spectral_radius": c.spectral_radius,
@@ -109,30 +125,60 @@ def _certificate_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     return rho, spectral
 
 
-def _words(c: Contraction) -> dict[str, str]:
+def _units(design: Any) -> dict[str, str]:
+    """The units the sentences write: of ``alpha``, ``gamma``, ``H`` and the error."""
+    info = design.data
+    if info.sampled is None:
+        return {"alpha": "1/s⁴", "gamma": "1/s²", "H": "s²", "e": "rad", "robot": "yes"}
+    u, y = info.units
+    gamma, h = ratio(u, y), ratio(y, u)
+    return {"alpha": f"({gamma})²" if gamma else "", "gamma": gamma, "H": h, "e": y, "robot": ""}
+
+
+def ratio(num: str, den: str) -> str:
+    """``num/den`` written plainly (``""`` when both are 1, ``1/den`` or ``num`` when one is)."""
+    if den in ("1", ""):
+        return "" if num in ("1", "") else num
+    return f"{'1' if num in ('1', '') else num}/{den}"
+
+
+def _words(c: Contraction, units: dict[str, str] | None = None) -> dict[str, str]:
     """The sentences of the certificate."""
+    units = units or {"alpha": "1/s⁴", "gamma": "1/s²", "H": "s²", "e": "rad", "robot": "yes"}
+    ua, ug, uh = units["alpha"], units["gamma"], units["H"]
     r = c.alpha_range
     rho = near_one(c.rho, 1 - c.rho if abs(1 - c.rho) >= 1e-4 else c.margin if c.margin > 0 else -c.excess)
     if c.kind == "adjoint":
-        rng = (f"0 < α < 2/σ_max(H)² = {r['alpha_max']:.6g} 1/s⁴ converges monotonically (proved for α < "
+        rng = (f"0 < α < 2/σ_max(H)² = {r['alpha_max']:.6g} {ua} converges monotonically (proved for α < "
                f"{r['alpha_max_proved']:.6g}); ρ is smallest, {near_one(r['rho_optimal'], r['rho_optimal_margin'])}, "
-               f"at α* = 2/(σ_max² + σ_min²) = {r['alpha_optimal']:.6g} 1/s⁴, and α = 1/σ_max² = "
-               f"{r['alpha_one_trial']:.6g} 1/s⁴ removes the largest singular direction in one trial")
-        sig = f"σ_max(H) = {r['sigma_max']:.6g} s², σ_min(H) = {r['sigma_min']:.3g} s²"
-        what = f"ρ = ‖I − α Hᵀ H‖₂ = max(|1 − α σ_max²|, |1 − α σ_min²|) with α = {c.value:.6g} 1/s⁴ ({sig})"
+               f"at α* = 2/(σ_max² + σ_min²) = {r['alpha_optimal']:.6g} {ua}, and α = 1/σ_max² = "
+               f"{r['alpha_one_trial']:.6g} {ua} removes the largest singular direction in one trial")
+        sig = f"σ_max(H) = {r['sigma_max']:.6g} {uh}, σ_min(H) = {r['sigma_min']:.3g} {uh}"
+        what = f"ρ = ‖I − α Hᵀ H‖₂ = max(|1 − α σ_max²|, |1 − α σ_min²|) with α = {c.value:.6g} {ua} ({sig})"
         fail = (f"{what} = {c.rho:.6g} > 1 by {c.rho - 1:.3g} (proved ρ ≥ {c.lower:.6g}): the learning does not "
                 f"converge in norm and its largest singular direction grows by {c.rho:.3g} per trial; {rng}")
         spectral = (f"I − α Hᵀ H is symmetric: its spectral radius is ρ = {rho}; "
                     + ("below 1" if c.asymptotic else "not below 1"))
     else:
-        rng = (f"the spectral radius |1 − γ h₀| < 1 for 0 < γ < 2/h₀ = {r['gamma_asymptotic_max']:.6g} 1/s² "
-               "(asymptotic only); ‖I − γ H‖₂ ≥ sup|1 − γ a(ω)| > 1 wherever Re a(ω) < 0, so no γ converges "
-               "monotonically: the adjoint update Q = α Hᵀ with 0 < α < 2/σ_max(H)² does")
-        what = f"ρ = ‖I − γ H‖₂ with γ = {c.value:.6g} 1/s²"
+        if c.kind == "p_type":
+            name, top = "γ", f"0 < γ < 2/h₀ = {r['gamma_asymptotic_max']:.6g} {ug}"
+            what = f"ρ = ‖I − γ H‖₂ with γ = {c.value:.6g} {ug}"
+            diag = "1 − γ h₀"
+        else:
+            name, top = "F₀", f"F₀ between 0 and 2/h₀ = {r['q0_asymptotic_max']:.6g} {ug}"
+            what = f"ρ = ‖I − F H‖₂ with the filter F (F₀ = {c.value:.6g} {ug})"
+            diag = "1 − F₀ h₀"
+        monotone = ("; ‖I − γ H‖₂ ≥ sup|1 − γ a(ω)| > 1 wherever Re a(ω) < 0 (above the error loop's natural "
+                    "frequency), so no γ converges monotonically: the adjoint update Q = α Hᵀ with 0 < α < "
+                    "2/σ_max(H)² does" if units["robot"] and c.kind == "p_type" else
+                    f"; monotone convergence needs ρ < 1, and ρ ≥ sup|1 − {name} a(ω)| on the symbol a of H: "
+                    "the learning must keep every frequency within the unit disc about 1; the adjoint update "
+                    "Q = α Hᵀ converges monotonically for 0 < α < 2/σ_max(H)²")
+        rng = f"the spectral radius |{diag}| < 1 for {top} (asymptotic only){monotone}"
         fail = (f"{what} = {c.rho:.6g} > 1 by {c.rho - 1:.3g} (proved ρ ≥ {c.lower:.6g}): no monotone "
                 f"convergence, the error may grow for many trials; {rng}")
         radius = near_one(c.spectral_radius, c.spectral_margin)
-        spectral = (f"I − γ H is lower triangular with diagonal 1 − γ h₀: spectral radius {radius} "
+        spectral = (f"I − Q H is lower triangular with diagonal {diag}: spectral radius {radius} "
                     + ("< 1, asymptotic convergence (after a transient that ρ bounds only by ρ^k)" if c.asymptotic
                        else "≥ 1: no convergence"))
     return {
@@ -193,8 +239,13 @@ class TrialAnalysis:
 @lru_cache(maxsize=2)
 def analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     """The :class:`TrialAnalysis` of ``trials`` (cached: the check, the figures and the diagnoses share it)."""
+    with np.errstate(all="ignore"):  # a diverged run: its non-finite numbers are what the checks report
+        return _analyse(lifted, operator, trials)
+
+
+def _analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     c = contraction(lifted, operator)
-    E = [lifted_errors(r) for r in trials.results]
+    E = [lifted_errors(r, lifted.shift) for r in trials.results]
     D = [np.asarray(f, dtype=float).T[:, :lifted.L] for f in trials.feedforward]
     norms = np.array([float(np.linalg.norm(e)) for e in E])
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -205,7 +256,8 @@ def analyse(lifted: LiftedModel, operator: Any, trials: Any) -> TrialAnalysis:
     for k in range(len(E) - 1):
         change = lifted.apply(D[k + 1] - D[k])
         size = float(np.linalg.norm(change))
-        mu.append(float(np.linalg.norm(E[k + 1] - E[k] + change)) / size if size > 0 else 0.0)
+        mu.append(float(np.linalg.norm(E[k + 1] - E[k] + change)) / size if size > 0 else
+                  0.0 if size == 0 else float("nan"))  # a diverged trial explains nothing
     predicted, e = [norms[0]], E[0]
     for _ in range(len(E) - 1):
         e = e - lifted.apply(operator.apply(lifted, e))
@@ -232,9 +284,10 @@ def _trial_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
     big = int(np.nanargmax(np.where(np.isfinite(excess), excess, np.inf))) if excess.size else 0
     margin = float(np.min((a.allowed - a.norms[1:]) / np.where(a.norms[:-1] > 0, a.norms[:-1], 1.0)))
     c = a.contraction
+    ue = _units(design)["e"]
     factor = (f"ρ ≤ {near_one(a.factor, c.margin)} (the certificate)" if c.monotone else
               "1 (no certificate: ρ ≥ 1, the decrease itself is tested)")
-    fell = (f"the error norm went from {a.norms[0]:.4g} rad (trial 0, d = 0) to {a.norms[-1]:.4g} rad "
+    fell = (f"the error norm went from {a.norms[0]:.4g} {ue} (trial 0, d = 0) to {a.norms[-1]:.4g} {ue} "
             f"(trial {K - 1}): ×{a.norms[-1] / a.norms[0]:.3g}")
     ok = finite and bool(np.all(excess <= 0))
     worst = int(np.nanargmax(a.ratios)) if a.ratios.size and np.any(np.isfinite(a.ratios)) else 0
@@ -245,33 +298,38 @@ def _trial_checks(design: Any, ctx: Context) -> tuple[Check, ...]:
         detail = f"a trial's error is not finite (diverged): {fell}"
     else:
         most = "" if big == k else (f", most from trial {big} to {big + 1} (×{a.ratios[big]:.4g}, "
-                                    f"{excess[big]:.3g} rad above)")
+                                    f"{excess[big]:.3g} {ue} above)")
         detail = (f"the error norm grew in {grew.size} of {K - 1} trials, first from trial {k} to {k + 1}: "
-                  f"{a.norms[k]:.4g} → {a.norms[k + 1]:.4g} rad (×{a.ratios[k]:.4g}, above the allowed "
-                  f"{a.allowed[k]:.4g} rad by {excess[k]:.3g} rad){most}, against {factor}; {fell}")
+                  f"{a.norms[k]:.4g} → {a.norms[k + 1]:.4g} {ue} (×{a.ratios[k]:.4g}, above the allowed "
+                  f"{a.allowed[k]:.4g} {ue} by {excess[k]:.3g} {ue}){most}, against {factor}; {fell}")
     cert = {"error_norms": a.norms.tolist(), "ratios": a.ratios.tolist(), "factor": a.factor,
             "floor": FLOOR_REL * float(a.norms[0]), "inequality": "‖e_(k+1)‖ ≤ ρ ‖e_k‖ + 1e-9 ‖e_0‖",
             "lifted_model_prediction": a.predicted.tolist(), "errors": "measured qD − q at samples 1 .. N−1"}
     decrease = Check(name="ilc_error_decrease", passed=ok if finite else False, target="‖e_(k+1)‖ ≤ ρ ‖e_k‖",
                      achieved=float(np.max(a.ratios)) if finite else None, margin=margin if finite else None,
-                     unit="", detail=detail, certificate=cert,
+                     unit="", detail=detail, certificate=to_json(cert),
                      data={"norms": a.norms, "allowed": a.allowed, "predicted": a.predicted})
     mu = a.unexplained
     j = int(np.nanargmax(mu)) if mu.size and np.any(np.isfinite(mu)) else 0
     gap = abs(a.predicted[-1] - a.norms[-1]) / a.norms[-1] if a.norms[-1] > 0 else 0.0
     explained = bool(np.all(np.isfinite(mu)) and np.max(mu) < 1.0)
-    model = Check(name="ilc_lifted_model", passed=explained, target="μ_k < 1", achieved=float(np.max(mu)),
-                  margin=float(1.0 - np.max(mu)), unit="", required=False,
+    model = Check(name="ilc_lifted_model", passed=explained, target="μ_k < 1",
+                  achieved=float(np.max(mu)) if explained or np.all(np.isfinite(mu)) else None,
+                  margin=float(1.0 - np.max(mu)) if np.all(np.isfinite(mu)) else None, unit="", required=False,
                   detail=(f"the lifted model leaves {100 * np.max(mu):.3g} % of a trial-to-trial change of the error "
                           f"unexplained (largest from trial {j} to {j + 1}; median {100 * np.median(mu):.3g} %): "
                           f"{_source(design)}; iterated from trial 0 it predicts the last trial's error norm "
-                          f"{a.predicted[-1]:.4g} rad against {a.norms[-1]:.4g} measured ({100 * gap:.3g} %)"),
-                  certificate={"unexplained": mu.tolist(), "predicted_last": float(a.predicted[-1]),
-                               "measured_last": float(a.norms[-1])})
+                          f"{a.predicted[-1]:.4g} {ue} against {a.norms[-1]:.4g} measured ({100 * gap:.3g} %)"),
+                  certificate=to_json({"unexplained": mu.tolist(), "predicted_last": float(a.predicted[-1]),
+                                       "measured_last": float(a.norms[-1])}))
     return decrease, model
 
 
 def _source(design: Any) -> str:
+    if design.data.sampled is not None:
+        return ("the model mismatch (the controller's model of the plant differs from the true plant)"
+                if design.data.model_differs else "rounding (the trials run the plant's own sampled difference "
+                "equation, of which the lifted model is exact)")
     if design.data.model_differs:
         return ("the model mismatch (the learned signal reaches the error through M⁻¹M̂, coupled between joints, "
                 "and what the model misses changes with each trial's motion)")

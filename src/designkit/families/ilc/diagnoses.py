@@ -29,6 +29,10 @@ def _converging(c: Any, lifted: Any) -> str:
                 f"{r['alpha_max_proved']:.4g}), e.g. {r['alpha_one_trial']:.4g} = 1/σ_max(H)², or leave it out "
                 "to get that value")
     alpha = 1.0 / max(s.estimate for s in lifted.sigma_max) ** 2
+    if lifted.integrator in ("zoh", "discrete"):
+        return (f"switch to controller.learning: {{kind: adjoint}} (α = 1/σ_max(H)² = {alpha:.4g} is computed), the "
+                "update with a monotone certificate for every plant, or lower the gain until ρ < 1 (this plant's "
+                "symbol decides whether any P-type gain has one)")
     return (f"switch to controller.learning: {{kind: adjoint}} (α = 1/σ_max(H)² = {alpha:.4g} 1/s⁴ is computed), "
             "the update with a monotone certificate; no P-type gain has one")
 
@@ -36,6 +40,26 @@ def _converging(c: Any, lifted: Any) -> str:
 def _fix(c: Any, lifted: Any) -> str:
     text = _converging(c, lifted)
     return text[0].upper() + text[1:] + "."
+
+
+def _undecided(c: Any, lifted: Any) -> tuple[str, str]:
+    """Why the contraction is undecided, and what would decide it."""
+    from designkit.families.ilc.checks import near_one
+    from designkit.verification.tolerances import BOUNDARY_REL
+
+    where = f"[{near_one(c.lower, -c.excess)}, {near_one(c.upper, c.margin)}]"
+    r = c.alpha_range
+    if c.kind == "adjoint" and r.get("rho_optimal_margin", 1.0) <= BOUNDARY_REL:
+        return (f"ρ = ‖I − Q H‖₂ is only known to lie in {where}, within {BOUNDARY_REL:g} of 1: below 1, but by less "
+                "than the precision of its bounds. No α does better here: the smallest ρ, at α* = "
+                f"{r['alpha_optimal']:.4g}, is {near_one(r['rho_optimal'], r['rho_optimal_margin'])}, since σ_min(H) = "
+                f"{r['sigma_min']:.3g} (the lifted map's symbol near the Nyquist frequency) is "
+                f"{r['sigma_max'] / r['sigma_min']:.3g} times below σ_max(H).",
+                "The monotone certificate cannot be decided on this grid: judge the learning by its trials "
+                "(ilc_error_decrease), or sample the trial more coarsely (simulation.dt) or shorten it, which raises "
+                "σ_min(H).")
+    return (f"ρ = ‖I − Q H‖₂ is only known to lie in {where}, which reaches 1.",
+            "Move the learning gain away from the edge of its range: " + _converging(c, lifted) + ".")
 
 
 def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
@@ -46,8 +70,7 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
     c, lifted = _contraction(result)
     if check.name == "ilc_convergence":
         if check.passed is None:
-            return (f"ρ = ‖I − Q H‖₂ is only known to lie in [{c.lower:.6g}, {c.upper:.6g}], which contains 1.",
-                    "Move the learning gain away from the edge of its range: " + _converging(c, lifted) + ".")
+            return _undecided(c, lifted)
         what = "α" if c.kind == "adjoint" else "γ"
         return (f"ρ = ‖I − Q H‖₂ = {c.rho:.4g} exceeds 1 by {c.rho - 1:.3g} for {what} = {c.value:.4g}: the "
                 "learning amplifies part of the error every trial instead of removing it.",
@@ -72,6 +95,11 @@ def diagnose(result: Any, check: Any) -> tuple[str, str] | None:
         peaks = result.trials.max_tracking_errors
         tail = peaks[-min(5, peaks.size):]
         rate = (tail[-1] / tail[0]) ** (1.0 / (tail.size - 1)) if tail.size > 1 and tail[0] > 0 else 1.0
+        if c.monotone is False and target is not None and not 0 < rate < 1:
+            return (f"The error grows trial after trial (the largest error ×{rate:.3g} per trial over the last "
+                    f"{tail.size} trials, {check.achieved:.4g} after {peaks.size}): ρ = ‖I − Q H‖₂ = {c.rho:.4g} > 1, "
+                    "so no decrease is certified, and a spectral radius below 1 promises convergence only after a "
+                    "transient growth.", _fix(c, lifted))
         if target is None or not 0 < rate < 1:
             return (f"The last trial still tracks to {check.achieved:.4g} rad and the largest error did not fall "
                     f"over the last {tail.size} trials (×{rate:.3g} per trial).",

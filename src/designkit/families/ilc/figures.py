@@ -33,6 +33,16 @@ def _evidence(result: Any, names: Sequence[str]) -> tuple[str, ...]:
 # ----------------------------------------------------------------------------- error norm per trial
 
 
+def _unit(result: Any, which: int) -> str:
+    """The learned signal's (0) or the error's (1) unit (empty when dimensionless)."""
+    unit = str(result.design.data.units[which])
+    return "" if unit == "1" else unit
+
+
+def _label(text: str, unit: str) -> str:
+    return f"{text} ({unit})" if unit else text
+
+
 def _draw_norms(result: Any, a: Any) -> tuple[Any, dict[str, Any]]:
     fig, (ax,) = new_figure(6.8, 3.6)
     k = np.arange(a.norms.size)
@@ -52,7 +62,7 @@ def _draw_norms(result: Any, a: Any) -> tuple[Any, dict[str, Any]]:
     ax.set_yscale("log")
     _log_labels(ax)
     ax.set_xlabel("trial k")
-    ax.set_ylabel("error norm ‖e_k‖ (rad)")
+    ax.set_ylabel(_label("error norm ‖e_k‖", _unit(result, 1)))
     ax.set_xlim(-0.3, a.norms.size - 0.7)
     ax.legend(loc="best", framealpha=0.9)
     info.update(first=float(a.norms[0]), last=float(a.norms[-1]),
@@ -78,10 +88,13 @@ def error_norm_figure(result: Any) -> Figure | None:
     if a is None:
         return None
     svg, keys, info = render_tagged(_draw_norms, result, a)
+    first = "computed torque alone" if result.design.data.sampled is None else "with no input"
     text = ("Euclidean norm of the sampled tracking error qD − q over every joint and instant, per trial "
-            f"(log scale; trial 0 runs computed torque alone, d₀ = 0; {info['trials']} trials)")
+            f"(log scale; trial 0 runs {first}, d₀ = 0; {info['trials']} trials)")
     if "measured" in keys:
-        text += (f": from {sci(info['first'])} rad in the first trial to {sci(info['last'])} rad in the last "
+        u = _unit(result, 1)
+        text += (f": from {sci(info['first'])}{' ' + u if u else ''} in the first trial to {sci(info['last'])}"
+                 f"{' ' + u if u else ''} in the last "
                  f"(×{sci(info['ratio'])})")
     text += "."
     if "rho-bound" in keys:
@@ -89,10 +102,14 @@ def error_norm_figure(result: Any) -> Figure | None:
             text += f" Dashed, red: the bound ρᵏ ‖e₀‖ the certificate proves, ρ = ‖I − Q H‖₂ = {info['rho']}"
             text += (", so close to 1 that the line is flat: the worst-case rate guarantees that the error does not "
                      "grow, nothing more." if info["rho"].startswith("1 −") else ".")
+        elif info["monotone"] is False:
+            text += (f" Dashed, red: ρᵏ ‖e₀‖ with ρ = ‖I − Q H‖₂ = {info['rho']}, above 1: no decrease is "
+                     "certified, and the lifted model's largest singular direction grows at this rate.")
         else:
-            text += (f" Dashed, red: ρᵏ ‖e₀‖ with ρ = ‖I − Q H‖₂ = {info['rho']}, "
-                     + ("above 1: no decrease is certified, and the lifted model's largest singular direction grows "
-                        "at this rate." if info["monotone"] is False else "not decided."))
+            text += (f" Dashed, red: ρᵏ ‖e₀‖ with ρ = ‖I − Q H‖₂ = {info['rho']}, not decided (its proved bracket "
+                     "reaches 1, or lies within the boundary tolerance of it)"
+                     + (", so close to 1 that the line is flat: no rate is proved." if info["rho"].startswith("1 ")
+                        else "."))
     if "lifted-prediction" in keys:
         text += (" Dash-dot, grey: the lifted model's prediction (I − H Q)ᵏ e₀ from the first trial's error, exact "
                  "for the controller's error system; its distance to the measured points is what the model mismatch "
@@ -117,7 +134,7 @@ def _draw_errors(result: Any) -> tuple[Any, dict[str, Any]]:
         tag(fig, "last-trial", *plot_decimated(ax, t, last.tracking_errors[:, j], color=color,
                                                label=f"trial {len(trials) - 1}, joint {j + 1}"))
         ax.axhline(0.0, color=GREY, lw=0.8)
-        ax.set_ylabel("q − qD (rad)")
+        ax.set_ylabel(_label("q − qD", _unit(result, 1)))
         ax.legend(loc="best", framealpha=0.9)
     axes[-1].set_xlabel("time (s)")
     axes[-1].set_xlim(t[0], t[-1])
@@ -131,10 +148,14 @@ def tracking_error_figure(result: Any) -> Figure | None:
         return None
     svg, keys, info = render_tagged(_draw_errors, result)
     parts = []
+    u = " " + _unit(result, 1) if _unit(result, 1) else ""
+    robot = result.design.data.sampled is None
     if "first-trial" in keys:
-        parts.append(f"the first trial (dashed, computed torque alone: largest |q − qD| = {sci(info['first'])} rad)")
+        parts.append(f"the first trial (dashed, {'computed torque alone' if robot else 'no input learned yet'}: "
+                     f"largest |q − qD| = {sci(info['first'])}{u})")
     if "last-trial" in keys:
-        parts.append(f"the last, trial {info['k']} (solid, with the learned acceleration: {sci(info['last'])} rad)")
+        parts.append(f"the last, trial {info['k']} (solid, with the learned "
+                     f"{'acceleration' if robot else 'input'}: {sci(info['last'])}{u})")
     text = ("Tracking error q − qD " + ("of each joint (one panel per joint) " if info["n"] > 1 else "")
             + "against time in " + _sentence(parts) + ".")
     return Figure("Tracking error: first and last trials", text, svg, "fig-ilc-first-last.svg",
@@ -154,7 +175,8 @@ def _draw_learned(result: Any) -> tuple[Any, dict[str, Any]]:
                                             label=f"d (joint {j + 1})"))
     ax.axhline(0.0, color=GREY, lw=0.8)
     ax.set_xlabel("time (s)")
-    ax.set_ylabel("learned acceleration (rad/s²)")
+    robot = result.design.data.sampled is None
+    ax.set_ylabel("learned acceleration (rad/s²)" if robot else _label("learned input", _unit(result, 0)))
     ax.set_xlim(t[0], t[-1])
     ax.legend(loc="best", framealpha=0.9)
     return fig, {"k": len(trials.results) - 1, "peak": float(np.max(np.abs(d))) if d.size else 0.0,
@@ -169,15 +191,23 @@ def learned_figure(result: Any) -> Figure | None:
     if "learned" not in keys:
         return None
     joints = " of each joint" if info["n"] > 1 else ""
-    text = (f"The learned acceleration d_k{joints} the last trial (k = {info['k']}) ran with (largest |d| = "
-            f"{sci(info['peak'])} rad/s²); the model's inertia maps it into the command, u = M̂(q)(q̈D + K1 e + "
-            "K2 ė + d_k) + ĥ.")
+    if result.design.data.sampled is None:
+        text = (f"The learned acceleration d_k{joints} the last trial (k = {info['k']}) ran with (largest |d| = "
+                f"{sci(info['peak'])} rad/s²); the model's inertia maps it into the command, u = M̂(q)(q̈D + K1 e + "
+                "K2 ė + d_k) + ĥ.")
+    else:
+        text = (f"The learned input u_k the last trial (k = {info['k']}) played to the plant, held over each sample "
+                f"(largest |u| = {sci(info['peak'])}{' ' + _unit(result, 0) if _unit(result, 0) else ''}).")
     a = trial_analysis(result)
     if a is not None and a.norms[-1] < a.norms[0]:
-        text += " It is the acceleration the controller's model misses along this motion, as learned so far"
+        text += (" It is the acceleration the controller's model misses along this motion, as learned so far"
+                 if result.design.data.sampled is None else " It is the input that makes the plant follow the "
+                 "reference, as learned so far")
         text += ("; it falls to zero at the end of the trial, where the error's last samples depend on it least "
                  "(the adjoint update learns there slowest)." if a.contraction.kind == "adjoint" else ".")
     elif a is not None:
         text += " The learning diverged: it is not what the model misses but the growing part of the update."
-    return Figure("Learned acceleration of the last trial", text, svg, "fig-ilc-learned.svg",
+    title = "Learned acceleration of the last trial" if result.design.data.sampled is None else \
+        "Learned input of the last trial"
+    return Figure(title, text, svg, "fig-ilc-learned.svg",
                   _evidence(result, ("ilc_error_decrease",)))

@@ -52,17 +52,24 @@ def _first(run: Any) -> float | None:
     return None if run.trials is None else float(run.trials.max_tracking_errors[0])
 
 
+def _robot(design: Any) -> bool:
+    return design.data.sampled is None
+
+
 KNOBS = (
     Knob("alpha", "1/s^4", "learning gain of the adjoint update Q = α Hᵀ", 1e-12, 1e30,
          path="controller.learning.alpha", role="learning", boundary=True,
          current=lambda d: float(d.gains["alpha"]), search=lambda d: _window(_alpha_scale(d)),
-         when=lambda d: _learning(d) == "adjoint"),
+         when=lambda d: _learning(d) == "adjoint" and _robot(d)),
     Knob("gain", "1/s^2", "learning gain of the P-type update", 1e-12, 1e30,
          path="controller.learning.gain", role="learning", boundary=True,
-         search=lambda d: _window(_p_scale(d)), when=lambda d: _learning(d) == "p_type"),
-    Knob("poles", "1/s", "error poles of the computed-torque feedback", 1e-3, 1e5, path="controller.poles"),
+         search=lambda d: _window(_p_scale(d)), when=lambda d: _learning(d) == "p_type" and _robot(d)),
+    Knob("poles", "1/s", "error poles of the computed-torque feedback", 1e-3, 1e5, path="controller.poles",
+         when=_robot),
 )
-"""The learning design's knobs (its learning gain, with the boundary, and the feedback's speed)."""
+"""The learning design's knobs (its learning gain, with the boundary, and the feedback's speed), on a robot: a knob
+has one unit, and on a linear plant the learning gain's unit is the plant's own (input per output unit), so no study
+varies it there."""
 
 METRICS = (
     Metric("last_trial_error", "peak tracking error of the last trial", "rad", _last,

@@ -16,7 +16,7 @@ import numpy as np
 
 from designkit.errors import SpecError
 from designkit.families.ilc.lifted import MAX_LIFTED, MAX_TRIAL_SAMPLES, LiftedModel, lifted_model
-from designkit.families.ilc.operators import Adjoint, PType, learning_operator
+from designkit.families.ilc.operators import Adjoint, Filter, PType, learning_operator
 from designkit.synthesis.design import FamilyData
 
 __all__ = ["IlcData", "check_size", "lifted_errors", "lifted_of", "operator_of", "trial_grid", "update_rule"]
@@ -45,6 +45,16 @@ class IlcData(FamilyData):
         Where the gain comes from, in words.
     model_differs : bool
         Whether the controller's model differs from the true plant (the certificate is then the model's).
+    sampled : tuple or None
+        A linear plant's sampled model ``(Phi, Gamma, C)`` as nested tuples (the controller's model, sampled at
+        ``dt``: :mod:`~designkit.families.ilc.linear`); None on a robot.
+    shift : int
+        The relative degree in samples (1 on a robot).
+    units : tuple of str
+        ``(learned signal, tracked output)`` units: ``("rad/s^2", "rad")`` on a robot, the plant's input and first
+        output on a linear plant.
+    filter : tuple or None
+        ``(num, den)`` of the ``filter`` learning operator.
     """
 
     samples: int
@@ -55,6 +65,10 @@ class IlcData(FamilyData):
     value: float
     value_source: str
     model_differs: bool = False
+    sampled: tuple[Any, ...] | None = None
+    shift: int = 1
+    units: tuple[str, str] = ("rad/s^2", "rad")
+    filter: tuple[Any, ...] | None = None
 
 
 def trial_grid(spec: Any, design: Any, plant: Any) -> Any:
@@ -94,6 +108,11 @@ def check_size(samples: int, dt: float, joints: int, trials: int) -> None:
 
 
 def _lifted(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData, time: np.ndarray | None) -> LiftedModel:
+    if info.sampled is not None:
+        from designkit.families.ilc.lifted import sampled_lifted
+
+        samples = int(info.samples) if time is None or len(time) < 2 else int(len(time))
+        return sampled_lifted(*info.sampled, float(info.dt), samples, str(info.integrator))
     if time is None or len(time) < 2:
         return lifted_model(K1, K2, float(info.dt), int(info.samples), str(info.integrator))
     dt = float(time[1] - time[0])
@@ -103,6 +122,8 @@ def _lifted(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData, time: n
 
 
 def _gains(design: Any) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    if design.data.sampled is not None:
+        return (), ()
     return tuple(tuple(np.atleast_1d(np.asarray(design.gains[k], dtype=float)).tolist()) for k in ("K1", "K2"))
 
 
@@ -111,28 +132,30 @@ def lifted_of(design: Any, time: np.ndarray | None = None) -> LiftedModel:
     return _lifted(*_gains(design), design.data, time)
 
 
-def operator_of(design: Any) -> Adjoint | PType:
+def operator_of(design: Any) -> Adjoint | PType | Filter:
     """The learning operator of an ``ilc`` design."""
     info = design.data
-    return learning_operator(str(info.learning), float(info.value))
+    return learning_operator(str(info.learning), info.filter if info.learning == "filter" else float(info.value))
 
 
-def lifted_errors(result: Any) -> np.ndarray:
-    """``e = qD - y_q`` of a trial at the samples ``1 .. N-1``, ``(n, L)`` (rad): what the learning sees."""
+def lifted_errors(result: Any, shift: int = 1) -> np.ndarray:
+    """``e = qD - y_q`` of a trial at the samples ``shift .. N-1``, ``(n, L)`` (rad on a robot): what the learning
+    sees."""
     y = np.asarray(result.measured, dtype=float)[:, list(result.positions)]
-    return (np.asarray(result.desired, dtype=float) - y).T[:, 1:]
+    return (np.asarray(result.desired, dtype=float) - y).T[:, shift:]
 
 
 def update_rule(K1: tuple[float, ...], K2: tuple[float, ...], info: IlcData) -> Any:
     """The :data:`~designkit.simulation.trials.LearningRule` ``(result_k, d_k) -> d_{k+1}`` of the gains and the
     design's data (grid, operator, trials)."""
-    operator = learning_operator(str(info.learning), float(info.value))
+    operator = learning_operator(str(info.learning), info.filter if info.learning == "filter" else float(info.value))
 
     def update(result: Any, feedforward: np.ndarray) -> np.ndarray:
         lifted = _lifted(K1, K2, info, result.time)
         check_size(lifted.samples, lifted.dt, lifted.n, int(info.trials))
         d = np.asarray(feedforward, dtype=float).T  # (n, N)
-        nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result))
+        with np.errstate(all="ignore"):  # a diverged trial gives a non-finite update, judged by the checks
+            nxt = d[:, :lifted.L] + operator.apply(lifted, lifted_errors(result, lifted.shift))
         out = np.empty_like(d)
         out[:, :lifted.L] = nxt
         out[:, lifted.L:] = nxt[:, -1:]

@@ -28,18 +28,26 @@ power iteration on ``H^T H``, and bracketed rigorously: below by ``||H u||`` for
 above by ``min(sum |h_m|, sup |a|)`` where ``a(w) = sum h_m e^{-imw}`` is the symbol (a finite Toeplitz matrix
 is a compression of the Laurent operator of its symbol), the supremum taken on an FFT grid of ``G`` points plus
 ``(pi / G) sum m |h_m|`` (the largest change of ``a`` between grid points).  ``sigma_min(H) = 1 / ||H^-1||``
-the same way on ``H^-1`` (also lower triangular Toeplitz).
+the same way on ``H^-1`` (also lower triangular Toeplitz).  Up to :data:`DENSE_MAX` samples the norms come from the
+dense matrix instead (:func:`toeplitz_norm`).
+
+**Any sampled linear plant** (:func:`sampled_lifted`): a single-input single-output ``x_(i+1) = Phi x_i + Gamma u_i``,
+``y_i = C x_i`` -- a discrete-time plant as given, a continuous one under a zero-order hold -- has the Markov
+parameters ``C Phi^m Gamma``; the ``s`` leading ones that vanish set the shift ``r = s + 1`` (the relative degree in
+samples), and the shifted ones the same structure, through the transfer function ``b(z^-1)/a(z^-1)`` with ``a`` the
+characteristic polynomial of ``Phi`` and ``b = (a * h)`` truncated.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
+from typing import Any
 
 import numpy as np
 
 __all__ = ["MAX_LIFTED", "MAX_TRIAL_SAMPLES", "LiftedModel", "Norm", "discretization", "lifted_model",
-           "markov_parameters", "symbol_bound", "top_singular"]
+           "markov_parameters", "sampled_lifted", "symbol_bound", "toeplitz_norm", "top_singular"]
 
 MAX_LIFTED = 50_000
 """Most lifted unknowns ``N n`` (samples per trial times joints) a design may ask for: 25 s at 1 kHz on a
@@ -134,10 +142,11 @@ class Norm:
     lower: float
     upper: float
     slack: float = 0.0
+    routes: str = "lanczos, power iteration"
 
-    def to_dict(self) -> dict[str, float]:
+    def to_dict(self) -> dict[str, Any]:
         return {"lanczos": self.estimate, "power_iteration": self.power, "lower_bound": self.lower,
-                "upper_bound": self.upper, "grid_slack": self.slack}
+                "upper_bound": self.upper, "grid_slack": self.slack, "routes": self.routes}
 
 
 def top_singular(matvec, rmatvec, L: int, upper: float, slack: float = 0.0) -> Norm:
@@ -166,54 +175,121 @@ def top_singular(matvec, rmatvec, L: int, upper: float, slack: float = 0.0) -> N
     return Norm(float(s[0]), value, lower, max(upper, lower), slack)
 
 
+DENSE_MAX = 256
+"""Up to this lifted size a Toeplitz operator's norm is taken from its dense matrix: the estimate and its vector ``u``
+from the top eigenpair of ``T^T T`` (LAPACK ``syevr``), the second route from that of ``T T^T``, the lower
+bound ``||T u||`` -- cheaper there than Lanczos and the power iteration on FFT products, which serve the larger
+sizes."""
+
+
+def toeplitz_norm(t: np.ndarray, upper: float, slack: float = 0.0, transpose: bool = False) -> Norm:
+    """:class:`Norm` of the ``L x L`` lower-triangular Toeplitz matrix of the coefficients ``t`` (``upper``: a
+    proved bound of it, ``slack`` the grid's share): dense up to :data:`DENSE_MAX`, else by FFT products."""
+    t = np.asarray(t, dtype=float)
+    L = t.size
+    if not np.all(np.isfinite(t)):  # coefficients beyond the floats (an unstable filter): not computed
+        nan = float("nan")
+        return Norm(nan, nan, nan, float("inf"), 0.0, "coefficients not finite: not computed")
+    if L <= DENSE_MAX:
+        from scipy.linalg import eigh, toeplitz
+
+        T = toeplitz(t, np.zeros(L))
+        # the top eigenpair alone (LAPACK syevr): the full divide-and-conquer with vectors runs BLAS-3 threads that
+        # cost a hundred times more on a loaded machine
+        w, V = eigh(T.T @ T, subset_by_index=[L - 1, L - 1], driver="evr")
+        second = float(np.sqrt(max(float(np.linalg.eigvalsh(T @ T.T)[-1]), 0.0)))
+        lower = float(np.linalg.norm(T @ V[:, -1]))
+        return Norm(float(np.sqrt(max(float(w[-1]), 0.0))), second, lower, max(upper, lower), slack,
+                    "dense: eigh of TᵀT, eigvalsh of T Tᵀ")
+    nfft = _nfft(L)
+    spectrum = np.fft.rfft(t, nfft)
+
+    def mv(x: np.ndarray) -> np.ndarray:
+        return np.fft.irfft(spectrum * np.fft.rfft(x, nfft), nfft)[:L]
+
+    return top_singular(mv, lambda x: mv(x[::-1])[::-1], L, upper, slack)
+
+
+def _transfer_of(Phi: np.ndarray, Gamma: np.ndarray, C: np.ndarray) -> tuple[tuple[float, ...], tuple[float, ...],
+                                                                           int]:
+    """``(b, a, s)`` of a sampled single-input single-output system ``x_(i+1) = Phi x_i + Gamma u_i``, ``y_i = C x_i``:
+    ``s`` leading Markov parameters ``C Phi^m Gamma`` vanish (relative degree ``s + 1`` in steps), and ``sum_m C
+    Phi^(m+s) Gamma z^-m = b(z^-1) / a(z^-1)`` with ``a`` the characteristic polynomial of ``Phi``."""
+    n = Phi.shape[0]
+    a = np.real(np.poly(Phi)) if n else np.array([1.0])
+    h, x = np.empty(n + 1), np.asarray(Gamma, dtype=float).reshape(-1)
+    for m in range(n + 1):
+        h[m] = float(C @ x)
+        x = Phi @ x
+    scale = float(np.max(np.abs(h))) if np.any(h != 0) else 0.0
+    if scale == 0.0:
+        raise ValueError("the input does not reach the output (every Markov parameter C Phi^m Gamma is zero)")
+    s = int(np.flatnonzero(np.abs(h) > RELATIVE_DEGREE_TOL * scale)[0])
+    b = np.convolve(a, h)[:n]  # C (zI - Phi)^-1 Gamma = z^-1 b(z^-1) / a(z^-1): b_k = sum_j a_j h_(k-j), k < n
+    b = b[s:]
+    b = b[:max(1, len(b) - int(np.argmax(np.abs(b[::-1]) > 0)))] if np.any(b != 0) else b[:1]
+    return tuple(float(v) for v in b), tuple(float(v) for v in a), s
+
+
+RELATIVE_DEGREE_TOL = 1e-12
+"""A Markov parameter below this fraction of the largest of the first ``n + 1`` counts as zero when the relative
+degree of a sampled linear plant is read from them (a state-space model whose ``C B`` vanishes structurally)."""
+
+
 @dataclass(frozen=True)
 class LiftedModel:
-    """The lifted error system of every joint over one trial (module docstring).
+    """The lifted error system of every channel (joint) over one trial (module docstring).
 
     Parameters
     ----------
-    K1, K2 : tuple of float
-        Error gains per joint (1/s^2, 1/s).
+    systems : tuple of (b, a)
+        Per channel, the shifted sampled transfer function ``sum_m h_m z^-m = b(z^-1)/a(z^-1)`` (``b[0] = h_0 !=
+        0``), coefficients in powers of ``z^-1``.
     dt : float
-        Integration step (s).
+        The trial's sample period (s).
     samples : int
-        Recorded instants ``N`` of a trial; the lifted size per joint is ``L = N - 1``.
+        Recorded instants ``N`` of a trial; the lifted size per channel is ``L = N - shift``.
     integrator : str
-        ``"rk4"`` or ``"cvodes"`` (:func:`discretization`).
+        How the sampled system was obtained: ``"rk4"`` or ``"cvodes"`` (:func:`discretization`), ``"zoh"`` (a
+        continuous linear plant under a zero-order hold), ``"discrete"`` (a discrete-time plant as given).
+    shift : int
+        The relative degree in samples: the input at ``t_i`` first moves the output at ``t_(i+shift)``.
     """
 
-    K1: tuple[float, ...]
-    K2: tuple[float, ...]
+    systems: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...]
     dt: float
     samples: int
     integrator: str = "rk4"
+    shift: int = 1
 
     @property
     def n(self) -> int:
-        """Number of joints."""
-        return len(self.K1)
+        """Number of channels (joints)."""
+        return len(self.systems)
 
     @property
     def L(self) -> int:
-        """Lifted samples per joint, ``N - 1``."""
-        return self.samples - 1
+        """Lifted samples per channel, ``N - shift``."""
+        return self.samples - self.shift
 
-    @cached_property
-    def steps(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-        """``(Phi, Gamma)`` of every joint."""
-        return tuple(discretization(k1, k2, self.dt, self.integrator) for k1, k2 in zip(self.K1, self.K2,
-                                                                                         strict=True))
+    def _series(self, j: int, inverse: bool) -> np.ndarray:
+        from scipy.signal import lfilter
+
+        b, a = (np.asarray(c, dtype=float) for c in self.systems[j])
+        impulse = np.zeros(self.L)
+        impulse[0] = 1.0
+        return lfilter(a, b, impulse) if inverse else lfilter(b, a, impulse)
 
     @cached_property
     def markov(self) -> np.ndarray:
-        """Shifted Markov parameters ``(n, L)``: ``markov[j, m] = d e_{i+m+1} / d v_i`` of joint ``j`` (s^2)."""
-        return np.array([markov_parameters(P, G, self.L) for P, G in self.steps])
+        """Shifted Markov parameters ``(n, L)``: ``markov[j, m] = d y_(i+m+shift) / d u_i`` of channel ``j``."""
+        return np.array([self._series(j, False) for j in range(self.n)])
 
     @cached_property
     def inverse_markov(self) -> np.ndarray:
-        """Coefficients ``(n, L)`` of ``H^-1`` per joint (1/s^2)."""
+        """Coefficients ``(n, L)`` of ``H^-1`` per channel (the power series of ``a/b``)."""
         with np.errstate(over="ignore", invalid="ignore"):
-            return np.array([markov_parameters(P, G, self.L, inverse=True) for P, G in self.steps])
+            return np.array([self._series(j, True) for j in range(self.n)])
 
     @cached_property
     def _spectra(self) -> tuple[int, np.ndarray, np.ndarray]:
@@ -238,19 +314,10 @@ class LiftedModel:
         """``H^-1 X``, ``X`` of shape ``(n, L)`` (rad -> rad/s^2)."""
         return self._convolve(self._spectra[2], X)
 
-    def _joint(self, j: int, which: str):
-        """``(matvec, rmatvec)`` of joint ``j``'s ``H`` (``which="H"``) or ``H^-1``."""
-        spectrum = self._spectra[1 if which == "H" else 2][j]
-
-        def mv(x: np.ndarray) -> np.ndarray:
-            return self._convolve(spectrum, x)
-
-        return mv, (lambda x: mv(x[::-1])[::-1])
-
-    def _unique(self) -> dict[tuple[float, float], int]:
-        """One joint index per distinct pair of gains (identical joints share their norms)."""
-        out: dict[tuple[float, float], int] = {}
-        for j, key in enumerate(zip(self.K1, self.K2, strict=True)):
+    def _unique(self) -> dict[Any, int]:
+        """One channel index per distinct system (identical joints share their norms)."""
+        out: dict[Any, int] = {}
+        for j, key in enumerate(self.systems):
             out.setdefault(key, j)
         return out
 
@@ -262,8 +329,8 @@ class LiftedModel:
             h = self.markov[j]
             sym, slack = symbol_bound(h)
             l1 = float(np.sum(np.abs(h)))
-            found[key] = top_singular(*self._joint(j, "H"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
-        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+            found[key] = toeplitz_norm(h, min(l1, sym), slack if sym < l1 else 0.0)
+        return tuple(found[key] for key in self.systems)
 
     @cached_property
     def sigma_min(self) -> tuple[Norm, ...]:
@@ -277,20 +344,42 @@ class LiftedModel:
                 continue
             sym, slack = symbol_bound(c)
             l1 = float(np.sum(np.abs(c)))
-            inv = top_singular(*self._joint(j, "inverse"), self.L, min(l1, sym), slack if sym < l1 else 0.0)
+            inv = toeplitz_norm(c, min(l1, sym), slack if sym < l1 else 0.0)
             found[key] = Norm(1.0 / inv.estimate, 1.0 / inv.power, 1.0 / inv.upper, 1.0 / inv.lower,
-                              inv.slack)
-        return tuple(found[key] for key in zip(self.K1, self.K2, strict=True))
+                              inv.slack, inv.routes)
+        return tuple(found[key] for key in self.systems)
 
     def zeros(self, j: int = 0) -> np.ndarray:
-        """Zeros of joint ``j``'s shifted transfer function ``z H(z)`` (0 and the sampling zero near -1)."""
-        b, _ = _transfer(*self.steps[j])
-        return np.array([0.0, -b[1] / b[0]])
+        """Finite nonzero zeros of channel ``j``'s shifted transfer function ``b(z^-1)/a(z^-1)`` (on the robot: the
+        sampling zero near -1)."""
+        b = np.asarray(self.systems[j][0], dtype=float)
+        return np.roots(b) if b.size > 1 else np.zeros(0)
 
 
 @lru_cache(maxsize=32)
 def lifted_model(K1: tuple[float, ...], K2: tuple[float, ...], dt: float, samples: int,
                  integrator: str = "rk4") -> LiftedModel:
     """The :class:`LiftedModel` of these gains and grid, shared by the update, the checks and the figures."""
-    return LiftedModel(tuple(float(k) for k in K1), tuple(float(k) for k in K2), float(dt), int(samples),
-                       integrator)
+    systems = []
+    for k1, k2 in zip(K1, K2, strict=True):
+        b, a = _transfer(*discretization(float(k1), float(k2), float(dt), integrator))
+        systems.append((tuple(float(v) for v in b), tuple(float(v) for v in a)))
+    return LiftedModel(tuple(systems), float(dt), int(samples), integrator)
+
+
+@lru_cache(maxsize=32)
+def sampled_lifted(Phi: tuple[tuple[float, ...], ...], Gamma: tuple[float, ...], C: tuple[float, ...], dt: float,
+                   samples: int, integrator: str) -> LiftedModel:
+    """The :class:`LiftedModel` of a sampled single-input single-output plant ``x_(i+1) = Phi x_i + Gamma u_i``,
+    ``y_i = C x_i`` over ``samples`` instants (its shift the relative degree read from the Markov parameters).
+
+    Raises
+    ------
+    ValueError
+        When the input reaches no output sample within the trial.
+    """
+    b, a, s = _transfer_of(np.array(Phi, dtype=float), np.array(Gamma, dtype=float), np.array(C, dtype=float))
+    if samples - 1 - s < 1:
+        raise ValueError(f"the input first moves the output {s + 1} samples later; a trial of {samples} samples "
+                         "leaves nothing to learn")
+    return LiftedModel(((b, a),), float(dt), int(samples), integrator, shift=s + 1)

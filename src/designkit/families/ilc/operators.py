@@ -30,9 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from designkit.families.ilc.lifted import LiftedModel, Norm, symbol_bound, top_singular
+from designkit.families.ilc.lifted import LiftedModel, Norm, symbol_bound, toeplitz_norm
+from designkit.verification.bracket import bracket_verdict
 
-__all__ = ["Adjoint", "Contraction", "PType", "contraction", "learning_operator"]
+__all__ = ["Adjoint", "Contraction", "Filter", "PType", "contraction", "learning_operator"]
 
 
 def _margin(x: float) -> float:
@@ -57,22 +58,71 @@ class Adjoint:
 
 @dataclass(frozen=True)
 class PType:
-    """``Q = gamma S`` (``gamma`` in 1/s^2, ``S`` the one-step advance)."""
+    """``Q = gamma S`` (``gamma`` in 1/s^2 on the robot, input per output unit on a linear plant; ``S`` the advance
+    by the relative degree)."""
 
     gain: float
     kind: str = "p_type"
+
+    def coefficients(self, L: int) -> np.ndarray:
+        """The first ``L`` coefficients of ``Q`` as a causal filter of the advanced error: ``[gamma]``."""
+        return np.array([self.gain])
 
     def apply(self, lifted: LiftedModel, E: np.ndarray) -> np.ndarray:
         return self.gain * np.asarray(E, dtype=float)
 
     def describe(self) -> str:
-        return (f"d_(k+1)(t_i) = d_k(t_i) + γ e_k(t_(i+1)) with γ = {self.gain:.6g} 1/s² (P-type, one-step "
-                "advance)")
+        return (f"d_(k+1)(t_i) = d_k(t_i) + γ e_k(t_(i+r)) with γ = {self.gain:.6g} (P-type, advance r = relative "
+                "degree)")
 
 
-def learning_operator(kind: str, value: float) -> Adjoint | PType:
-    """The operator of ``kind`` (``adjoint``: ``alpha``; ``p_type``: ``gamma``)."""
-    return Adjoint(float(value)) if kind == "adjoint" else PType(float(value))
+@dataclass(frozen=True)
+class Filter:
+    """``Q = F(z) S``: a causal filter ``F(z) = (n_0 + n_1 z^-1 + ...) / (d_0 + d_1 z^-1 + ...)`` of the error
+    advanced by the relative degree (the P-type is ``F = gamma``)."""
+
+    num: tuple[float, ...]
+    den: tuple[float, ...] = (1.0,)
+    kind: str = "filter"
+
+    @property
+    def value(self) -> float:
+        """``F``'s first coefficient ``n_0 / d_0`` (what the spectral radius reads)."""
+        return float(self.num[0] / self.den[0])
+
+    def coefficients(self, L: int) -> np.ndarray:
+        """The first ``L`` coefficients of ``F``'s impulse response."""
+        from scipy.signal import lfilter
+
+        impulse = np.zeros(max(L, 1))
+        impulse[0] = 1.0
+        with np.errstate(over="ignore", invalid="ignore"):
+            return lfilter(np.asarray(self.num, dtype=float), np.asarray(self.den, dtype=float), impulse)
+
+    def apply(self, lifted: LiftedModel, E: np.ndarray) -> np.ndarray:
+        from scipy.signal import lfilter
+
+        return lfilter(np.asarray(self.num, dtype=float), np.asarray(self.den, dtype=float),
+                       np.asarray(E, dtype=float), axis=-1)
+
+    def describe(self) -> str:
+        return (f"d_(k+1) = d_k + F(z) e_k(· + r) with F(z) = ({_poly(self.num)}) / ({_poly(self.den)}) (a causal "
+                "filter of the error advanced by the relative degree r)")
+
+
+def _poly(c: tuple[float, ...]) -> str:
+    terms = [f"{v:.6g}" + ("" if k == 0 else " z⁻¹" if k == 1 else f" z^-{k}") for k, v in enumerate(c) if v != 0]
+    return " + ".join(terms).replace("+ -", "− ") or "0"
+
+
+def learning_operator(kind: str, value: Any) -> Adjoint | PType | Filter:
+    """The operator of ``kind`` (``adjoint``: ``alpha``; ``p_type``: ``gamma``; ``filter``: ``(num, den)``)."""
+    if kind == "adjoint":
+        return Adjoint(float(value))
+    if kind == "filter":
+        num, den = value
+        return Filter(tuple(float(v) for v in num), tuple(float(v) for v in den))
+    return PType(float(value))
 
 
 @dataclass(frozen=True)
@@ -115,10 +165,9 @@ class Contraction:
 
     @property
     def monotone(self) -> bool | None:
-        """True: ``rho < 1`` proved; False: ``rho > 1`` proved; None: undecided."""
-        if self.margin > 0:
-            return True
-        return False if self.excess > 0 else None
+        """True: ``rho < 1`` proved; False: ``rho > 1`` proved; None: undecided (the bracket contains 1, or an end
+        of it lies within the boundary tolerance of 1: :func:`~designkit.verification.bracket.bracket_verdict`)."""
+        return bracket_verdict(self.margin, self.excess).passed
 
     @property
     def asymptotic(self) -> bool:
@@ -161,31 +210,48 @@ def _adjoint(lifted: LiftedModel, alpha: float) -> Contraction:
                        float(excess), float(rho), float(decided), tuple(joints), rng)
 
 
-def _p_type(lifted: LiftedModel, gamma: float) -> Contraction:
+def _causal(lifted: LiftedModel, operator: PType | Filter) -> Contraction:
+    """``I - Q H`` with ``Q`` causal on the advanced error: lower-triangular Toeplitz, coefficients ``delta - q * h``
+    (``q`` the filter's impulse response, ``h`` the Markov parameters), so the spectral radius is ``|1 - q_0 h_0|``
+    and ``min(sum |t_m|, sup |t(w)|)`` bounds the norm."""
+    from scipy.signal import fftconvolve
+
     joints = []
     rho = rho_p = lower = upper = -np.inf
     spectral, spectral_margin = -np.inf, np.inf
+    L = lifted.L
+    q = operator.coefficients(L)
     for j in range(lifted.n):
         h = lifted.markov[j]
-        mv_h, rmv_h = lifted._joint(j, "H")
-        sym, slack = symbol_bound(h, 1.0, gamma)
-        norm: Norm = top_singular(lambda x, mv=mv_h: x - gamma * mv(x), lambda x, r=rmv_h: x - gamma * r(x),
-                                  lifted.L, sym, slack)
-        sr = abs(1.0 - gamma * h[0])
+        t = -fftconvolve(q, h)[:L] if q.size > 1 else -q[0] * h
+        t[0] += 1.0
+        sym, slack = symbol_bound(t)
+        l1 = float(np.sum(np.abs(t)))
+        norm: Norm = toeplitz_norm(t, min(l1, sym), slack if sym < l1 else 0.0)
+        sr = abs(1.0 - float(q[0] * h[0]))  # the diagonal, whatever the later coefficients
         joints.append({"norm": norm.to_dict(), "spectral_radius": sr, "h0": float(h[0])})
         rho, rho_p = max(rho, norm.estimate), max(rho_p, norm.power)
         lower, upper = max(lower, norm.lower), max(upper, norm.upper)
         spectral = max(spectral, sr)
-        spectral_margin = min(spectral_margin, _margin(gamma * h[0]))
+        spectral_margin = min(spectral_margin, _margin(float(q[0] * h[0])))
+    if not all(np.isfinite(j["norm"]["lanczos"]) for j in joints):  # an operator whose norm was not computed
+        rho = rho_p = lower = float("nan")
+        upper = float("inf")
     h0 = min(float(lifted.markov[j, 0]) for j in range(lifted.n))
-    rng = {"gamma_asymptotic_max": 2.0 / h0, "unit": "1/s^2"}
-    return Contraction("p_type", gamma, float(rho), float(rho_p), float(lower), float(upper), float(1.0 - upper),
+    if isinstance(operator, PType):
+        rng = {"gamma_asymptotic_max": 2.0 / h0, "h0": h0, "unit": ""}
+        value = operator.gain
+    else:
+        rng = {"q0_asymptotic_max": 2.0 / h0, "h0": h0, "unit": ""}
+        value = operator.value
+    return Contraction(operator.kind, value, float(rho), float(rho_p), float(lower), float(upper), float(1.0 - upper),
                        float(lower - 1.0), float(spectral), float(spectral_margin), tuple(joints), rng)
 
 
 @lru_cache(maxsize=32)
-def contraction(lifted: LiftedModel, operator: Adjoint | PType) -> Contraction:
+def contraction(lifted: LiftedModel, operator: Adjoint | PType | Filter) -> Contraction:
     """The :class:`Contraction` of ``operator`` on ``lifted`` (cached: the checks, figures and JSON share it)."""
     if isinstance(operator, Adjoint):
         return _adjoint(lifted, operator.alpha)
-    return _p_type(lifted, operator.gain)
+    with np.errstate(all="ignore"):  # an unstable filter's coefficients overflow: its norm is then not computed
+        return _causal(lifted, operator)

@@ -62,9 +62,10 @@ def _run(design: Any, ctx: Context) -> tuple:
 
 
 def _applies(design: Any, ctx: Context) -> bool:
-    """A simulated loop whose law is not a switching law (a switching family measures its own chattering band)."""
+    """A simulated loop whose law is not a switching law (a switching family measures its own chattering band); a
+    design without a law (a learned input sequence played to the plant) computes no command that could chatter."""
     law = ctx.law if ctx.law is not None else design.law
-    return (ctx.simulation is not None and getattr(ctx.simulation, "u_command", None) is not None
+    return (law is not None and ctx.simulation is not None and getattr(ctx.simulation, "u_command", None) is not None
             and not getattr(law, "discontinuous", False))
 
 

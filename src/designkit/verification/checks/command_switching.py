@@ -81,9 +81,11 @@ def _run(design: Any, ctx: Context) -> tuple:
 
 
 def _applies(design: Any, ctx: Context) -> bool:
-    """A simulated loop with a recorded command."""
+    """A simulated loop with a recorded command computed by a law (a design without one plays a learned input
+    sequence, held over each of its samples: there is no switching to characterise)."""
     sim = ctx.simulation
-    return sim is not None and getattr(sim, "u_command", None) is not None and len(sim.time) > 1
+    law = ctx.law if ctx.law is not None else design.law
+    return law is not None and sim is not None and getattr(sim, "u_command", None) is not None and len(sim.time) > 1
 
 
 RULE = CheckRule(name="command_switching", order=146, universal=True, applies=_applies, run=_run,
